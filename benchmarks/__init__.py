@@ -1,0 +1,1 @@
+"""ogcp's user-facing layer: the ``ogcp`` command line, suites, regression checks and plots."""

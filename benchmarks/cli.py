@@ -1,0 +1,206 @@
+"""The ``ogcp`` command line: thin argument parsing over the Python API.
+
+Every invalid input ends in one line on stderr (``ogcp: error: ...``) and exit status 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from planner import __version__
+from planner.constraints import Constraint, MaxFingerSpread
+from planner.contacts import DEFAULT_CONE_EDGES, DEFAULT_MU, ContactSet, sample_contacts
+from planner.errors import OgcpError
+from planner.objects import BUILTIN_OBJECTS, DEFAULT_DIAGONAL, resolve_object
+from planner.result import SearchResult
+from planner.search import HEURISTICS, METHODS, GraspPlanner
+from planner.successors import SUCCESSORS
+
+DEFAULT_CONTACTS = 100
+
+
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {value}")
+    return value
+
+
+def _int(text: str) -> int:
+    try:
+        return int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
+
+
+def _float(text: str) -> float:
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+
+
+def _add_contact_options(parser: argparse.ArgumentParser, n_default: int | None) -> None:
+    parser.add_argument("-n", "--contacts", type=_positive_int, default=n_default, metavar="N",
+                        help=f"number of contacts sampled from the surface (default {n_default or DEFAULT_CONTACTS})")
+    parser.add_argument("--seed", type=_int, default=0, help="seed of every random choice (default 0)")
+    parser.add_argument("--mu", type=_float, default=DEFAULT_MU, help=f"friction coefficient (default {DEFAULT_MU})")
+    parser.add_argument("--cone-edges", type=_int, default=DEFAULT_CONE_EDGES,
+                        help=f"friction-cone edges k (default {DEFAULT_CONE_EDGES})")
+    parser.add_argument("--diagonal", type=_float, default=DEFAULT_DIAGONAL,
+                        help=f"bounding-box diagonal of built-in objects [m] (default {DEFAULT_DIAGONAL})")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of the ``ogcp`` command."""
+    parser = argparse.ArgumentParser(prog="ogcp", description="Optimal grasp contact planning and benchmarking.")
+    parser.add_argument("--version", action="version", version=f"ogcp {__version__}")
+    commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    objects = ", ".join(sorted(BUILTIN_OBJECTS))
+
+    contacts = commands.add_parser("contacts", help="sample a contact set from a mesh and write it as JSON")
+    contacts.add_argument("object", metavar="MESH_OR_NAME", help=f"mesh file or built-in object ({objects})")
+    _add_contact_options(contacts, DEFAULT_CONTACTS)
+    contacts.add_argument("-o", "--output", required=True, type=Path, help="output JSON file")
+
+    plan = commands.add_parser("plan", help="plan an optimal or bounded-suboptimal m-contact grasp")
+    plan.add_argument("object", metavar="MESH_OR_NAME_OR_CONTACTS",
+                      help=f"mesh file, built-in object ({objects}) or contact JSON file")
+    plan.add_argument("-m", "--fingers", type=_int, default=3, help="number of contacts m (default 3)")
+    plan.add_argument("--method", default="astar", help=f"search method: {', '.join(METHODS)} (default astar)")
+    plan.add_argument("--eps", type=_float, default=None, help="WA* inflation eps >= 0 (default 0.4 for wastar)")
+    plan.add_argument("--branching", type=_int, default=2, help="branching factor b >= 2 (default 2)")
+    plan.add_argument("--successor", default="fc", help=f"expansion successors: {', '.join(SUCCESSORS)} (default fc)")
+    plan.add_argument("--heuristic", default=None,
+                      help=f"heuristic successors: {', '.join(HEURISTICS)} (default fc; none for dijkstra)")
+    plan.add_argument("--heuristic-branching", type=_int, default=None, help="b of the heuristic (default: --branching)")
+    plan.add_argument("--symmetry", action="store_true", help="approximate geometric symmetry removal (may lose optimality)")
+    plan.add_argument("--ordered", action="store_true", help="keep finger order (the paper's raw search tree)")
+    plan.add_argument("--kmeans-iterations", type=_int, default=10, help="k-means iterations t for fc (default 10)")
+    plan.add_argument("--position-weight", type=_float, default=1.0, help="position weight in fc features (default 1)")
+    plan.add_argument("--max-spread", type=_float, default=None, metavar="METRES",
+                      help="constraint: maximum distance between any two contacts [m]")
+    _add_contact_options(plan, None)
+    plan.add_argument("--json", action="store_true", help="print one JSON object (schema ogcp.plan/1)")
+    plan.add_argument("-o", "--output", type=Path, default=None, help="also write the JSON result to this file")
+    return parser
+
+
+def load_contact_set(spec: str, args: argparse.Namespace) -> ContactSet:
+    """Contact set from a contact JSON file, or sampled from a mesh or built-in object."""
+    if spec.lower().endswith(".json"):
+        if args.contacts is not None:
+            raise OgcpError("-n/--contacts does not apply to a contact file (its contacts are fixed)")
+        return ContactSet.load(spec)
+    mesh, source = resolve_object(spec, args.diagonal)
+    n = args.contacts if args.contacts is not None else DEFAULT_CONTACTS
+    return sample_contacts(mesh, n, args.seed, args.mu, args.cone_edges, source)
+
+
+def contact_set_record(contacts: ContactSet) -> dict[str, Any]:
+    """What a plan records about its contact set (enough to rebuild or evaluate it)."""
+    return {
+        "size": len(contacts),
+        "com": contacts.com.tolist(),
+        "torque_scale": contacts.torque_scale,
+        "mu": contacts.mu,
+        "cone_edges": contacts.cone_edges,
+        "source": contacts.source,
+    }
+
+
+def write_json_atomic(path: Path, data: dict[str, Any]) -> None:
+    """Write JSON so that a crash never leaves a truncated file."""
+    tmp = path.with_name(path.name + ".tmp")
+    try:
+        tmp.write_text(json.dumps(data, indent=1) + "\n")
+        tmp.replace(path)
+    except OSError as exc:
+        raise OgcpError(f"cannot write {path}: {exc.strerror or exc}") from exc
+
+
+def summary(result: SearchResult, contacts: ContactSet) -> str:
+    """Readable multi-line summary of a plan."""
+    s, c = result.stats, result.config
+    source = contacts.source
+    what = source.get("name") or source.get("path") or "contact file"
+    heuristic = f"Γh={c['heuristic']} b={c['heuristic_branching']}" if c["heuristic"] != "none" else "no heuristic"
+    method = {"astar": "A*", "wastar": f"WA* (eps={result.eps:g})", "dijkstra": "Dijkstra"}[result.method]
+    if result.method == "wastar":
+        certificate = f"within bound: optimum <= {result.bound:.6f} (guarantee: <= {result.eps_bound:.6f})"
+    elif c["symmetry"]:
+        certificate = "optimal up to approximate symmetry removal"
+    else:
+        certificate = "optimal (certified)"
+    lines = [
+        f"object: {what}   |C| = {len(contacts)}   mu = {contacts.mu:g}   k = {contacts.cone_edges}   seed = {c['seed']}",
+        f"search: {method}, m = {c['m']}, Γ={c['successor']} b={c['branching']}, {heuristic}"
+        + (", symmetry removal" if c["symmetry"] else ""),
+        f"grasp: {list(result.grasp)}   Q1 = {result.q1:.6f}   Q_OWS = {result.q_ows:.6f}",
+        f"certificate: {certificate}",
+        (f"states: created {s.created}, visited {s.visited}, b* = {s.effective_branching_factor:.2f}, "
+        f"solution depth {s.solution_depth}"),
+        f"created per level: {list(s.created_per_level)}",
+        f"visited per level: {list(s.visited_per_level)}",
+        (f"Q1 evaluations: {s.q1_evaluations} (cache hits {s.q1_cache_hits}, rejected by bound {s.bound_rejections}), "
+        f"hull calls {s.hull_calls}"),
+        f"time: {s.wall_seconds:.2f} s wall, {s.cpu_seconds:.2f} s CPU",
+        "contacts (index: position [m] / inward normal):",
+    ]
+    for i, p, n in zip(result.grasp, result.positions, result.normals):
+        lines.append(f"  {i:5d}: [{p[0]:+.4f} {p[1]:+.4f} {p[2]:+.4f}] / [{n[0]:+.3f} {n[1]:+.3f} {n[2]:+.3f}]")
+    return "\n".join(lines)
+
+
+def run_contacts(args: argparse.Namespace) -> int:
+    mesh, source = resolve_object(args.object, args.diagonal)
+    contacts = sample_contacts(mesh, args.contacts, args.seed, args.mu, args.cone_edges, source)
+    write_json_atomic(args.output, contacts.to_dict())
+    print(f"wrote {len(contacts)} contacts to {args.output}", file=sys.stderr)
+    return 0
+
+
+def run_plan(args: argparse.Namespace) -> int:
+    contacts = load_contact_set(args.object, args)
+    constraints: list[Constraint] = []
+    if args.max_spread is not None:
+        constraints.append(MaxFingerSpread(args.max_spread))
+    planner = GraspPlanner(
+        method=args.method, eps=args.eps, branching=args.branching, successor=args.successor,
+        heuristic=args.heuristic, heuristic_branching=args.heuristic_branching, symmetry=args.symmetry,
+        ordered=args.ordered, seed=args.seed, kmeans_iterations=args.kmeans_iterations,
+        position_weight=args.position_weight, constraints=constraints,
+    )
+    result = planner.plan(contacts, args.fingers)
+    record = result.to_dict(contact_set_record(contacts))
+    if args.output is not None:
+        write_json_atomic(args.output, record)
+    print(json.dumps(record) if args.json else summary(result, contacts))
+    return 0
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``ogcp`` console script."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    handlers = {"contacts": run_contacts, "plan": run_plan}
+    try:
+        return handlers[args.command](args)
+    except OgcpError as exc:
+        print(f"ogcp: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("ogcp: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

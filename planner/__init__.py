@@ -1,0 +1,40 @@
+"""ogcp planner: contact sets, exact Q1 and optimal / bounded-suboptimal grasp search.
+
+Typical use::
+
+    from planner import GraspPlanner, builtin_mesh, sample_contacts
+
+    contacts = sample_contacts(builtin_mesh("box"), n=100, seed=0)
+    result = GraspPlanner(method="astar").plan(contacts, m=3)
+    print(result.grasp, result.q1)
+"""
+
+from planner.constraints import DistinctContacts, MaxFingerSpread
+from planner.contacts import ContactSet, sample_contacts
+from planner.errors import OgcpError
+from planner.objects import BUILTIN_OBJECTS, builtin_mesh, load_mesh, resolve_object
+from planner.quality import Q1Certificate, q1, q1_certificate
+from planner.result import SearchResult, SearchStats
+from planner.search import GraspPlanner
+from planner.tolerance import TOL
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "BUILTIN_OBJECTS",
+    "TOL",
+    "ContactSet",
+    "DistinctContacts",
+    "GraspPlanner",
+    "MaxFingerSpread",
+    "OgcpError",
+    "Q1Certificate",
+    "SearchResult",
+    "SearchStats",
+    "builtin_mesh",
+    "load_mesh",
+    "q1",
+    "q1_certificate",
+    "resolve_object",
+    "sample_contacts",
+]

@@ -1,0 +1,188 @@
+"""Exact Ferrari-Canny Q1 (L1 grasp-wrench-space radius), one definition for all of ogcp.
+
+Q1 of a wrench set W (N, 6) is the distance from the origin to the boundary of conv(W)
+when the origin lies strictly inside, else 0. "Strictly" means Q1 > ``TOL.force_closure``
+(1e-9): smaller values report 0. Degenerate sets (fewer than 7 wrenches, wrenches spanning
+an affine subspace of fewer than 6 dimensions, NaNs) give 0, never an exception.
+
+The full hull of a large wrench set is very expensive (800 wrenches: seconds and
+100k+ facets), so :func:`q1_certificate` never builds it. It grows a small active subset
+A of W (an expanding-polytope scheme): qhull on A gives the facet of conv(A) nearest the
+origin with offset d and unit normal u; the support of the *full* set along u,
+``h(u) = max_w u.w``, is an upper bound on Q1 and d (when positive) is a lower bound,
+because conv(A) is inside conv(W). If ``h(u) - d`` exceeds ``TOL.q1_gap`` the support
+points of the nearest facets are added to A and the loop repeats; otherwise Q1 is
+certified to within ``TOL.q1_gap``. A certified nearest facet with d <= 0 proves that the
+origin is not strictly inside conv(W).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.spatial import ConvexHull, QhullError
+
+from planner.tolerance import TOL
+
+DIM = 6
+#: Wrench sets up to this size are hulled directly: one qhull call beats the loop.
+DIRECT_HULL_MAX = 96
+#: With direction hints the active-set loop starts close to the answer and wins earlier.
+HINTED_DIRECT_HULL_MAX = 24
+#: Nearest facets whose support points may join the active set per iteration.
+FACETS_PER_ROUND = 24
+
+
+@dataclass(frozen=True)
+class Q1Certificate:
+    """Exact Q1 with the facet that certifies it.
+
+    Attributes:
+        q1: Ferrari-Canny Q1 [N]; 0 when not in force closure or degenerate.
+        offset: Signed offset of the certified nearest facet [N]; negative when the
+            origin lies outside the hull, NaN for degenerate sets.
+        direction: Unit outward normal of that facet, shape (6,): the wrench direction
+            the grasp resists least. NaN for degenerate sets.
+        hull_calls: Number of qhull invocations spent.
+    """
+
+    q1: float
+    offset: float
+    direction: NDArray[np.float64]
+    hull_calls: int
+
+    @property
+    def force_closure(self) -> bool:
+        """Whether the origin lies strictly inside the hull (Q1 > tolerance)."""
+        return self.q1 > 0.0
+
+
+def _degenerate() -> Q1Certificate:
+    return Q1Certificate(0.0, float("nan"), np.full(DIM, np.nan), 0)
+
+
+def _clip(offset: float) -> float:
+    return offset if offset > TOL.force_closure else 0.0
+
+
+def _affine_rank_ok(points: NDArray[np.float64]) -> bool:
+    centred = points - points.mean(axis=0)
+    singular = np.linalg.svd(centred, compute_uv=False)
+    return bool(singular.size == DIM and singular[-1] > TOL.rank * max(singular[0], 1e-300))
+
+
+def _hull(points: NDArray[np.float64]) -> ConvexHull | None:
+    try:
+        return ConvexHull(points)
+    except (QhullError, ValueError):
+        return None
+
+
+def _complete_to_full_dimension(wrenches: NDArray[np.float64], active: list[int]) -> list[int]:
+    """Add support points until the active set spans 6 affine dimensions."""
+    active = list(dict.fromkeys(active))
+    for _ in range(DIM + 1):
+        pts = wrenches[active]
+        centred = pts - pts.mean(axis=0)
+        _, singular, vt = np.linalg.svd(centred, full_matrices=True)
+        rank = int(np.sum(singular > TOL.rank * max(singular[0] if singular.size else 1.0, 1e-300)))
+        if rank >= DIM:
+            return active
+        # Directions orthogonal to the current affine hull: W is full-dimensional, so the
+        # extreme wrenches along each of them leave that hull.
+        for direction in vt[rank:]:
+            proj = wrenches @ direction
+            for idx in (int(np.argmax(proj)), int(np.argmin(proj))):
+                if idx not in active:
+                    active.append(idx)
+    return active
+
+
+def q1_certificate(wrenches: NDArray[np.float64], hints: NDArray[np.float64] | None = None) -> Q1Certificate:
+    """Exact Q1 of a wrench set, with the certifying facet.
+
+    Args:
+        wrenches: Wrenches, shape (N, 6) [N] (torques already divided by rho).
+        hints: Optional unit directions, shape (j, 6), along which the hull is expected
+            to be closest to the origin; their support points seed the active set. They
+            only affect speed, never the value.
+
+    Returns:
+        The :class:`Q1Certificate`.
+    """
+    w = np.asarray(wrenches, dtype=float)
+    if w.ndim != 2 or w.shape[1] != DIM or w.shape[0] <= DIM or not np.all(np.isfinite(w)):
+        return _degenerate()
+    if not _affine_rank_ok(w):
+        return _degenerate()
+    if w.shape[0] <= (DIRECT_HULL_MAX if hints is None else HINTED_DIRECT_HULL_MAX):
+        return _full_hull_certificate(w)
+    return _active_set_q1(w, hints)
+
+
+def _active_set_q1(w: NDArray[np.float64], hints: NDArray[np.float64] | None) -> Q1Certificate:
+    seeds = np.vstack([np.eye(DIM), -np.eye(DIM)] + ([] if hints is None else [np.atleast_2d(hints)]))
+    active = [int(i) for i in np.argmax(w @ seeds.T, axis=0)]
+    active = _complete_to_full_dimension(w, active)
+    in_active = np.zeros(len(w), dtype=bool)
+    in_active[active] = True
+    for hull_calls in range(1, len(w) + 1):
+        hull = _hull(w[in_active])
+        if hull is None:
+            # A numerically flat active set: fall back to hulling everything.
+            cert = q1_certificate_direct(w)
+            return Q1Certificate(cert.q1, cert.offset, cert.direction, hull_calls + cert.hull_calls)
+        offsets = -hull.equations[:, DIM]
+        nearest = np.argsort(offsets)[:FACETS_PER_ROUND]
+        normals = hull.equations[nearest, :DIM]
+        support = w @ normals.T
+        gaps = support.max(axis=0) - offsets[nearest]
+        if gaps[0] <= TOL.q1_gap:
+            d = float(offsets[nearest[0]])
+            return Q1Certificate(_clip(d), d, normals[0].copy(), hull_calls)
+        beyond = gaps > TOL.q1_gap
+        new = np.unique(np.argmax(support[:, beyond], axis=0))
+        new = new[~in_active[new]]
+        if new.size == 0:  # cannot happen in exact arithmetic; guard against round-off loops
+            d = float(offsets[nearest[0]])
+            return Q1Certificate(_clip(d), d, normals[0].copy(), hull_calls)
+        in_active[new] = True
+    raise AssertionError("active-set Q1 did not terminate")  # pragma: no cover
+
+
+def q1_certificate_direct(wrenches: NDArray[np.float64]) -> Q1Certificate:
+    """Q1 from the full convex hull of all wrenches (reference path; slow for large sets).
+
+    Args:
+        wrenches: Wrenches, shape (N, 6).
+
+    Returns:
+        The :class:`Q1Certificate` computed from one full qhull call.
+    """
+    w = np.asarray(wrenches, dtype=float)
+    if w.ndim != 2 or w.shape[1] != DIM or w.shape[0] <= DIM or not np.all(np.isfinite(w)):
+        return _degenerate()
+    return _full_hull_certificate(w)
+
+
+def _full_hull_certificate(w: NDArray[np.float64]) -> Q1Certificate:
+    hull = _hull(w)
+    if hull is None:
+        return _degenerate()
+    offsets = -hull.equations[:, DIM]
+    best = int(np.argmin(offsets))
+    return Q1Certificate(_clip(float(offsets[best])), float(offsets[best]), hull.equations[best, :DIM].copy(), 1)
+
+
+def q1(wrenches: NDArray[np.float64]) -> float:
+    """Exact Ferrari-Canny Q1 of a wrench set.
+
+    Args:
+        wrenches: Wrenches, shape (N, 6).
+
+    Returns:
+        Q1 [N]; 0 when the origin is not strictly inside the hull or the set is degenerate.
+    """
+    return q1_certificate(wrenches).q1

@@ -1,0 +1,182 @@
+"""Exact Q1: against facet enumeration, scipy's hull, closed forms; bounds and monotonicity."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+from scipy.spatial import ConvexHull, QhullError
+
+from planner.bounds import SupportBound
+from planner.contacts import ContactSet
+from planner.oracle import GraspQuality
+from planner.quality import q1, q1_certificate, q1_certificate_direct
+from planner.wrench import contact_wrenches
+from tests.conftest import q1_by_facet_enumeration
+
+OBJECTS = ("box", "sphere", "donut", "amphora")
+
+
+def scipy_q1(w: np.ndarray) -> float:
+    """Q1 straight from scipy's ConvexHull with its default options (the usual reference)."""
+    try:
+        hull = ConvexHull(w)
+    except QhullError:
+        return 0.0
+    value = float((-hull.equations[:, -1]).min())
+    return value if value > 1e-9 else 0.0
+
+
+def random_grasps(contacts: ContactSet, m: int, count: int, seed: int) -> list[np.ndarray]:
+    rng = np.random.default_rng(seed)
+    return [rng.choice(len(contacts), m, replace=False) for _ in range(count)]
+
+
+@pytest.mark.parametrize("name", OBJECTS)
+def test_matches_facet_enumeration_on_small_grasps(name, object_contacts):
+    contacts = object_contacts(name, 40, seed=5)
+    four_edges = ContactSet(contacts.positions, contacts.normals, contacts.com, contacts.torque_scale, 0.5, 4)
+    checked = fc = 0
+    for cs, m, count in ((contacts, 3, 6), (four_edges, 3, 12), (four_edges, 4, 12)):
+        for g in random_grasps(cs, m, count, seed=m):
+            w = cs.subset_wrenches(g)
+            expected = q1_by_facet_enumeration(w)
+            assert q1(w) == pytest.approx(expected, abs=1e-9)
+            checked += 1
+            fc += expected > 0
+    assert checked == 30 and fc > 0  # both outcomes must be exercised
+
+
+@pytest.mark.parametrize("name", OBJECTS)
+def test_agrees_with_scipy_hull(name, object_contacts):
+    contacts = object_contacts(name, 60, seed=2)
+    values = []
+    for m, count in ((3, 15), (5, 6), (8, 4), (14, 3)):
+        for g in random_grasps(contacts, m, count, seed=10 + m):
+            w = contacts.subset_wrenches(g)
+            reference = scipy_q1(w)
+            assert q1(w) == pytest.approx(reference, abs=1e-9)
+            values.append(reference)
+    assert max(values) > 0 and min(values) == 0
+
+
+def test_large_set_active_path_matches_full_hull(object_contacts):
+    # 30 contacts = 240 wrenches: the active-set path, with and without direction hints.
+    contacts = object_contacts("box", 30, seed=4)
+    w = contacts.subset_wrenches(np.arange(30))
+    reference = q1_certificate_direct(w)
+    hints = np.random.default_rng(0).normal(size=(12, 6))
+    hints /= np.linalg.norm(hints, axis=1, keepdims=True)
+    for cert in (q1_certificate(w), q1_certificate(w, hints)):
+        assert cert.q1 == pytest.approx(reference.q1, abs=1e-9)
+        assert cert.q1 > 0
+
+
+@pytest.mark.parametrize("mu", [0.1, 0.5, 1.0, 1.7])
+def test_closed_form_octahedral_sphere(mu):
+    """Six contacts at ±x, ±y, ±z of a sphere around the COM, k = 4, rho = r.
+
+    Every edge is f = n + mu s e_c (c a tangent axis), and its torque (p x f)/r = -mu s
+    (n x e_c) is one of the six vertices ±mu e_b of an octahedron. The hyperplane
+    T . (1,1,1)/sqrt(3) = mu/sqrt(3) passes through the 12 edges whose torques are
+    +mu e_x, +mu e_y, +mu e_z and has all other edges below it: the nearest facet, so
+    Q1 = mu / sqrt(3), along a pure-torque diagonal.
+    """
+    r = 0.05
+    positions = np.vstack([np.eye(3), -np.eye(3)]) * r
+    w = contact_wrenches(positions, -positions / r, np.zeros(3), r, mu, 4).reshape(-1, 6)
+    cert = q1_certificate(w)
+    assert cert.q1 == pytest.approx(mu / np.sqrt(3), abs=1e-12)
+    assert np.allclose(np.abs(cert.direction[3:]), 1 / np.sqrt(3)) and np.allclose(cert.direction[:3], 0, atol=1e-12)
+
+
+def test_two_contacts_never_force_closure(object_contacts):
+    # Two point contacts cannot resist torque about the line through them.
+    contacts = object_contacts("sphere", 30, seed=1)
+    for g in random_grasps(contacts, 2, 20, seed=3):
+        assert q1(contacts.subset_wrenches(g)) == 0.0
+
+
+def test_degenerate_inputs_give_zero():
+    rng = np.random.default_rng(0)
+    assert q1(np.zeros((0, 6))) == 0.0
+    assert q1(rng.normal(size=(6, 6))) == 0.0  # fewer than 7 points
+    flat = rng.normal(size=(40, 6))
+    flat[:, 5] = 0.3  # all wrenches on an affine hyperplane
+    assert q1(flat) == 0.0
+    nan = rng.normal(size=(30, 6))
+    nan[3, 2] = np.nan
+    assert q1(nan) == 0.0
+    positions = np.tile([[0.05, 0.0, 0.0]], (3, 1))  # one contact repeated
+    normals = np.tile([[-1.0, 0.0, 0.0]], (3, 1))
+    assert q1(contact_wrenches(positions, normals, np.zeros(3), 0.05, 0.5, 8).reshape(-1, 6)) == 0.0
+    at_com = contact_wrenches(np.zeros((4, 3)), np.vstack([np.eye(3), [[0.6, 0.8, 0.0]]]), np.zeros(3), 0.05, 0.5, 8)
+    at_com = at_com.reshape(-1, 6)
+    assert q1(at_com) == 0.0  # no torque at all
+
+
+def test_input_is_not_modified(object_contacts):
+    # scipy's "Qbb" option rescales its input in place; the engine must never do that.
+    w = np.array(object_contacts("box", 30, seed=4).subset_wrenches(np.arange(30)))
+    before = w.copy()
+    q1_certificate(w)
+    assert np.array_equal(w, before)
+
+
+@pytest.mark.parametrize("name", OBJECTS)
+def test_monotone_when_contacts_are_added(name, object_contacts):
+    contacts = object_contacts(name, 40, seed=8)
+    order = np.random.default_rng(1).permutation(len(contacts))
+    values = [q1(contacts.subset_wrenches(order[:size])) for size in range(3, 16)]
+    assert all(b >= a - 1e-12 for a, b in itertools.pairwise(values))
+    assert values[-1] > 0
+
+
+def test_certificate_direction_attains_q1(object_contacts):
+    contacts = object_contacts("donut", 40, seed=3)
+    for g in random_grasps(contacts, 6, 10, seed=4):
+        w = contacts.subset_wrenches(g)
+        cert = q1_certificate(w)
+        assert np.linalg.norm(cert.direction) == pytest.approx(1.0, abs=1e-9)
+        assert float(np.max(w @ cert.direction)) == pytest.approx(cert.offset, abs=1e-9)
+        assert cert.force_closure == (cert.q1 > 0)
+
+
+def test_support_bound_is_a_valid_monotone_upper_bound(object_contacts):
+    contacts = object_contacts("amphora", 40, seed=2)
+    bounds = SupportBound(contacts.wrenches, seed=0)
+    rng = np.random.default_rng(5)
+    negative_seen = 0
+    for _ in range(40):
+        g = rng.choice(len(contacts), int(rng.integers(3, 9)), replace=False)
+        exact = q1(contacts.subset_wrenches(g))
+        upper = bounds.bound([bounds.vector(g)])
+        assert max(upper, 0.0) >= exact - 1e-12  # the bound is on the signed offset
+        if upper < 0:
+            negative_seen += 1
+            assert exact == 0.0
+        assert bounds.bound([bounds.vector(g[:-1])]) <= upper + 1e-15
+    assert negative_seen > 0
+
+
+def test_support_vectors_extend_when_directions_are_added(object_contacts):
+    contacts = object_contacts("box", 30, seed=1)
+    bounds = SupportBound(contacts.wrenches, seed=0)
+    members = np.arange(0, 30, 3)
+    before = bounds.vector(members)
+    u = np.random.default_rng(2).normal(size=(5, 6))
+    bounds.add(u / np.linalg.norm(u, axis=1, keepdims=True))
+    extended = bounds.vector(members, before)
+    assert len(extended) == bounds.count == len(before) + 5
+    assert np.array_equal(extended, bounds.vector(members))
+
+
+def test_oracle_never_evaluates_a_union_twice(object_contacts):
+    contacts = object_contacts("box", 30, seed=1)
+    oracle = GraspQuality(contacts)
+    a, b = oracle.mask_of(np.arange(0, 10)), oracle.mask_of(np.arange(10, 20))
+    first = oracle.of_masks([a, b])
+    again = oracle.of_masks([oracle.mask_of(np.arange(20)), a])  # same union, other parts
+    assert first == again == oracle.of_indices(np.arange(20))
+    assert oracle.evaluations == 1 and oracle.cache_hits == 2
