@@ -13,10 +13,12 @@ from pathlib import Path
 from typing import Any
 
 from planner import __version__
+from planner.baselines.es import DEFAULT_BINS, DEFAULT_CHUNK, ES_METHODS, ESResult, ExhaustiveSearch
 from planner.constraints import Constraint, MaxFingerSpread
 from planner.contacts import DEFAULT_CONE_EDGES, DEFAULT_MU, ContactSet, sample_contacts
 from planner.errors import OgcpError
 from planner.objects import BUILTIN_OBJECTS, DEFAULT_DIAGONAL, resolve_object
+from planner.parallel import BACKENDS
 from planner.result import SearchResult
 from planner.search import HEURISTICS, METHODS, GraspPlanner
 from planner.successors import SUCCESSORS
@@ -75,7 +77,8 @@ def build_parser() -> argparse.ArgumentParser:
     plan.add_argument("object", metavar="MESH_OR_NAME_OR_CONTACTS",
                       help=f"mesh file, built-in object ({objects}) or contact JSON file")
     plan.add_argument("-m", "--fingers", type=_int, default=3, help="number of contacts m (default 3)")
-    plan.add_argument("--method", default="astar", help=f"search method: {', '.join(METHODS)} (default astar)")
+    plan.add_argument("--method", default="astar",
+                      help=f"method: {', '.join(METHODS + ES_METHODS)} (default astar)")
     plan.add_argument("--eps", type=_float, default=None, help="WA* inflation eps >= 0 (default 0.4 for wastar)")
     plan.add_argument("--branching", type=_int, default=2, help="branching factor b >= 2 (default 2)")
     plan.add_argument("--successor", default="fc", help=f"expansion successors: {', '.join(SUCCESSORS)} (default fc)")
@@ -89,6 +92,14 @@ def build_parser() -> argparse.ArgumentParser:
     plan.add_argument("--max-spread", type=_float, default=None, metavar="METRES",
                       help="constraint: maximum distance between any two contacts [m]")
     _add_contact_options(plan, None)
+    es = plan.add_argument_group("exhaustive search (--method es / es-pruned)")
+    es.add_argument("--jobs", type=_positive_int, default=1, help="worker processes (default 1)")
+    es.add_argument("--backend", default="loky", help=f"parallel backend: {', '.join(BACKENDS)} (default loky)")
+    es.add_argument("--address", default=None, metavar="HOST:PORT", help="Dask scheduler address (backend dask)")
+    es.add_argument("--checkpoint", type=Path, default=None, metavar="DIR",
+                    help="keep finished chunks here; a rerun resumes from them")
+    es.add_argument("--chunk", type=_positive_int, default=DEFAULT_CHUNK, help=f"grasps per chunk (default {DEFAULT_CHUNK})")
+    es.add_argument("--bins", type=_positive_int, default=DEFAULT_BINS, help=f"histogram bins (default {DEFAULT_BINS})")
     plan.add_argument("--json", action="store_true", help="print one JSON object (schema ogcp.plan/1)")
     plan.add_argument("-o", "--output", type=Path, default=None, help="also write the JSON result to this file")
     return parser
@@ -168,8 +179,42 @@ def run_contacts(args: argparse.Namespace) -> int:
     return 0
 
 
+def es_summary(result: ESResult, contacts: ContactSet) -> str:
+    """Readable summary of an exhaustive search."""
+    lines = [
+        f"object: {contacts.source.get('name') or contacts.source.get('path') or 'contact file'}   |C| = {len(contacts)}",
+        (f"search: {result.method}, m = {result.config['m']}, {result.grasps} grasps in {result.chunks} chunks "
+         f"({result.resumed} resumed), backend {result.config['backend']}"),
+        f"grasp: {list(result.grasp)}   Q1 = {result.q1:.6f}   Q_OWS = {result.q_ows:.6f}",
+    ]
+    if result.counts is not None:
+        lines.append(f"force closure: {result.grasps - result.zero} of {result.grasps} "
+                     f"({100 * result.force_closure_fraction:.2f} %); histogram over (0, Q_OWS]: {result.counts.tolist()}")
+    lines.append(f"exact hulls: {result.exact_hulls}; time: {result.wall_seconds:.2f} s wall, "
+                 f"{result.cpu_seconds:.2f} s CPU (all workers)")
+    return "\n".join(lines)
+
+
+def run_es(args: argparse.Namespace, contacts: ContactSet) -> int:
+    if args.eps is not None:
+        raise OgcpError(f"eps applies to method 'wastar' only (method {args.method!r} got eps={args.eps})")
+    search = ExhaustiveSearch(
+        pruned=args.method == "es-pruned", jobs=args.jobs, backend=args.backend, address=args.address,
+        checkpoint=args.checkpoint, chunk=args.chunk, bins=args.bins, progress=sys.stderr.isatty(),
+    )
+    result = search.run(contacts, args.fingers)
+    record = result.to_dict(contact_set_record(contacts))
+    record["config"]["seed"] = args.seed
+    if args.output is not None:
+        write_json_atomic(args.output, record)
+    print(json.dumps(record) if args.json else es_summary(result, contacts))
+    return 0
+
+
 def run_plan(args: argparse.Namespace) -> int:
     contacts = load_contact_set(args.object, args)
+    if args.method in ES_METHODS:
+        return run_es(args, contacts)
     constraints: list[Constraint] = []
     if args.max_spread is not None:
         constraints.append(MaxFingerSpread(args.max_spread))

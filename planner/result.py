@@ -127,24 +127,57 @@ class SearchResult:
             contact_set: Optional description of the contact set (COM, rho, mu, k) so the
                 plan can be evaluated without re-sampling.
         """
-        return {
-            "schema": PLAN_SCHEMA,
-            "method": self.method,
-            "grasp": list(self.grasp),
-            "q1": self.q1,
-            "q_ows": self.q_ows,
-            "bound": self.bound,
-            "eps": self.eps,
-            "eps_bound": self.eps_bound,
-            "force_closure": self.q1 > 0,
-            "contacts": {"positions": self.positions.tolist(), "normals": self.normals.tolist()},
-            "contact_set": contact_set or {},
-            "stats": self.stats.to_dict(),
-            "config": self.config,
-            "source": self.contact_source,
-            "tolerances": TOL.as_dict(),
-            "provenance": provenance(),
-        }
+        return plan_record(
+            self.method, self.grasp, self.q1, self.q_ows, self.bound, self.positions, self.normals,
+            stats=self.stats.to_dict(), config=self.config, contact_set=contact_set,
+            eps=self.eps, eps_bound=self.eps_bound, source=self.contact_source,
+        )
+
+
+def plan_record(
+    method: str,
+    grasp: tuple[int, ...],
+    q1: float,
+    q_ows: float,
+    bound: float,
+    positions: NDArray[np.float64],
+    normals: NDArray[np.float64],
+    stats: dict[str, Any],
+    config: dict[str, Any],
+    contact_set: dict[str, Any] | None = None,
+    **extra: Any,
+) -> dict[str, Any]:
+    """The ``ogcp.plan/1`` record shared by every planning method.
+
+    Args:
+        method: Method name.
+        grasp: Sorted contact indices.
+        q1: Q1 of the grasp [N].
+        q_ows: Q1 of the whole contact set [N].
+        bound: Certified upper bound on the optimum [N].
+        positions: Contact points of the grasp, shape (m, 3) [m].
+        normals: Inward normals of the grasp, shape (m, 3).
+        stats: Method-specific statistics.
+        config: Method parameters.
+        contact_set: Description of the contact set (COM, rho, mu, k, source).
+        **extra: Further method-specific top-level fields.
+    """
+    return {
+        "schema": PLAN_SCHEMA,
+        "method": method,
+        "grasp": list(grasp),
+        "q1": q1,
+        "q_ows": q_ows,
+        "bound": bound,
+        "force_closure": q1 > 0,
+        "contacts": {"positions": positions.tolist(), "normals": normals.tolist()},
+        "contact_set": contact_set or {},
+        **extra,
+        "stats": stats,
+        "config": config,
+        "tolerances": TOL.as_dict(),
+        "provenance": provenance(),
+    }
 
 
 def effective_branching_factor(created_below_root: int, depth: int) -> float:

@@ -1,0 +1,1 @@
+"""pytest-benchmark speed benchmarks (see README: run with --benchmark-enable)."""

@@ -1,0 +1,27 @@
+"""Q1 speed: ogcp's engine against the scipy ConvexHull reference on the same inputs."""
+
+from __future__ import annotations
+
+from benchmarks.q1_speed import scipy_q1
+from planner.quality import q1
+
+
+def test_small_grasps_ogcp(benchmark, small_grasps):
+    benchmark.group = "q1-small"
+    values = benchmark(lambda: [q1(w) for w in small_grasps])
+    assert len(values) == len(small_grasps)
+
+
+def test_small_grasps_scipy(benchmark, small_grasps):
+    benchmark.group = "q1-small"
+    benchmark(lambda: [scipy_q1(w) for w in small_grasps])
+
+
+def test_super_contact_ogcp(benchmark, super_contact):
+    benchmark.group = "q1-large"
+    assert benchmark(q1, super_contact) > 0
+
+
+def test_super_contact_scipy(benchmark, super_contact):
+    benchmark.group = "q1-large"
+    benchmark.pedantic(scipy_q1, args=(super_contact,), rounds=1, iterations=1)

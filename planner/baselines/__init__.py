@@ -1,0 +1,1 @@
+"""Baselines that ogcp's search is compared with: exhaustive search (ES)."""

@@ -1,0 +1,338 @@
+"""Exhaustive search (ES): the exact Q1 of every m-grasp of distinct contacts.
+
+All C(|C|, m) grasps are split into chunks of consecutive lexicographic ranks, so the split
+depends only on (|C|, m, chunk size), never on the number of workers. Each chunk takes the
+batched path: support-function upper bounds for all its grasps at once (a bound at or
+below the force-closure tolerance *proves* Q1 = 0), then the exact engine for the rest.
+Every grasp's exact Q1 lands in the histogram, so ``es`` evaluates every grasp; the
+``es-pruned`` variant also skips grasps whose bound cannot beat the chunk's best and
+reports no histogram. The two are separate methods and never mixed.
+
+The argmax is the largest Q1, ties broken by the lexicographically smallest indices.
+With a checkpoint directory every finished chunk is written atomically as it completes,
+and a rerun with the same parameters resumes from them with the identical answer.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+from tqdm import tqdm
+
+from planner.bounds import SupportBound
+from planner.contacts import ContactSet
+from planner.errors import OgcpError
+from planner.parallel import run_tasks, validate_backend
+from planner.quality import q1, q1_certificate
+from planner.result import plan_record
+from planner.tolerance import TOL
+
+from . import combinations
+
+ES_METHODS = ("es", "es-pruned")
+DEFAULT_CHUNK = 200_000
+DEFAULT_BINS = 50
+#: Grasps whose bounds are computed in one vectorised block inside a chunk.
+BOUND_BLOCK = 50_000
+BOUND_SEED = 0
+
+
+@dataclass(frozen=True, eq=False)
+class ChunkResult:
+    """What one chunk contributes: its best grasp, histogram and counts."""
+
+    index: int
+    best_q1: float
+    best_grasp: tuple[int, ...] | None
+    counts: list[int]
+    zero: int
+    evaluated: int
+    exact_hulls: int
+    cpu_seconds: float
+
+    def to_dict(self) -> dict[str, Any]:
+        return dict(self.__dict__)
+
+
+@dataclass(frozen=True, eq=False)
+class ESResult:
+    """Result of exhaustive search.
+
+    Attributes:
+        method: ``es`` or ``es-pruned``.
+        grasp: Sorted indices of the best grasp (lexicographically smallest among ties).
+        positions: Its contact points, shape (m, 3) [m].
+        normals: Its inward normals, shape (m, 3).
+        q1: Its Q1 [N].
+        q_ows: Q1 of all contacts [N]; the histogram spans [0, q_ows].
+        grasps: Number of grasps C(|C|, m).
+        bin_edges: Histogram bin edges over (0, q_ows], shape (bins + 1,).
+        counts: Force-closure grasps per bin (``es`` only).
+        zero: Grasps with Q1 = 0 (``es`` only).
+        exact_hulls: Grasps that needed the exact engine (the rest were settled by bounds).
+        chunks: Number of chunks; ``resumed`` of them came from the checkpoint.
+        resumed: Chunks read back from the checkpoint.
+        cpu_seconds: CPU time summed over workers, resumed chunks included [s].
+        wall_seconds: Wall time of this run [s].
+        config: Parameters of the run.
+    """
+
+    method: str
+    grasp: tuple[int, ...]
+    positions: NDArray[np.float64]
+    normals: NDArray[np.float64]
+    q1: float
+    q_ows: float
+    grasps: int
+    bin_edges: NDArray[np.float64]
+    counts: NDArray[np.int64] | None
+    zero: int | None
+    exact_hulls: int
+    chunks: int
+    resumed: int
+    cpu_seconds: float
+    wall_seconds: float
+    config: dict[str, Any]
+
+    @property
+    def force_closure_fraction(self) -> float | None:
+        """Fraction of grasps in force closure (``es`` only)."""
+        return None if self.zero is None else 1.0 - self.zero / self.grasps
+
+    def to_dict(self, contact_set: dict[str, Any] | None = None) -> dict[str, Any]:
+        """JSON form, schema ``ogcp.plan/1`` (with ES statistics and the histogram)."""
+        histogram = None
+        if self.counts is not None:
+            histogram = {
+                "bin_edges": self.bin_edges.tolist(),
+                "counts": self.counts.tolist(),
+                "zero": self.zero,
+                "force_closure_fraction": self.force_closure_fraction,
+            }
+        stats = {
+            "grasps": self.grasps,
+            "exact_hulls": self.exact_hulls,
+            "chunks": self.chunks,
+            "resumed_chunks": self.resumed,
+            "cpu_seconds": self.cpu_seconds,
+            "wall_seconds": self.wall_seconds,
+        }
+        return plan_record(
+            self.method, self.grasp, self.q1, self.q_ows, self.q1, self.positions, self.normals,
+            stats=stats, config=self.config, contact_set=contact_set, eps=0.0, histogram=histogram,
+        )
+
+
+def _chunk_task(
+    wrenches: NDArray[np.float64], n: int, m: int, index: int, chunk: int, edges: NDArray[np.float64], pruned: bool
+) -> ChunkResult:
+    """Evaluate one chunk (runs in a worker process)."""
+    cpu0 = time.process_time()
+    grasps = combinations.combinations_range(n, m, index * chunk, (index + 1) * chunk)
+    bounds = SupportBound(wrenches, seed=BOUND_SEED)
+    support = bounds._support[:, : bounds.count]
+    counts = np.zeros(len(edges) - 1, dtype=np.int64)
+    zero = exact = 0
+    best_q, best_g = 0.0, None
+    for block_start in range(0, len(grasps), BOUND_BLOCK):
+        block = grasps[block_start : block_start + BOUND_BLOCK]
+        upper = support[block].max(axis=1).min(axis=1)
+        candidates = np.flatnonzero(upper > TOL.force_closure)
+        zero += len(block) - len(candidates)
+        if pruned:  # visit high bounds first so the best value prunes early
+            candidates = candidates[np.argsort(-upper[candidates], kind="stable")]
+        for i in candidates:
+            if pruned and upper[i] < best_q:
+                break
+            value = q1(wrenches[block[i]].reshape(-1, 6))
+            exact += 1
+            if value <= 0:
+                zero += 1
+                continue
+            counts[min(int(np.searchsorted(edges, value, side="right")) - 1, len(counts) - 1)] += 1
+            grasp = tuple(int(c) for c in block[i])
+            if value > best_q or (value == best_q and grasp < best_g):
+                best_q, best_g = value, grasp
+    if best_g is None and len(grasps):
+        # No grasp of the chunk is in force closure: all tie at 0, and the chunk's grasps
+        # are in lexicographic order.
+        best_g = tuple(int(c) for c in grasps[0])
+    return ChunkResult(
+        index, best_q, best_g, counts.tolist(), zero, len(grasps), exact, time.process_time() - cpu0
+    )
+
+
+class ExhaustiveSearch:
+    """Exhaustive search over all m-grasps, in parallel, resumable.
+
+    Args:
+        pruned: Skip grasps whose bound cannot beat the best (method ``es-pruned``; no
+            histogram).
+        jobs: Worker processes.
+        backend: ``loky`` or ``dask``.
+        address: Dask scheduler ``HOST:PORT``.
+        checkpoint: Directory for finished chunks (resume); None keeps nothing on disk.
+        chunk: Grasps per chunk.
+        bins: Histogram bins over (0, Q_OWS].
+        progress: Show a progress bar with an ETA on stderr.
+    """
+
+    def __init__(
+        self,
+        pruned: bool = False,
+        jobs: int = 1,
+        backend: str = "loky",
+        address: str | None = None,
+        checkpoint: str | Path | None = None,
+        chunk: int = DEFAULT_CHUNK,
+        bins: int = DEFAULT_BINS,
+        progress: bool = False,
+    ) -> None:
+        self.pruned = pruned
+        self.jobs = jobs
+        self.backend = backend
+        self.address = address
+        self.checkpoint = checkpoint
+        self.chunk = chunk
+        self.bins = bins
+        self.progress = progress
+
+    def run(self, contacts: ContactSet, m: int) -> ESResult:
+        """Evaluate every grasp and return the best with the histogram.
+
+        Raises:
+            OgcpError: For invalid parameters or a checkpoint of a different run.
+        """
+        validate_backend(self.backend, self.address, self.jobs)
+        n = len(contacts)
+        if not isinstance(m, (int, np.integer)) or m < 2 or m > n:
+            raise OgcpError(f"m must be an integer with 2 <= m <= |C| = {n}, got {m!r}")
+        if not isinstance(self.chunk, int) or self.chunk < 1 or not isinstance(self.bins, int) or self.bins < 1:
+            raise OgcpError("chunk size and bins must be integers >= 1")
+        wall0 = time.perf_counter()
+        q_ows = q1_certificate(contacts.wrenches.reshape(-1, 6)).q1
+        edges = np.linspace(0.0, q_ows, self.bins + 1) if q_ows > 0 else np.linspace(0.0, 1.0, self.bins + 1)
+        total = combinations.count(n, int(m))
+        n_chunks = -(-total // self.chunk)
+        config = {
+            "method": "es-pruned" if self.pruned else "es",
+            "m": int(m),
+            "chunk": self.chunk,
+            "bins": self.bins,
+            "jobs": self.jobs,
+            "backend": self.backend,
+            "contact_set_digest": _digest(contacts),
+        }
+        store = _ChunkStore(self.checkpoint, {k: config[k] for k in ("method", "m", "chunk", "bins", "contact_set_digest")})
+        done = store.load()
+        todo = [i for i in range(n_chunks) if i not in done]
+        args = [(np.asarray(contacts.wrenches), n, int(m), i, self.chunk, edges, self.pruned) for i in todo]
+        bar = tqdm(total=total, unit="grasp", unit_scale=True, disable=not self.progress, desc=config["method"])
+        bar.update(sum(r.evaluated for r in done.values()))
+        results = dict(done)
+        try:
+            for result in run_tasks(_chunk_task, args, self.jobs, self.backend, self.address):
+                store.save(result)
+                results[result.index] = result
+                bar.update(result.evaluated)
+        finally:
+            bar.close()
+        return self._merge(contacts, int(m), q_ows, edges, total, results, len(done), config, wall0)
+
+    def _merge(
+        self,
+        contacts: ContactSet,
+        m: int,
+        q_ows: float,
+        edges: NDArray[np.float64],
+        total: int,
+        results: dict[int, ChunkResult],
+        resumed: int,
+        config: dict[str, Any],
+        wall0: float,
+    ) -> ESResult:
+        best_q, best_g = -1.0, None
+        for index in sorted(results):
+            r = results[index]
+            if r.best_grasp is not None and (r.best_q1 > best_q or (r.best_q1 == best_q and r.best_grasp < best_g)):
+                best_q, best_g = r.best_q1, r.best_grasp
+        assert best_g is not None
+        idx = np.array(best_g, dtype=np.intp)
+        counts = np.sum([r.counts for r in results.values()], axis=0).astype(np.int64)
+        return ESResult(
+            method=config["method"],
+            grasp=best_g,
+            positions=contacts.positions[idx].copy(),
+            normals=contacts.normals[idx].copy(),
+            q1=best_q,
+            q_ows=q_ows,
+            grasps=total,
+            bin_edges=edges,
+            counts=None if self.pruned else counts,
+            zero=None if self.pruned else int(sum(r.zero for r in results.values())),
+            exact_hulls=int(sum(r.exact_hulls for r in results.values())),
+            chunks=len(results),
+            resumed=resumed,
+            cpu_seconds=float(sum(r.cpu_seconds for r in results.values())),
+            wall_seconds=time.perf_counter() - wall0,
+            config=config,
+        )
+
+
+def _digest(contacts: ContactSet) -> str:
+    h = hashlib.sha256()
+    for array in (contacts.positions, contacts.normals, contacts.com):
+        h.update(np.ascontiguousarray(array).tobytes())
+    h.update(repr((contacts.torque_scale, contacts.mu, contacts.cone_edges)).encode())
+    return h.hexdigest()[:16]
+
+
+class _ChunkStore:
+    """Finished chunks on disk: one JSON file each, written atomically, plus a manifest."""
+
+    def __init__(self, directory: str | Path | None, key: dict[str, Any]) -> None:
+        self.directory = None if directory is None else Path(directory)
+        self.key = key
+
+    def load(self) -> dict[int, ChunkResult]:
+        if self.directory is None:
+            return {}
+        try:
+            self.directory.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise OgcpError(f"cannot create checkpoint directory {self.directory}: {exc.strerror}") from exc
+        manifest = self.directory / "manifest.json"
+        if manifest.exists():
+            stored = json.loads(manifest.read_text())
+            if stored != self.key:
+                raise OgcpError(
+                    f"checkpoint {self.directory} belongs to a different run ({stored}); use another directory"
+                )
+        else:
+            _write_atomic(manifest, self.key)
+        done = {}
+        for path in sorted(self.directory.glob("chunk_*.json")):
+            try:
+                data = json.loads(path.read_text())
+                result = ChunkResult(**{**data, "best_grasp": tuple(data["best_grasp"]) if data["best_grasp"] else None})
+            except (json.JSONDecodeError, TypeError, KeyError):
+                continue  # unreadable chunk: recomputed
+            done[result.index] = result
+        return done
+
+    def save(self, result: ChunkResult) -> None:
+        if self.directory is not None:
+            _write_atomic(self.directory / f"chunk_{result.index:07d}.json", result.to_dict())
+
+
+def _write_atomic(path: Path, data: dict[str, Any]) -> None:
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(json.dumps(data) + "\n")
+    tmp.replace(path)
