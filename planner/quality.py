@@ -31,6 +31,8 @@ DIM = 6
 DIRECT_HULL_MAX = 96
 #: With direction hints the active-set loop starts close to the answer and wins earlier.
 HINTED_DIRECT_HULL_MAX = 24
+#: Wrenches this close to a certified facet's hyperplane are taken to lie on it [N].
+ON_FACET = 1e-11
 #: Nearest facets whose support points may join the active set per iteration.
 FACETS_PER_ROUND = 24
 
@@ -140,14 +142,12 @@ def _active_set_q1(w: NDArray[np.float64], hints: NDArray[np.float64] | None) ->
         support = w @ normals.T
         gaps = support.max(axis=0) - offsets[nearest]
         if gaps[0] <= TOL.q1_gap:
-            d = float(offsets[nearest[0]])
-            return Q1Certificate(_clip(d), d, normals[0].copy(), hull_calls)
+            return _certificate(w, normals[0], float(offsets[nearest[0]]), hull_calls)
         beyond = gaps > TOL.q1_gap
         new = np.unique(np.argmax(support[:, beyond], axis=0))
         new = new[~in_active[new]]
         if new.size == 0:  # cannot happen in exact arithmetic; guard against round-off loops
-            d = float(offsets[nearest[0]])
-            return Q1Certificate(_clip(d), d, normals[0].copy(), hull_calls)
+            return _certificate(w, normals[0], float(offsets[nearest[0]]), hull_calls)
         in_active[new] = True
     raise AssertionError("active-set Q1 did not terminate")  # pragma: no cover
 
@@ -173,7 +173,26 @@ def _full_hull_certificate(w: NDArray[np.float64]) -> Q1Certificate:
         return _degenerate()
     offsets = -hull.equations[:, DIM]
     best = int(np.argmin(offsets))
-    return Q1Certificate(_clip(float(offsets[best])), float(offsets[best]), hull.equations[best, :DIM].copy(), 1)
+    return _certificate(w, hull.equations[best, :DIM], float(offsets[best]), 1)
+
+
+def _certificate(w: NDArray[np.float64], normal: NDArray[np.float64], offset: float, hull_calls: int) -> Q1Certificate:
+    """Certificate of a facet, with its hyperplane refitted canonically.
+
+    Different hulls (full or active-set, other seeds) find the same facet with
+    hyperplanes that differ in the last bits. Refitting the plane through the wrenches
+    that lie on it, in index order, makes the reported value a function of the wrench
+    set alone, so every method reports bit-identical Q1 for the same grasp.
+    """
+    on = np.flatnonzero(np.abs(w @ normal - offset) <= ON_FACET)
+    if len(on) >= DIM:
+        points = w[on]
+        centre = points.mean(axis=0)
+        _, singular, vt = np.linalg.svd(points - centre)
+        if singular[DIM - 2] > TOL.rank * singular[0]:  # spans the 5 dimensions of a facet
+            refit = vt[DIM - 1] if vt[DIM - 1] @ normal > 0 else -vt[DIM - 1]
+            normal, offset = refit, float(refit @ centre)
+    return Q1Certificate(_clip(offset), offset, np.array(normal, dtype=float), hull_calls)
 
 
 def q1(wrenches: NDArray[np.float64]) -> float:

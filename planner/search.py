@@ -313,7 +313,8 @@ class _Search:
             visited[depth] = visited.get(depth, 0) + 1
             trace.append((len(trace), key))
             if self.is_terminal(state):
-                return self.result(state, q0 - key, q0, key, open_list, created, visited, trace, wall0, cpu0)
+                # The cached exact value: q0 - (q0 - q) need not equal q in floating point.
+                return self.result(state, self.exact(state), q0, key, open_list, created, visited, trace, wall0, cpu0)
             for child in self.successors(state):
                 child_depth = self.depth(child)
                 created[child_depth] = created.get(child_depth, 0) + 1

@@ -69,8 +69,8 @@ def test_large_set_active_path_matches_full_hull(object_contacts):
     hints = np.random.default_rng(0).normal(size=(12, 6))
     hints /= np.linalg.norm(hints, axis=1, keepdims=True)
     for cert in (q1_certificate(w), q1_certificate(w, hints)):
-        assert cert.q1 == pytest.approx(reference.q1, abs=1e-9)
-        assert cert.q1 > 0
+        # Bit-identical whatever path found the facet (the facet plane is refitted canonically).
+        assert cert.q1 == reference.q1 > 0
 
 
 @pytest.mark.parametrize("mu", [0.1, 0.5, 1.0, 1.7])

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from planner.errors import OgcpError
+from planner.quality import q1
 from planner.result import effective_branching_factor
 from planner.search import GraspPlanner
 from tests.conftest import exhaustive_best
@@ -48,6 +49,8 @@ def test_astar_finds_the_brute_force_optimum(name, n, m, seed, object_contacts, 
         assert result.bound == pytest.approx(result.q1, abs=1e-12)
         assert len(set(result.grasp)) == m and list(result.grasp) == sorted(result.grasp)
         assert np.array_equal(result.positions, contacts.positions[list(result.grasp)])
+        # Bit for bit: the reported value is the grasp's Q1, not q0 - (q0 - q).
+        assert result.q1 == q1(contacts.subset_wrenches(np.array(result.grasp)))
 
 
 def test_prefiltered_reference_equals_plain_enumeration(object_contacts):
