@@ -224,7 +224,7 @@ def run_plan(args: argparse.Namespace) -> int:
         ordered=args.ordered, seed=args.seed, kmeans_iterations=args.kmeans_iterations,
         position_weight=args.position_weight, constraints=constraints,
     )
-    result = planner.plan(contacts, args.fingers)
+    result = planner.plan(contacts, args.fingers, progress=sys.stderr.isatty())
     record = result.to_dict(contact_set_record(contacts))
     if args.output is not None:
         write_json_atomic(args.output, record)

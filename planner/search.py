@@ -33,10 +33,11 @@ import heapq
 import itertools
 import math
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
+from tqdm import tqdm
 
 from planner.bounds import Vector
 from planner.constraints import Constraint, DistinctContacts
@@ -147,12 +148,13 @@ class GraspPlanner:
             "constraints": [c.describe() for c in self.constraints],
         }
 
-    def plan(self, contacts: ContactSet, m: int) -> SearchResult:
+    def plan(self, contacts: ContactSet, m: int, progress: bool = False) -> SearchResult:
         """Find the best m-contact grasp (or one within the WA* bound).
 
         Args:
             contacts: The contact set C.
             m: Number of contacts (fingers), 2 <= m <= |C|.
+            progress: Show expansions and the current f on stderr (tqdm).
 
         Returns:
             The :class:`SearchResult`.
@@ -166,7 +168,10 @@ class GraspPlanner:
         if m > len(contacts):
             raise OgcpError(f"m = {m} exceeds the number of contacts |C| = {len(contacts)}")
         config["m"] = int(m)
-        return _Search(contacts, int(m), config, [DistinctContacts(), *self.constraints]).run()
+        search = _Search(contacts, int(m), config, [DistinctContacts(), *self.constraints])
+        with tqdm(desc=config["method"], unit=" expansions", disable=not progress, leave=False) as bar:
+            search.on_expand = lambda f: (bar.update(), bar.set_postfix(f=f"{f:.6f}", refresh=False))
+            return search.run()
 
 
 class _Search:
@@ -200,6 +205,7 @@ class _Search:
         self.symmetry = SymmetryFilter(contacts) if config["symmetry"] else None
         self.pruned = 0
         self.bound_evaluations = 0
+        self.on_expand: Callable[[float], object] = lambda f: None
 
     # -- states -----------------------------------------------------------------------
 
@@ -312,6 +318,7 @@ class _Search:
             depth = -neg_depth
             visited[depth] = visited.get(depth, 0) + 1
             trace.append((len(trace), key))
+            self.on_expand(key)
             if self.is_terminal(state):
                 # The cached exact value: q0 - (q0 - q) need not equal q in floating point.
                 return self.result(state, self.exact(state), q0, key, open_list, created, visited, trace, wall0, cpu0)
