@@ -14,6 +14,7 @@ from typing import Any
 
 from planner import __version__
 from planner.baselines.es import DEFAULT_BINS, DEFAULT_CHUNK, ES_METHODS, ESResult, ExhaustiveSearch
+from planner.baselines.hfts import HFTS, HFTSResult
 from planner.constraints import Constraint, MaxFingerSpread
 from planner.contacts import DEFAULT_CONE_EDGES, DEFAULT_MU, ContactSet, sample_contacts
 from planner.errors import OgcpError
@@ -78,7 +79,7 @@ def build_parser() -> argparse.ArgumentParser:
                       help=f"mesh file, built-in object ({objects}) or contact JSON file")
     plan.add_argument("-m", "--fingers", type=_int, default=3, help="number of contacts m (default 3)")
     plan.add_argument("--method", default="astar",
-                      help=f"method: {', '.join(METHODS + ES_METHODS)} (default astar)")
+                      help=f"method: {', '.join(METHODS + ES_METHODS + ('hfts',))} (default astar)")
     plan.add_argument("--eps", type=_float, default=None, help="WA* inflation eps >= 0 (default 0.4 for wastar)")
     plan.add_argument("--branching", type=_int, default=2, help="branching factor b >= 2 (default 2)")
     plan.add_argument("--successor", default="fc", help=f"expansion successors: {', '.join(SUCCESSORS)} (default fc)")
@@ -100,6 +101,9 @@ def build_parser() -> argparse.ArgumentParser:
                     help="keep finished chunks here; a rerun resumes from them")
     es.add_argument("--chunk", type=_positive_int, default=DEFAULT_CHUNK, help=f"grasps per chunk (default {DEFAULT_CHUNK})")
     es.add_argument("--bins", type=_positive_int, default=DEFAULT_BINS, help=f"histogram bins (default {DEFAULT_BINS})")
+    hfts = plan.add_argument_group("HFTS baseline (--method hfts)")
+    hfts.add_argument("--runs", type=_positive_int, default=20, help="independent runs, seeds S..S+R-1 (default 20)")
+    hfts.add_argument("--iterations", type=_positive_int, default=40, help="moves per level (default 40)")
     plan.add_argument("--json", action="store_true", help="print one JSON object (schema ogcp.plan/1)")
     plan.add_argument("-o", "--output", type=Path, default=None, help="also write the JSON result to this file")
     return parser
@@ -211,10 +215,41 @@ def run_es(args: argparse.Namespace, contacts: ContactSet) -> int:
     return 0
 
 
+def hfts_summary(result: HFTSResult, contacts: ContactSet) -> str:
+    """Readable summary of the HFTS runs."""
+    s = result.summary()
+    lines = [
+        f"object: {contacts.source.get('name') or contacts.source.get('path') or 'contact file'}   |C| = {len(contacts)}",
+        (f"search: HFTS, m = {result.config['m']}, {s['runs']} runs (seeds {result.config['seed']}.."
+         f"{result.config['seed'] + s['runs'] - 1}), {result.config['levels']} cluster levels"),
+        f"best run: grasp {list(result.grasp)}   Q1 = {result.q1:.6f}   Q_OWS = {result.q_ows:.6f}",
+        (f"spread: mean {s['mean']:.6f}  std {s['std']:.6f}  max {s['max']:.6f}  "
+         f"force closure {100 * s['force_closure_fraction']:.0f} %"),
+        f"Q1 evaluations: {s['q1_evaluations']}; time: {s['wall_seconds']:.2f} s wall, {s['cpu_seconds']:.2f} s CPU",
+        "runs (seed: Q1):  " + "  ".join(f"{r.seed}: {r.q1:.4f}" for r in result.runs),
+    ]
+    return "\n".join(lines)
+
+
+def run_hfts(args: argparse.Namespace, contacts: ContactSet) -> int:
+    if args.eps is not None:
+        raise OgcpError(f"eps applies to method 'wastar' only (method 'hfts' got eps={args.eps})")
+    search = HFTS(runs=args.runs, seed=args.seed, iterations=args.iterations, position_weight=args.position_weight,
+                  jobs=args.jobs, backend=args.backend, address=args.address)
+    result = search.run(contacts, args.fingers)
+    record = result.to_dict(contact_set_record(contacts))
+    if args.output is not None:
+        write_json_atomic(args.output, record)
+    print(json.dumps(record) if args.json else hfts_summary(result, contacts))
+    return 0
+
+
 def run_plan(args: argparse.Namespace) -> int:
     contacts = load_contact_set(args.object, args)
     if args.method in ES_METHODS:
         return run_es(args, contacts)
+    if args.method == "hfts":
+        return run_hfts(args, contacts)
     constraints: list[Constraint] = []
     if args.max_spread is not None:
         constraints.append(MaxFingerSpread(args.max_spread))

@@ -1,0 +1,259 @@
+"""HFTS baseline: hierarchical fingertip space optimisation (Hang et al.), reimplemented.
+
+On the same :class:`ContactSet` and the same Q1 as every other method in ogcp:
+
+* Hierarchy: recursive k-means on ``[w * (p - com) / rho, n]`` with 12 clusters at the top
+  and 4 below, ``depth = int(log4(N / 3)) - 1`` cluster levels (at least 1). A node's
+  representative is the mean position and the normalised mean inward normal of its
+  contacts. Below the last cluster level are the real contacts, so the search always
+  ends on real contacts and reports their exact Q1.
+* One run: a random top-level node per finger; at every level ``iterations`` moves, each
+  moving *all* fingers at once to random siblings, accepted only if the objective
+  improves; then a random child per finger, taken even if worse; no backtracking.
+* Objective: the signed Q1 of the representatives (the offset of the facet nearest the
+  origin, negative outside force closure; -inf for degenerate or repeated contacts).
+
+HFTS is randomised and anytime: :class:`HFTS` runs seeds ``seed .. seed + runs - 1``
+independently (in parallel) and reports each run and their spread.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from planner.contacts import ContactSet
+from planner.errors import OgcpError
+from planner.parallel import run_tasks, validate_backend
+from planner.quality import q1, q1_certificate
+from planner.result import plan_record
+from planner.successors import KMeansPartitioner
+from planner.wrench import contact_wrenches
+
+TOP_CLUSTERS = 12
+CHILD_CLUSTERS = 4
+
+
+@dataclass(frozen=True)
+class HFTSRun:
+    """One seeded HFTS run: its grasp, exact Q1 and, per level, the objective after the
+    descent into it (start), after its moves, and how many moves were accepted."""
+
+    seed: int
+    grasp: tuple[int, ...]
+    q1: float
+    start_per_level: tuple[float, ...]
+    objective_per_level: tuple[float, ...]
+    accepted_per_level: tuple[int, ...]
+    evaluations: int
+    cpu_seconds: float
+
+    def to_dict(self) -> dict[str, Any]:
+        return {**self.__dict__, "grasp": list(self.grasp)}
+
+
+@dataclass(frozen=True, eq=False)
+class HFTSResult:
+    """All runs of an HFTS invocation; ``grasp`` and ``q1`` are the best run's."""
+
+    grasp: tuple[int, ...]
+    q1: float
+    q_ows: float
+    positions: NDArray[np.float64]
+    normals: NDArray[np.float64]
+    runs: tuple[HFTSRun, ...]
+    wall_seconds: float
+    config: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def values(self) -> NDArray[np.float64]:
+        """Q1 of every run [N]."""
+        return np.array([r.q1 for r in self.runs])
+
+    def summary(self) -> dict[str, float]:
+        """Mean, std, max, force-closure fraction, evaluations and CPU time over the runs."""
+        v = self.values
+        return {
+            "runs": len(v),
+            "mean": float(v.mean()),
+            "std": float(v.std()),
+            "max": float(v.max()),
+            "force_closure_fraction": float(np.mean(v > 0)),
+            "q1_evaluations": int(sum(r.evaluations for r in self.runs)),
+            "cpu_seconds": float(sum(r.cpu_seconds for r in self.runs)),
+            "wall_seconds": self.wall_seconds,
+        }
+
+    def to_dict(self, contact_set: dict[str, Any] | None = None) -> dict[str, Any]:
+        """JSON form, schema ``ogcp.plan/1``, with ``runs`` listing every run."""
+        return plan_record(
+            "hfts", self.grasp, self.q1, self.q_ows, self.q1, self.positions, self.normals,
+            stats=self.summary(), config=self.config, contact_set=contact_set,
+            runs=[r.to_dict() for r in self.runs],
+        )
+
+
+class Hierarchy:
+    """The HFTS hierarchy: nodes are contact-index arrays, level 0 = top clusters."""
+
+    def __init__(self, contacts: ContactSet, position_weight: float, seed: int) -> None:
+        n = len(contacts)
+        self.depth = max(1, int(math.log(n / 3.0, 4)) - 1) if n >= 3 else 1
+        top = KMeansPartitioner(contacts, TOP_CLUSTERS, 10, position_weight, seed)
+        below = KMeansPartitioner(contacts, CHILD_CLUSTERS, 10, position_weight, seed)
+        self.members: list[NDArray[np.intp]] = []
+        self.children: list[list[int]] = []
+        self.parent: list[int] = []
+        self.levels: list[list[int]] = [[]]
+        for part in top.split(np.arange(n, dtype=np.intp)):
+            self._add(part, -1, 0)
+        for level in range(1, self.depth):
+            self.levels.append([])
+            for node in self.levels[level - 1]:
+                for part in below.split(self.members[node]):
+                    self._add(part, node, level)
+        positions = np.array([contacts.positions[m].mean(axis=0) for m in self.members])
+        normals = np.array([contacts.normals[m].mean(axis=0) for m in self.members])
+        lengths = np.linalg.norm(normals, axis=1, keepdims=True)
+        self.positions = positions
+        self.normals = np.divide(normals, lengths, out=np.zeros_like(normals), where=lengths > 1e-12)
+
+    def _add(self, members: NDArray[np.intp], parent: int, level: int) -> None:
+        node = len(self.members)
+        self.members.append(members)
+        self.children.append([])
+        self.parent.append(parent)
+        self.levels[level].append(node)
+        if parent >= 0:
+            self.children[parent].append(node)
+
+    def siblings(self, node: int, level: int) -> list[int]:
+        """Nodes sharing the parent (the whole top level for level 0)."""
+        return self.levels[0] if level == 0 else self.children[self.parent[node]]
+
+
+def _signed_q1(contacts: ContactSet, positions: NDArray[np.float64], normals: NDArray[np.float64]) -> float:
+    if np.any(np.linalg.norm(normals, axis=1) < 1e-12):
+        return -math.inf
+    w = contact_wrenches(positions, normals, contacts.com, contacts.torque_scale, contacts.mu, contacts.cone_edges)
+    cert = q1_certificate(w.reshape(-1, 6))
+    return cert.offset if math.isfinite(cert.offset) else -math.inf
+
+
+def _one_run(contacts: ContactSet, tree: Hierarchy, m: int, seed: int, iterations: int) -> HFTSRun:
+    """One HFTS run (module-level so worker processes can run it)."""
+    cpu0 = time.process_time()
+    rng = np.random.default_rng(seed)
+    evaluations = 0
+
+    def objective(level: int, choice: list[int]) -> float:
+        nonlocal evaluations
+        if len(set(choice)) < m:
+            return -math.inf
+        evaluations += 1
+        if level < tree.depth:
+            return _signed_q1(contacts, tree.positions[choice], tree.normals[choice])
+        return _signed_q1(contacts, contacts.positions[choice], contacts.normals[choice])
+
+    def other(options: list[int] | NDArray[np.intp], current: int) -> int:
+        """A random option other than the current one (the current one if it is alone)."""
+        pick = int(rng.choice(options))
+        while pick == current and len(options) > 1:
+            pick = int(rng.choice(options))
+        return pick
+
+    choice = [int(rng.choice(tree.levels[0])) for _ in range(m)]
+    leaves: list[int] = []
+    start_per_level, per_level, accepted_per_level = [], [], []
+    for level in range(tree.depth + 1):
+        value = objective(level, choice)
+        start_per_level.append(value)
+        accepted = 0
+        for _ in range(iterations):
+            if level < tree.depth:
+                candidate = [other(tree.siblings(node, level), node) for node in choice]
+            else:  # the real contacts of each finger's leaf cluster
+                candidate = [other(tree.members[leaf], c) for leaf, c in zip(leaves, choice)]
+            candidate_value = objective(level, candidate)
+            if candidate_value > value:
+                choice, value, accepted = candidate, candidate_value, accepted + 1
+        per_level.append(value)
+        accepted_per_level.append(accepted)
+        if level + 1 < tree.depth:  # descend: a random child per finger, kept even if worse
+            choice = [int(rng.choice(tree.children[node])) for node in choice]
+        elif level + 1 == tree.depth:
+            leaves = choice
+            choice = [int(rng.choice(tree.members[node])) for node in leaves]
+    grasp = tuple(sorted(choice))
+    # The reported quality is the exact Q1 of the real contacts, in canonical order.
+    final = q1(contacts.subset_wrenches(np.array(grasp))) if len(set(grasp)) == m else 0.0
+    return HFTSRun(
+        seed, grasp, final, tuple(start_per_level), tuple(per_level), tuple(accepted_per_level), evaluations,
+        time.process_time() - cpu0,
+    )
+
+
+class HFTS:
+    """HFTS over R independent seeded runs.
+
+    Args:
+        runs: Number of runs R; run r uses seed ``seed + r``.
+        seed: First seed.
+        iterations: Moves per level.
+        position_weight: Weight of positions (scaled by rho) against normals in the features.
+        hierarchy_seed: Seed of the k-means hierarchy (shared by all runs).
+        jobs: Worker processes; ``backend`` / ``address`` as for exhaustive search.
+    """
+
+    def __init__(
+        self,
+        runs: int = 20,
+        seed: int = 0,
+        iterations: int = 40,
+        position_weight: float = 1.0,
+        hierarchy_seed: int = 0,
+        jobs: int = 1,
+        backend: str = "loky",
+        address: str | None = None,
+    ) -> None:
+        self.runs = runs
+        self.seed = seed
+        self.iterations = iterations
+        self.position_weight = position_weight
+        self.hierarchy_seed = hierarchy_seed
+        self.jobs = jobs
+        self.backend = backend
+        self.address = address
+
+    def run(self, contacts: ContactSet, m: int) -> HFTSResult:
+        """Run HFTS R times and collect the runs (best first in ``grasp``/``q1``)."""
+        validate_backend(self.backend, self.address, self.jobs)
+        for name in ("runs", "iterations"):
+            value = getattr(self, name)
+            if not isinstance(value, int) or value < 1:
+                raise OgcpError(f"HFTS {name} must be an integer >= 1, got {value!r}")
+        if not isinstance(self.seed, int) or self.seed < 0:
+            raise OgcpError(f"seed must be a non-negative integer, got {self.seed!r}")
+        if not isinstance(m, (int, np.integer)) or m < 2 or m > len(contacts):
+            raise OgcpError(f"m must be an integer with 2 <= m <= |C| = {len(contacts)}, got {m!r}")
+        wall0 = time.perf_counter()
+        tree = Hierarchy(contacts, self.position_weight, self.hierarchy_seed)
+        tasks = [(contacts, tree, int(m), self.seed + r, self.iterations) for r in range(self.runs)]
+        runs = sorted(run_tasks(_one_run, tasks, self.jobs, self.backend, self.address), key=lambda r: r.seed)
+        best = max(runs, key=lambda r: (r.q1, [-i for i in r.grasp]))
+        idx = np.array(best.grasp, dtype=np.intp)
+        config = {
+            "method": "hfts", "m": int(m), "runs": self.runs, "seed": self.seed, "iterations": self.iterations,
+            "position_weight": self.position_weight, "hierarchy_seed": self.hierarchy_seed,
+            "top_clusters": TOP_CLUSTERS, "child_clusters": CHILD_CLUSTERS, "levels": tree.depth,
+        }
+        return HFTSResult(
+            grasp=best.grasp, q1=best.q1, q_ows=q1_certificate(contacts.wrenches.reshape(-1, 6)).q1,
+            positions=contacts.positions[idx].copy(), normals=contacts.normals[idx].copy(), runs=tuple(runs),
+            wall_seconds=time.perf_counter() - wall0, config=config,
+        )
