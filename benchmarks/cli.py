@@ -17,7 +17,8 @@ from planner.baselines.es import DEFAULT_BINS, DEFAULT_CHUNK, ES_METHODS, ESResu
 from planner.baselines.hfts import HFTS, HFTSResult
 from planner.constraints import Constraint, MaxFingerSpread
 from planner.contacts import DEFAULT_CONE_EDGES, DEFAULT_MU, ContactSet, sample_contacts
-from planner.errors import OgcpError
+from planner.errors import OgcpError, choice_error
+from planner.hands.reachability import SDHReachability
 from planner.objects import BUILTIN_OBJECTS, DEFAULT_DIAGONAL, resolve_object
 from planner.parallel import BACKENDS
 from planner.result import SearchResult
@@ -25,6 +26,7 @@ from planner.search import HEURISTICS, METHODS, GraspPlanner
 from planner.successors import SUCCESSORS
 
 DEFAULT_CONTACTS = 100
+HANDS = ("sdh",)
 
 
 def _positive_int(text: str) -> int:
@@ -92,6 +94,8 @@ def build_parser() -> argparse.ArgumentParser:
     plan.add_argument("--position-weight", type=_float, default=1.0, help="position weight in fc features (default 1)")
     plan.add_argument("--max-spread", type=_float, default=None, metavar="METRES",
                       help="constraint: maximum distance between any two contacts [m]")
+    plan.add_argument("--hand", default=None, help="constraint: fingertips reachable by this hand (sdh); needs m = 3")
+    plan.add_argument("--hand-threshold", type=_float, default=0.3, help="largest reachability residual (default 0.3)")
     _add_contact_options(plan, None)
     es = plan.add_argument_group("exhaustive search (--method es / es-pruned)")
     es.add_argument("--jobs", type=_positive_int, default=1, help="worker processes (default 1)")
@@ -253,6 +257,14 @@ def run_plan(args: argparse.Namespace) -> int:
     constraints: list[Constraint] = []
     if args.max_spread is not None:
         constraints.append(MaxFingerSpread(args.max_spread))
+    hand = None
+    if args.hand is not None:
+        if args.hand not in HANDS:
+            raise choice_error("hand", args.hand, HANDS)
+        if args.fingers != 3:
+            raise OgcpError(f"the {args.hand} hand has 3 fingers; got -m {args.fingers}")
+        hand = SDHReachability(threshold=args.hand_threshold)
+        constraints.append(hand)
     planner = GraspPlanner(
         method=args.method, eps=args.eps, branching=args.branching, successor=args.successor,
         heuristic=args.heuristic, heuristic_branching=args.heuristic_branching, symmetry=args.symmetry,
@@ -261,9 +273,18 @@ def run_plan(args: argparse.Namespace) -> int:
     )
     result = planner.plan(contacts, args.fingers, progress=sys.stderr.isatty())
     record = result.to_dict(contact_set_record(contacts))
+    if hand is not None:
+        reach = hand.reach(result.grasp, contacts)
+        record["hand"] = {"name": hand.name, "joint_angles": list(reach.joint_angles), "residual": reach.residual,
+                          "finger_contacts": [result.grasp[i] for i in reach.fingers]}
     if args.output is not None:
         write_json_atomic(args.output, record)
-    print(json.dumps(record) if args.json else summary(result, contacts))
+    text = summary(result, contacts)
+    if hand is not None:
+        h = record["hand"]
+        text += (f"\nhand: {h['name']}, residual {h['residual']:.3f}, fingers on contacts {h['finger_contacts']}, "
+                 f"joint angles [rad] {[round(a, 3) for a in h['joint_angles']]}")
+    print(json.dumps(record) if args.json else text)
     return 0
 
 
