@@ -12,6 +12,8 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from planner import __version__
 from planner.baselines.es import DEFAULT_BINS, DEFAULT_CHUNK, ES_METHODS, ESResult, ExhaustiveSearch
 from planner.baselines.hfts import HFTS, HFTSResult
@@ -108,6 +110,7 @@ def build_parser() -> argparse.ArgumentParser:
     hfts = plan.add_argument_group("HFTS baseline (--method hfts)")
     hfts.add_argument("--runs", type=_positive_int, default=20, help="independent runs, seeds S..S+R-1 (default 20)")
     hfts.add_argument("--iterations", type=_positive_int, default=40, help="moves per level (default 40)")
+    hfts.add_argument("--compare-optimum", action="store_true", help="also run A* and print the gap to the optimum")
     plan.add_argument("--json", action="store_true", help="print one JSON object (schema ogcp.plan/1)")
     plan.add_argument("-o", "--output", type=Path, default=None, help="also write the JSON result to this file")
     return parser
@@ -179,6 +182,22 @@ def summary(result: SearchResult, contacts: ContactSet) -> str:
     return "\n".join(lines)
 
 
+def build_constraints(args: argparse.Namespace) -> tuple[list[Constraint], SDHReachability | None]:
+    """Constraints from --max-spread and --hand; the hand model is also returned."""
+    constraints: list[Constraint] = []
+    if args.max_spread is not None:
+        constraints.append(MaxFingerSpread(args.max_spread))
+    hand = None
+    if args.hand is not None:
+        if args.hand not in HANDS:
+            raise choice_error("hand", args.hand, HANDS)
+        if args.fingers != 3:
+            raise OgcpError(f"the {args.hand} hand has 3 fingers; got -m {args.fingers}")
+        hand = SDHReachability(threshold=args.hand_threshold)
+        constraints.append(hand)
+    return constraints, hand
+
+
 def run_contacts(args: argparse.Namespace) -> int:
     mesh, source = resolve_object(args.object, args.diagonal)
     contacts = sample_contacts(mesh, args.contacts, args.seed, args.mu, args.cone_edges, source)
@@ -195,8 +214,11 @@ def es_summary(result: ESResult, contacts: ContactSet) -> str:
          f"({result.resumed} resumed), backend {result.config['backend']}"),
         f"grasp: {list(result.grasp)}   Q1 = {result.q1:.6f}   Q_OWS = {result.q_ows:.6f}",
     ]
-    if result.counts is not None:
-        lines.append(f"force closure: {result.grasps - result.zero} of {result.grasps} "
+    admissible = result.grasps - result.excluded
+    if result.excluded:
+        lines.append(f"constraints: {result.excluded} grasps excluded, {admissible} admissible")
+    if result.counts is not None and admissible:
+        lines.append(f"force closure: {admissible - result.zero} of {admissible} "
                      f"({100 * result.force_closure_fraction:.2f} %); histogram over (0, Q_OWS]: {result.counts.tolist()}")
     lines.append(f"exact hulls: {result.exact_hulls}; time: {result.wall_seconds:.2f} s wall, "
                  f"{result.cpu_seconds:.2f} s CPU (all workers)")
@@ -209,6 +231,7 @@ def run_es(args: argparse.Namespace, contacts: ContactSet) -> int:
     search = ExhaustiveSearch(
         pruned=args.method == "es-pruned", jobs=args.jobs, backend=args.backend, address=args.address,
         checkpoint=args.checkpoint, chunk=args.chunk, bins=args.bins, progress=sys.stderr.isatty(),
+        constraints=build_constraints(args)[0],
     )
     result = search.run(contacts, args.fingers)
     record = result.to_dict(contact_set_record(contacts))
@@ -238,13 +261,28 @@ def hfts_summary(result: HFTSResult, contacts: ContactSet) -> str:
 def run_hfts(args: argparse.Namespace, contacts: ContactSet) -> int:
     if args.eps is not None:
         raise OgcpError(f"eps applies to method 'wastar' only (method 'hfts' got eps={args.eps})")
+    if args.max_spread is not None:
+        raise OgcpError("HFTS models a hand by its residual (--hand), not by --max-spread")
+    hand = build_constraints(args)[1]
     search = HFTS(runs=args.runs, seed=args.seed, iterations=args.iterations, position_weight=args.position_weight,
-                  jobs=args.jobs, backend=args.backend, address=args.address)
+                  jobs=args.jobs, backend=args.backend, address=args.address, hand=hand)
     result = search.run(contacts, args.fingers)
+    if args.compare_optimum:
+        optimum = GraspPlanner(seed=args.seed).plan(contacts, args.fingers)
+        record_optimum = {"method": "astar", "grasp": list(optimum.grasp), "q1": optimum.q1}
+    else:
+        record_optimum = None
     record = result.to_dict(contact_set_record(contacts))
+    text = hfts_summary(result, contacts)
+    if record_optimum is not None:
+        record["optimum"] = record_optimum
+        gaps = record_optimum["q1"] - result.values
+        text += (f"\nA* optimum: grasp {record_optimum['grasp']}   Q1 = {record_optimum['q1']:.6f}   "
+                 f"HFTS gap: best {gaps.min():.6f}, mean {gaps.mean():.6f}, "
+                 f"runs reaching it {int(np.sum(gaps <= 0))} of {len(gaps)}")
     if args.output is not None:
         write_json_atomic(args.output, record)
-    print(json.dumps(record) if args.json else hfts_summary(result, contacts))
+    print(json.dumps(record) if args.json else text)
     return 0
 
 
@@ -254,17 +292,7 @@ def run_plan(args: argparse.Namespace) -> int:
         return run_es(args, contacts)
     if args.method == "hfts":
         return run_hfts(args, contacts)
-    constraints: list[Constraint] = []
-    if args.max_spread is not None:
-        constraints.append(MaxFingerSpread(args.max_spread))
-    hand = None
-    if args.hand is not None:
-        if args.hand not in HANDS:
-            raise choice_error("hand", args.hand, HANDS)
-        if args.fingers != 3:
-            raise OgcpError(f"the {args.hand} hand has 3 fingers; got -m {args.fingers}")
-        hand = SDHReachability(threshold=args.hand_threshold)
-        constraints.append(hand)
+    constraints, hand = build_constraints(args)
     planner = GraspPlanner(
         method=args.method, eps=args.eps, branching=args.branching, successor=args.successor,
         heuristic=args.heuristic, heuristic_branching=args.heuristic_branching, symmetry=args.symmetry,

@@ -41,6 +41,14 @@ class Constraint(Protocol):
         ...
 
 
+def accepts_many(constraint: Constraint, grasps: NDArray[np.intp], contacts: ContactSet) -> NDArray[np.bool_]:
+    """P(g) for many grasps (B, m): the constraint's vectorised form when it has one."""
+    vectorised = getattr(constraint, "accepts_many", None)
+    if vectorised is not None:
+        return np.asarray(vectorised(grasps, contacts), dtype=bool)
+    return np.array([constraint.accepts(tuple(g), contacts) for g in grasps], dtype=bool)
+
+
 def _has_distinct_representatives(sets: Sequence[Indices]) -> bool:
     """Hall's condition via augmenting paths on at most m candidates per set.
 
@@ -97,6 +105,11 @@ class MaxFingerSpread:
         p = contacts.positions[list(grasp)]
         d = np.linalg.norm(p[:, None, :] - p[None, :, :], axis=2)
         return bool(d.max() <= self.spread)
+
+    def accepts_many(self, grasps: NDArray[np.intp], contacts: ContactSet) -> NDArray[np.bool_]:
+        """P(g) for many grasps (B, m) at once."""
+        p = contacts.positions[grasps]
+        return np.linalg.norm(p[:, :, None, :] - p[:, None, :, :], axis=-1).max(axis=(1, 2)) <= self.spread
 
     def admits(self, super_contacts: Sequence[Indices], contacts: ContactSet) -> bool:
         """Necessary condition: every pair of super-contacts has two points within reach."""

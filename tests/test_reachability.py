@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import itertools
 import json
+import re
 
 import numpy as np
 import pytest
@@ -88,3 +89,40 @@ def test_cli_reports_the_hand_configuration(capsys, tmp_path, monkeypatch):
     assert sorted(record["hand"]["finger_contacts"]) == record["grasp"]
     assert main(["plan", "donut", "-n", "30", "-m", "4", "--hand", "sdh"]) == 2
     assert "3 fingers" in capsys.readouterr().err
+
+
+def test_es_filtered_by_the_same_predicate(hand, donut):
+    from planner.baselines.es import ExhaustiveSearch
+
+    grasps = list(itertools.combinations(range(18), 3))
+    valid = [g for g in grasps if hand.accepts(g, donut)]
+    values = {g: q1(donut.subset_wrenches(np.array(g))) for g in valid}
+    best = max(values.values())
+    result = ExhaustiveSearch(chunk=100, constraints=[hand]).run(donut, 3)
+    assert result.q1 == best and result.grasp == min(g for g in valid if values[g] == best)
+    assert result.excluded == len(grasps) - len(valid)
+    assert result.zero == sum(v == 0 for v in values.values())
+    assert result.q1 == GraspPlanner(constraints=[hand]).plan(donut, 3).q1
+
+
+def test_hfts_penalises_the_residual(hand, object_contacts):
+    from planner.baselines.hfts import HFTS
+
+    contacts = object_contacts("donut", 100, 0)
+    free = HFTS(runs=12, seed=0).run(contacts, 3)
+    with_hand = HFTS(runs=12, seed=0, hand=hand).run(contacts, 3)
+    assert all(r.residual is None for r in free.runs) and all(r.residual is not None for r in with_hand.runs)
+    free_residuals = hand.residuals(contacts.positions[[list(r.grasp) for r in free.runs]],
+                                    contacts.normals[[list(r.grasp) for r in free.runs]])
+    assert np.mean([r.residual for r in with_hand.runs]) < np.mean(free_residuals)
+    assert with_hand.config["hand"]["name"] == "sdh"
+
+
+def test_cli_es_summary_counts_admissible_grasps(capsys, tmp_path, monkeypatch):
+    monkeypatch.setenv("OGCP_CACHE", str(tmp_path))
+    assert main(["plan", "donut", "-n", "16", "-m", "3", "--method", "es", "--hand", "sdh"]) == 0
+    out = capsys.readouterr().out
+    excluded, admissible = map(int, re.search(r"constraints: (\d+) grasps excluded, (\d+) admissible", out).groups())
+    assert excluded + admissible == 560  # C(16, 3)
+    fc, of = map(int, re.search(r"force closure: (\d+) of (\d+)", out).groups())
+    assert of == admissible and fc <= admissible

@@ -11,7 +11,7 @@ def test_es_chunk(benchmark, box200):
 
     edges = np.linspace(0.0, 1.0, 51)
     result = benchmark.pedantic(
-        _chunk_task, args=(np.asarray(box200.wrenches), 200, 3, 0, 5000, edges, False), rounds=1, iterations=1
+        _chunk_task, args=(box200, 3, 0, 5000, edges, False), rounds=1, iterations=1
     )
     assert result.evaluated == 5000
 

@@ -18,6 +18,7 @@ from __future__ import annotations
 import hashlib
 import json
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -27,6 +28,7 @@ from numpy.typing import NDArray
 from tqdm import tqdm
 
 from planner.bounds import SupportBound
+from planner.constraints import Constraint, accepts_many
 from planner.contacts import ContactSet
 from planner.errors import OgcpError
 from planner.parallel import run_tasks, validate_backend
@@ -53,6 +55,7 @@ class ChunkResult:
     best_grasp: tuple[int, ...] | None
     counts: list[int]
     zero: int
+    excluded: int
     evaluated: int
     exact_hulls: int
     cpu_seconds: float
@@ -76,6 +79,7 @@ class ESResult:
         bin_edges: Histogram bin edges over (0, q_ows], shape (bins + 1,).
         counts: Force-closure grasps per bin (``es`` only).
         zero: Grasps with Q1 = 0 (``es`` only).
+        excluded: Grasps that fail a constraint (not in the histogram or the argmax).
         exact_hulls: Grasps that needed the exact engine (the rest were settled by bounds).
         chunks: Number of chunks; ``resumed`` of them came from the checkpoint.
         resumed: Chunks read back from the checkpoint.
@@ -94,6 +98,7 @@ class ESResult:
     bin_edges: NDArray[np.float64]
     counts: NDArray[np.int64] | None
     zero: int | None
+    excluded: int
     exact_hulls: int
     chunks: int
     resumed: int
@@ -103,8 +108,9 @@ class ESResult:
 
     @property
     def force_closure_fraction(self) -> float | None:
-        """Fraction of grasps in force closure (``es`` only)."""
-        return None if self.zero is None else 1.0 - self.zero / self.grasps
+        """Fraction of the admissible grasps in force closure (``es`` only)."""
+        admissible = self.grasps - self.excluded
+        return None if self.zero is None or admissible == 0 else 1.0 - self.zero / admissible
 
     def to_dict(self, contact_set: dict[str, Any] | None = None) -> dict[str, Any]:
         """JSON form, schema ``ogcp.plan/1`` (with ES statistics and the histogram)."""
@@ -118,6 +124,7 @@ class ESResult:
             }
         stats = {
             "grasps": self.grasps,
+            "excluded_by_constraints": self.excluded,
             "exact_hulls": self.exact_hulls,
             "chunks": self.chunks,
             "resumed_chunks": self.resumed,
@@ -131,11 +138,22 @@ class ESResult:
 
 
 def _chunk_task(
-    wrenches: NDArray[np.float64], n: int, m: int, index: int, chunk: int, edges: NDArray[np.float64], pruned: bool
+    contacts: ContactSet,
+    m: int,
+    index: int,
+    chunk: int,
+    edges: NDArray[np.float64],
+    pruned: bool,
+    constraints: Sequence[Constraint] = (),
 ) -> ChunkResult:
     """Evaluate one chunk (runs in a worker process)."""
     cpu0 = time.process_time()
-    grasps = combinations.combinations_range(n, m, index * chunk, (index + 1) * chunk)
+    wrenches = np.asarray(contacts.wrenches)
+    grasps = combinations.combinations_range(len(contacts), m, index * chunk, (index + 1) * chunk)
+    total = len(grasps)
+    for constraint in constraints:  # P(g) filters the grasps before any quality is computed
+        grasps = grasps[accepts_many(constraint, grasps, contacts)]
+    excluded = total - len(grasps)
     bounds = SupportBound(wrenches, seed=BOUND_SEED)
     support = bounds._support[:, : bounds.count]
     counts = np.zeros(len(edges) - 1, dtype=np.int64)
@@ -165,7 +183,7 @@ def _chunk_task(
         # are in lexicographic order.
         best_g = tuple(int(c) for c in grasps[0])
     return ChunkResult(
-        index, best_q, best_g, counts.tolist(), zero, len(grasps), exact, time.process_time() - cpu0
+        index, best_q, best_g, counts.tolist(), zero, excluded, total, exact, time.process_time() - cpu0
     )
 
 
@@ -182,6 +200,8 @@ class ExhaustiveSearch:
         chunk: Grasps per chunk.
         bins: Histogram bins over (0, Q_OWS].
         progress: Show a progress bar with an ETA on stderr.
+        constraints: Grasp constraints P(g); grasps that fail are excluded (the count is
+            reported) from the argmax and the histogram.
     """
 
     def __init__(
@@ -194,8 +214,10 @@ class ExhaustiveSearch:
         chunk: int = DEFAULT_CHUNK,
         bins: int = DEFAULT_BINS,
         progress: bool = False,
+        constraints: Sequence[Constraint] = (),
     ) -> None:
         self.pruned = pruned
+        self.constraints = constraints
         self.jobs = jobs
         self.backend = backend
         self.address = address
@@ -229,11 +251,12 @@ class ExhaustiveSearch:
             "jobs": self.jobs,
             "backend": self.backend,
             "contact_set_digest": _digest(contacts),
+            "constraints": [c.describe() for c in self.constraints],
         }
-        store = _ChunkStore(self.checkpoint, {k: config[k] for k in ("method", "m", "chunk", "bins", "contact_set_digest")})
+        store = _ChunkStore(self.checkpoint, {k: config[k] for k in ("method", "m", "chunk", "bins", "contact_set_digest", "constraints")})
         done = store.load()
         todo = [i for i in range(n_chunks) if i not in done]
-        args = [(np.asarray(contacts.wrenches), n, int(m), i, self.chunk, edges, self.pruned) for i in todo]
+        args = [(contacts, int(m), i, self.chunk, edges, self.pruned, tuple(self.constraints)) for i in todo]
         bar = tqdm(total=total, unit="grasp", unit_scale=True, disable=not self.progress, desc=config["method"])
         bar.update(sum(r.evaluated for r in done.values()))
         results = dict(done)
@@ -263,7 +286,8 @@ class ExhaustiveSearch:
             r = results[index]
             if r.best_grasp is not None and (r.best_q1 > best_q or (r.best_q1 == best_q and r.best_grasp < best_g)):
                 best_q, best_g = r.best_q1, r.best_grasp
-        assert best_g is not None
+        if best_g is None:
+            raise OgcpError("no grasp satisfies the constraints")
         idx = np.array(best_g, dtype=np.intp)
         counts = np.sum([r.counts for r in results.values()], axis=0).astype(np.int64)
         return ESResult(
@@ -277,6 +301,7 @@ class ExhaustiveSearch:
             bin_edges=edges,
             counts=None if self.pruned else counts,
             zero=None if self.pruned else int(sum(r.zero for r in results.values())),
+            excluded=int(sum(r.excluded for r in results.values())),
             exact_hulls=int(sum(r.exact_hulls for r in results.values())),
             chunks=len(results),
             resumed=resumed,

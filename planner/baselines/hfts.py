@@ -11,7 +11,10 @@ On the same :class:`ContactSet` and the same Q1 as every other method in ogcp:
   moving *all* fingers at once to random siblings, accepted only if the objective
   improves; then a random child per finger, taken even if worse; no backtracking.
 * Objective: the signed Q1 of the representatives (the offset of the facet nearest the
-  origin, negative outside force closure; -inf for degenerate or repeated contacts).
+  origin, negative outside force closure; -inf for degenerate or repeated contacts),
+  minus ``residual_weight`` (1.0) times the hand's reachability residual when a hand is
+  modelled. The residual penalises; it does not forbid (the run reports whether its
+  final grasp is within the hand's threshold).
 
 HFTS is randomised and anytime: :class:`HFTS` runs seeds ``seed .. seed + runs - 1``
 independently (in parallel) and reports each run and their spread.
@@ -52,6 +55,7 @@ class HFTSRun:
     accepted_per_level: tuple[int, ...]
     evaluations: int
     cpu_seconds: float
+    residual: float | None = None
 
     def to_dict(self) -> dict[str, Any]:
         return {**self.__dict__, "grasp": list(self.grasp)}
@@ -145,7 +149,9 @@ def _signed_q1(contacts: ContactSet, positions: NDArray[np.float64], normals: ND
     return cert.offset if math.isfinite(cert.offset) else -math.inf
 
 
-def _one_run(contacts: ContactSet, tree: Hierarchy, m: int, seed: int, iterations: int) -> HFTSRun:
+def _one_run(
+    contacts: ContactSet, tree: Hierarchy, m: int, seed: int, iterations: int, hand: Any = None, weight: float = 1.0
+) -> HFTSRun:
     """One HFTS run (module-level so worker processes can run it)."""
     cpu0 = time.process_time()
     rng = np.random.default_rng(seed)
@@ -156,9 +162,12 @@ def _one_run(contacts: ContactSet, tree: Hierarchy, m: int, seed: int, iteration
         if len(set(choice)) < m:
             return -math.inf
         evaluations += 1
-        if level < tree.depth:
-            return _signed_q1(contacts, tree.positions[choice], tree.normals[choice])
-        return _signed_q1(contacts, contacts.positions[choice], contacts.normals[choice])
+        source = (tree.positions, tree.normals) if level < tree.depth else (contacts.positions, contacts.normals)
+        positions, normals = source[0][choice], source[1][choice]
+        value = _signed_q1(contacts, positions, normals)
+        if hand is not None and math.isfinite(value):
+            value -= weight * float(hand.residuals(positions[None], normals[None])[0])
+        return value
 
     def other(options: list[int] | NDArray[np.intp], current: int) -> int:
         """A random option other than the current one (the current one if it is alone)."""
@@ -192,9 +201,12 @@ def _one_run(contacts: ContactSet, tree: Hierarchy, m: int, seed: int, iteration
     grasp = tuple(sorted(choice))
     # The reported quality is the exact Q1 of the real contacts, in canonical order.
     final = q1(contacts.subset_wrenches(np.array(grasp))) if len(set(grasp)) == m else 0.0
+    residual = None
+    if hand is not None:
+        residual = float(hand.residuals(contacts.positions[None, list(grasp)], contacts.normals[None, list(grasp)])[0])
     return HFTSRun(
         seed, grasp, final, tuple(start_per_level), tuple(per_level), tuple(accepted_per_level), evaluations,
-        time.process_time() - cpu0,
+        time.process_time() - cpu0, residual,
     )
 
 
@@ -208,6 +220,9 @@ class HFTS:
         position_weight: Weight of positions (scaled by rho) against normals in the features.
         hierarchy_seed: Seed of the k-means hierarchy (shared by all runs).
         jobs: Worker processes; ``backend`` / ``address`` as for exhaustive search.
+        hand: A hand model with ``residuals(positions, normals)`` (e.g.
+            :class:`planner.hands.reachability.SDHReachability`); its residual is
+            subtracted from the objective with weight ``residual_weight``.
     """
 
     def __init__(
@@ -220,7 +235,11 @@ class HFTS:
         jobs: int = 1,
         backend: str = "loky",
         address: str | None = None,
+        hand: Any = None,
+        residual_weight: float = 1.0,
     ) -> None:
+        self.hand = hand
+        self.residual_weight = residual_weight
         self.runs = runs
         self.seed = seed
         self.iterations = iterations
@@ -243,7 +262,10 @@ class HFTS:
             raise OgcpError(f"m must be an integer with 2 <= m <= |C| = {len(contacts)}, got {m!r}")
         wall0 = time.perf_counter()
         tree = Hierarchy(contacts, self.position_weight, self.hierarchy_seed)
-        tasks = [(contacts, tree, int(m), self.seed + r, self.iterations) for r in range(self.runs)]
+        if self.hand is not None and m != 3:
+            raise OgcpError(f"the {self.hand.name} hand has 3 fingers; got m = {m}")
+        tasks = [(contacts, tree, int(m), self.seed + r, self.iterations, self.hand, self.residual_weight)
+                 for r in range(self.runs)]
         runs = sorted(run_tasks(_one_run, tasks, self.jobs, self.backend, self.address), key=lambda r: r.seed)
         best = max(runs, key=lambda r: (r.q1, [-i for i in r.grasp]))
         idx = np.array(best.grasp, dtype=np.intp)
@@ -251,6 +273,7 @@ class HFTS:
             "method": "hfts", "m": int(m), "runs": self.runs, "seed": self.seed, "iterations": self.iterations,
             "position_weight": self.position_weight, "hierarchy_seed": self.hierarchy_seed,
             "top_clusters": TOP_CLUSTERS, "child_clusters": CHILD_CLUSTERS, "levels": tree.depth,
+            "hand": None if self.hand is None else self.hand.describe(), "residual_weight": self.residual_weight,
         }
         return HFTSResult(
             grasp=best.grasp, q1=best.q1, q_ows=q1_certificate(contacts.wrenches.reshape(-1, 6)).q1,

@@ -157,6 +157,17 @@ class SDHReachability:
             pass  # a read-only cache only costs the sampling time next run
         return q, codes
 
+    def residuals(self, positions: NDArray[np.float64], normals: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Residuals of fingertip target triples, best over finger assignments, shape (B,).
+
+        Args:
+            positions: Target points, shape (B, 3, 3) [m].
+            normals: Inward normals at the targets (the pad normals needed), shape (B, 3, 3).
+        """
+        codes = np.stack([pair_code(positions[:, list(a)], normals[:, list(a)]) for a in ASSIGNMENTS], axis=1)
+        distance, _ = self._tree.query(codes.reshape(-1, 6) / self.scale, k=1)
+        return distance.reshape(len(positions), len(ASSIGNMENTS)).min(axis=1)
+
     def reach(self, grasp: Sequence[int], contacts: ContactSet) -> Reach:
         """Residual of a 3-contact grasp over all finger assignments, with the nearest sample."""
         if len(grasp) != 3:
@@ -170,6 +181,12 @@ class SDHReachability:
     def accepts(self, grasp: Sequence[int], contacts: ContactSet) -> bool:
         """P(g): the residual is within the threshold."""
         return self.reach(grasp, contacts).residual <= self.threshold
+
+    def accepts_many(self, grasps: NDArray[np.intp], contacts: ContactSet) -> NDArray[np.bool_]:
+        """P(g) for many 3-contact grasps at once, shape (B,)."""
+        if grasps.shape[1] != 3:
+            raise OgcpError(f"the SDH has 3 fingers; grasps of {grasps.shape[1]} contacts cannot be assigned")
+        return self.residuals(contacts.positions[grasps], contacts.normals[grasps]) <= self.threshold
 
     def admits(self, super_contacts: Sequence[NDArray[np.intp]], contacts: ContactSet) -> bool:
         """Sound: False only if no grasp drawn from the super-contacts is reachable."""
