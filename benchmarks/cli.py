@@ -110,7 +110,8 @@ def build_parser() -> argparse.ArgumentParser:
     hfts = plan.add_argument_group("HFTS baseline (--method hfts)")
     hfts.add_argument("--runs", type=_positive_int, default=20, help="independent runs, seeds S..S+R-1 (default 20)")
     hfts.add_argument("--iterations", type=_positive_int, default=40, help="moves per level (default 40)")
-    hfts.add_argument("--compare-optimum", action="store_true", help="also run A* and print the gap to the optimum")
+    hfts.add_argument("--no-optimum", action="store_true",
+                      help="skip the A* run that reports the optimum next to the HFTS spread")
     plan.add_argument("--json", action="store_true", help="print one JSON object (schema ogcp.plan/1)")
     plan.add_argument("-o", "--output", type=Path, default=None, help="also write the JSON result to this file")
     return parser
@@ -198,6 +199,13 @@ def build_constraints(args: argparse.Namespace) -> tuple[list[Constraint], SDHRe
     return constraints, hand
 
 
+def hand_record(hand: SDHReachability, grasp: Sequence[int], contacts: ContactSet) -> dict[str, Any]:
+    """The ``"hand"`` block of a result: joint angles, residual, which finger takes which contact."""
+    reach = hand.reach(grasp, contacts)
+    return {"name": hand.name, "joint_angles": list(reach.joint_angles), "residual": reach.residual,
+            "reachable": reach.residual <= hand.threshold, "finger_contacts": [grasp[i] for i in reach.fingers]}
+
+
 def run_contacts(args: argparse.Namespace) -> int:
     mesh, source = resolve_object(args.object, args.diagonal)
     contacts = sample_contacts(mesh, args.contacts, args.seed, args.mu, args.cone_edges, source)
@@ -228,14 +236,17 @@ def es_summary(result: ESResult, contacts: ContactSet) -> str:
 def run_es(args: argparse.Namespace, contacts: ContactSet) -> int:
     if args.eps is not None:
         raise OgcpError(f"eps applies to method 'wastar' only (method {args.method!r} got eps={args.eps})")
+    constraints, hand = build_constraints(args)
     search = ExhaustiveSearch(
         pruned=args.method == "es-pruned", jobs=args.jobs, backend=args.backend, address=args.address,
         checkpoint=args.checkpoint, chunk=args.chunk, bins=args.bins, progress=sys.stderr.isatty(),
-        constraints=build_constraints(args)[0],
+        constraints=constraints,
     )
     result = search.run(contacts, args.fingers)
     record = result.to_dict(contact_set_record(contacts))
     record["config"]["seed"] = args.seed
+    if hand is not None:
+        record["hand"] = hand_record(hand, result.grasp, contacts)
     if args.output is not None:
         write_json_atomic(args.output, record)
     print(json.dumps(record) if args.json else es_summary(result, contacts))
@@ -267,12 +278,14 @@ def run_hfts(args: argparse.Namespace, contacts: ContactSet) -> int:
     search = HFTS(runs=args.runs, seed=args.seed, iterations=args.iterations, position_weight=args.position_weight,
                   jobs=args.jobs, backend=args.backend, address=args.address, hand=hand)
     result = search.run(contacts, args.fingers)
-    if args.compare_optimum:
-        optimum = GraspPlanner(seed=args.seed).plan(contacts, args.fingers)
+    if not args.no_optimum:
+        optimum = GraspPlanner(seed=args.seed, constraints=[hand] if hand else ()).plan(contacts, args.fingers)
         record_optimum = {"method": "astar", "grasp": list(optimum.grasp), "q1": optimum.q1}
     else:
         record_optimum = None
     record = result.to_dict(contact_set_record(contacts))
+    if hand is not None:
+        record["hand"] = hand_record(hand, result.grasp, contacts)
     text = hfts_summary(result, contacts)
     if record_optimum is not None:
         record["optimum"] = record_optimum
@@ -302,9 +315,7 @@ def run_plan(args: argparse.Namespace) -> int:
     result = planner.plan(contacts, args.fingers, progress=sys.stderr.isatty())
     record = result.to_dict(contact_set_record(contacts))
     if hand is not None:
-        reach = hand.reach(result.grasp, contacts)
-        record["hand"] = {"name": hand.name, "joint_angles": list(reach.joint_angles), "residual": reach.residual,
-                          "finger_contacts": [result.grasp[i] for i in reach.fingers]}
+        record["hand"] = hand_record(hand, result.grasp, contacts)
     if args.output is not None:
         write_json_atomic(args.output, record)
     text = summary(result, contacts)
