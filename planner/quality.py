@@ -5,8 +5,11 @@ when the origin lies strictly inside, else 0. "Strictly" means Q1 > ``TOL.force_
 (1e-9): smaller values report 0. Degenerate sets (fewer than 7 wrenches, wrenches spanning
 an affine subspace of fewer than 6 dimensions, NaNs) give 0, never an exception.
 
-The full hull of a large wrench set is very expensive (800 wrenches: seconds and
-100k+ facets), so :func:`q1_certificate` never builds it. It grows a small active subset
+The fast path is the compiled expanding-polytope kernel of :mod:`planner.kernel`, whose
+answers carry a certificate (the facet complex it built provably encloses the ball of
+radius Q1). Whatever it cannot certify comes here, to two qhull paths. The full hull of
+a large wrench set is very expensive (800 wrenches: seconds and 100k+ facets), so
+:func:`q1_certificate` never builds it for large sets. The qhull path grows a small active subset
 A of W (an expanding-polytope scheme): qhull on A gives the facet of conv(A) nearest the
 origin with offset d and unit normal u; the support of the *full* set along u,
 ``h(u) = max_w u.w``, is an upper bound on Q1 and d (when positive) is a lower bound,
@@ -24,9 +27,12 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial import ConvexHull, QhullError
 
+from planner.kernel import kernel_q1
 from planner.tolerance import TOL
 
 DIM = 6
+#: The compiled kernel takes sets below 4096 wrenches (its ridge keys hold 12-bit indices).
+KERNEL_MAX = 4095
 #: Wrench sets up to this size are hulled directly: one qhull call beats the loop.
 DIRECT_HULL_MAX = 96
 #: With direction hints the active-set loop starts close to the answer and wins earlier.
@@ -43,10 +49,12 @@ class Q1Certificate:
 
     Attributes:
         q1: Ferrari-Canny Q1 [N]; 0 when not in force closure or degenerate.
-        offset: Signed offset of the certified nearest facet [N]; negative when the
-            origin lies outside the hull, NaN for degenerate sets.
-        direction: Unit outward normal of that facet, shape (6,): the wrench direction
-            the grasp resists least. NaN for degenerate sets.
+        offset: For force closure, the offset of the certified nearest facet (= Q1) [N].
+            Otherwise the offset of a supporting hyperplane proving it (<= 1e-9;
+            negative when the origin is strictly outside), not necessarily the most
+            negative facet offset (use :func:`signed_q1` for that). NaN if degenerate.
+        direction: Unit outward normal of that facet or hyperplane, shape (6,): for force
+            closure, the wrench direction the grasp resists least. NaN if degenerate.
         hull_calls: Number of qhull invocations spent.
     """
 
@@ -102,7 +110,9 @@ def _complete_to_full_dimension(wrenches: NDArray[np.float64], active: list[int]
     return active
 
 
-def q1_certificate(wrenches: NDArray[np.float64], hints: NDArray[np.float64] | None = None) -> Q1Certificate:
+def q1_certificate(
+    wrenches: NDArray[np.float64], hints: NDArray[np.float64] | None = None, kernel: bool = True
+) -> Q1Certificate:
     """Exact Q1 of a wrench set, with the certifying facet.
 
     Args:
@@ -110,6 +120,8 @@ def q1_certificate(wrenches: NDArray[np.float64], hints: NDArray[np.float64] | N
         hints: Optional unit directions, shape (j, 6), along which the hull is expected
             to be closest to the origin; their support points seed the active set. They
             only affect speed, never the value.
+        kernel: Try the compiled kernel first (False forces the qhull paths; the value
+            is the same, bit for bit).
 
     Returns:
         The :class:`Q1Certificate`.
@@ -119,6 +131,12 @@ def q1_certificate(wrenches: NDArray[np.float64], hints: NDArray[np.float64] | N
         return _degenerate()
     if not _affine_rank_ok(w):
         return _degenerate()
+    if kernel and w.shape[0] <= KERNEL_MAX:
+        ok, value, direction = kernel_q1(w)
+        if ok and value > 0:
+            return _certificate(w, direction, value, 0)
+        if ok and np.all(np.isfinite(direction)):
+            return Q1Certificate(0.0, float(np.max(w @ direction)), direction, 0)
     if w.shape[0] <= (DIRECT_HULL_MAX if hints is None else HINTED_DIRECT_HULL_MAX):
         return _full_hull_certificate(w)
     return _active_set_q1(w, hints)
@@ -193,6 +211,24 @@ def _certificate(w: NDArray[np.float64], normal: NDArray[np.float64], offset: fl
             refit = vt[DIM - 1] if vt[DIM - 1] @ normal > 0 else -vt[DIM - 1]
             normal, offset = refit, float(refit @ centre)
     return Q1Certificate(_clip(offset), offset, np.array(normal, dtype=float), hull_calls)
+
+
+def signed_q1(wrenches: NDArray[np.float64]) -> float:
+    """Q1 when in force closure, else the most negative facet offset (full hull; small sets).
+
+    The signed form gives randomised optimisers (HFTS) a slope outside force closure.
+
+    Args:
+        wrenches: Wrenches, shape (N, 6).
+
+    Returns:
+        Q1 > 0, or the smallest facet offset (<= 1e-9) [N]; -inf for degenerate sets.
+    """
+    cert = q1_certificate(wrenches)
+    if cert.q1 > 0:
+        return cert.q1
+    full = q1_certificate_direct(wrenches)
+    return full.offset if np.isfinite(full.offset) else -np.inf
 
 
 def q1(wrenches: NDArray[np.float64]) -> float:

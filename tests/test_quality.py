@@ -61,16 +61,33 @@ def test_agrees_with_scipy_hull(name, object_contacts):
     assert max(values) > 0 and min(values) == 0
 
 
-def test_large_set_active_path_matches_full_hull(object_contacts):
-    # 30 contacts = 240 wrenches: the active-set path, with and without direction hints.
-    contacts = object_contacts("box", 30, seed=4)
+@pytest.mark.parametrize("name", OBJECTS)
+def test_kernel_active_set_and_full_hull_agree_bit_for_bit(name, object_contacts):
+    # 30 contacts = 240 wrenches: kernel, active-set qhull (with and without hints), full hull.
+    contacts = object_contacts(name, 30, seed=4)
     w = contacts.subset_wrenches(np.arange(30))
     reference = q1_certificate_direct(w)
     hints = np.random.default_rng(0).normal(size=(12, 6))
     hints /= np.linalg.norm(hints, axis=1, keepdims=True)
-    for cert in (q1_certificate(w), q1_certificate(w, hints)):
-        # Bit-identical whatever path found the facet (the facet plane is refitted canonically).
-        assert cert.q1 == reference.q1 > 0
+    paths = (q1_certificate(w), q1_certificate(w, kernel=False), q1_certificate(w, hints, kernel=False))
+    for cert in paths:
+        assert cert.q1 == reference.q1 > 0  # the facet plane is refitted canonically
+    assert paths[0].hull_calls == 0 and paths[1].hull_calls > 1  # kernel, then the qhull loop
+
+
+@pytest.mark.parametrize("name", OBJECTS)
+def test_kernel_equals_qhull_on_random_grasps(name, object_contacts):
+    contacts = object_contacts(name, 200, seed=9)
+    rng = np.random.default_rng(2)
+    fc = 0
+    for m in (3, 3, 3, 4, 5, 6) * 30:
+        w = contacts.subset_wrenches(rng.choice(200, m, replace=False))
+        fast, slow = q1_certificate(w), q1_certificate(w, kernel=False)
+        assert fast.q1 == slow.q1
+        fc += fast.q1 > 0
+        if fast.q1 == 0 and np.isfinite(fast.offset):  # a supporting hyperplane proves it
+            assert np.max(w @ fast.direction) <= 1e-9
+    assert fc > 10
 
 
 @pytest.mark.parametrize("mu", [0.1, 0.5, 1.0, 1.7])

@@ -33,7 +33,7 @@ from numpy.typing import NDArray
 from planner.contacts import ContactSet
 from planner.errors import OgcpError
 from planner.parallel import run_tasks, validate_backend
-from planner.quality import q1, q1_certificate
+from planner.quality import q1, q1_certificate, signed_q1
 from planner.result import plan_record
 from planner.successors import KMeansPartitioner
 from planner.wrench import contact_wrenches
@@ -145,8 +145,7 @@ def _signed_q1(contacts: ContactSet, positions: NDArray[np.float64], normals: ND
     if np.any(np.linalg.norm(normals, axis=1) < 1e-12):
         return -math.inf
     w = contact_wrenches(positions, normals, contacts.com, contacts.torque_scale, contacts.mu, contacts.cone_edges)
-    cert = q1_certificate(w.reshape(-1, 6))
-    return cert.offset if math.isfinite(cert.offset) else -math.inf
+    return signed_q1(w.reshape(-1, 6))
 
 
 def _one_run(

@@ -1,0 +1,188 @@
+"""Batched kernel calls and the public API of the exact Q1 kernel."""
+
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+from numba import njit, prange
+from numpy.typing import NDArray
+
+from planner.kernel.epa import Workspace, _q1_kernel
+from planner.kernel.geometry import DIM, FALLBACK, FC_TOL, MAX_FACETS, OK, RANK_TOL  # noqa: F401
+
+# --------------------------------------------------------------------------------------
+# Batch kernel
+# --------------------------------------------------------------------------------------
+
+
+@njit(cache=True)
+def _batch_kernel(
+    wc: np.ndarray,
+    grasps: np.ndarray,
+    table: np.ndarray,
+    ws: tuple,
+    certify: bool,
+    out: np.ndarray,
+    status: np.ndarray,
+    stats: np.ndarray,
+    threshold: float,
+) -> None:
+    """Q1 of many grasps of one contact set; see :func:`q1_batch`."""
+    cut = max(threshold, FC_TOL)
+    B, m = grasps.shape
+    k = wc.shape[1]
+    D = table.shape[1]
+    P = np.empty((m * k, DIM))
+    direction = np.empty(DIM)
+    for g in range(B):
+        # Stage 1: support-table rejection (exact proof of Q1 <= 1e-9).
+        rejected = False
+        for t in range(D):
+            h = table[grasps[g, 0], t]
+            for a in range(1, m):
+                v = table[grasps[g, a], t]
+                h = max(h, v)
+            if h <= cut:
+                rejected = True
+                break
+        if rejected:
+            out[g] = h if h > FC_TOL else 0.0
+            status[g] = OK
+            continue
+        for a in range(m):
+            for e in range(k):
+                for j in range(DIM):
+                    P[a * k + e, j] = wc[grasps[g, a], e, j]
+        st, val = _q1_kernel(P, m * k, ws, certify, stats, threshold, direction)
+        out[g] = val
+        status[g] = st
+
+
+@njit(cache=True)
+def _new_workspace(max_points: int, max_facets: int) -> tuple:
+    """The :class:`Workspace` arrays, allocated inside compiled code (one per thread)."""
+    size = 1 << 16
+    return (
+        np.zeros((max_facets, DIM), dtype=np.int32), np.zeros((max_facets, DIM)), np.zeros(max_facets),
+        np.zeros((max_facets, DIM), dtype=np.int32), np.zeros(max_facets, dtype=np.bool_),
+        np.zeros(max_facets, dtype=np.bool_), np.zeros(max_facets, dtype=np.int32),
+        np.zeros((max_facets * DIM, 3), dtype=np.int32), np.zeros(size, dtype=np.int64),
+        np.zeros(size, dtype=np.int32), np.zeros(size, dtype=np.int64), np.zeros(size, dtype=np.int64),
+        np.zeros(size, dtype=np.int64), np.zeros(1, dtype=np.int64), np.zeros(max_points, dtype=np.bool_),
+        np.zeros((5, DIM)), np.zeros(DIM, dtype=np.int64), np.zeros((max_points, DIM)),
+    )
+
+
+@njit(cache=True, parallel=True)
+def _batch_parallel(
+    wc: np.ndarray, grasps: np.ndarray, table: np.ndarray, certify: bool, out: np.ndarray, status: np.ndarray,
+    threshold: float, nchunks: int, max_facets: int,
+) -> None:
+    """:func:`_batch_kernel` over ``nchunks`` contiguous chunks in parallel (own workspace each)."""
+    B = grasps.shape[0]
+    npts = grasps.shape[1] * wc.shape[1]
+    for c in prange(nchunks):
+        lo = c * B // nchunks
+        hi = (c + 1) * B // nchunks
+        ws = _new_workspace(max(64, npts), max_facets)
+        stats = np.zeros(6, dtype=np.int64)
+        _batch_kernel(wc, grasps[lo:hi], table, ws, certify, out[lo:hi], status[lo:hi], stats, threshold)
+
+
+
+
+# --------------------------------------------------------------------------------------
+# Public API
+# --------------------------------------------------------------------------------------
+
+_WS: Workspace | None = None
+#: Diagnostic counters: [EPA iterations, flat ridge pairs certified, facets created, certificates,
+#: pencil normals recomputed by elimination, unused].
+_STATS = np.zeros(6, dtype=np.int64)
+
+
+def _workspace(n: int) -> Workspace:
+    global _WS
+    if _WS is None or _WS.active.shape[0] < n:
+        # Hull size grows quickly with N in 6-D: give large sets room (alive facets).
+        _WS = Workspace(max(64, n), MAX_FACETS if n <= 64 else 1 << 17)
+    return _WS
+
+
+def kernel_q1(wrenches: NDArray[np.float64], certify: bool = True) -> tuple[bool, float, NDArray[np.float64]]:
+    """Exact Q1 of one wrench set by the compiled kernel.
+
+    Args:
+        wrenches: Wrenches, shape (N, 6), N < 4096, finite.
+        certify: Verify the lower bound combinatorially (see :mod:`planner.kernel`).
+
+    Returns:
+        ``(ok, q1, direction)``: ``ok`` False means the kernel could not certify an answer
+        and the caller must use another method; ``direction`` is the unit normal of the
+        settling facet (NaN when none).
+    """
+    w = np.ascontiguousarray(wrenches, dtype=np.float64)
+    direction = np.full(DIM, np.nan)
+    ws = _workspace(len(w))
+    status, value = _q1_kernel(w, len(w), ws.as_tuple(), certify, _STATS, 0.0, direction)
+    return status == OK, float(value), direction
+
+
+@functools.lru_cache(maxsize=8)
+def default_directions(count: int = 128, seed: int = 0) -> NDArray[np.float64]:
+    """The 12 signed axes plus seeded random unit directions, shape (count, 6), read-only."""
+    rng = np.random.default_rng([seed, 6])
+    rnd = rng.normal(size=(max(count - 12, 0), DIM))
+    rnd /= np.linalg.norm(rnd, axis=1, keepdims=True)
+    out = np.vstack([np.eye(DIM), -np.eye(DIM), rnd])[:count]
+    out.setflags(write=False)
+    return out
+
+
+def support_table(contact_wrenches: NDArray[np.float64], directions: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Per-contact support values ``max_e w_ce . u``, shape (n, len(directions))."""
+    return np.ascontiguousarray(np.max(contact_wrenches @ directions.T, axis=1))
+
+
+def q1_batch(
+    contact_wrenches: NDArray[np.float64],
+    grasps: NDArray[np.integer],
+    certify: bool = True,
+    table: NDArray[np.float64] | None = None,
+    threshold: float = 0.0,
+    parallel: bool = False,
+) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+    """Exact Q1 of many grasps of one contact set in one compiled call.
+
+    Args:
+        contact_wrenches: Wrenches of every contact, shape (n, k, 6).
+        grasps: Contact indices of each grasp, shape (B, m).
+        certify: See :func:`kernel_q1`.
+        table: Optional precomputed :func:`support_table` (reuse it across calls).
+        threshold: Branch-and-bound cut-off [N]. 0 (default): every value is the exact
+            Q1. If > 0, every grasp with Q1 > threshold still gets its exact Q1, but a
+            grasp proven to have Q1 <= threshold gets an *upper bound* of its Q1 that
+            is <= threshold (0 when <= 1e-9), found without finishing its hull.
+        parallel: Spread the grasps over all numba threads (same results).
+
+    Returns:
+        ``(q1, ok)``: Q1 per grasp, shape (B,) [N], and whether the kernel settled it; the
+        caller computes the grasps with ``ok`` False by another method (NaN there).
+    """
+    wc = np.ascontiguousarray(contact_wrenches, dtype=np.float64)
+    g = np.ascontiguousarray(grasps, dtype=np.int64)
+    if table is None:
+        table = support_table(wc, default_directions())
+    ws = _workspace(g.shape[1] * wc.shape[1])
+    out = np.empty(len(g))
+    status = np.zeros(len(g), dtype=np.int64)
+    if parallel and len(g) >= 1024:
+        import numba
+
+        nchunks = 4 * numba.get_num_threads()
+        _batch_parallel(wc, g, table, certify, out, status, float(threshold), nchunks,
+                        MAX_FACETS if g.shape[1] * wc.shape[1] <= 64 else 1 << 17)
+    else:
+        _batch_kernel(wc, g, table, ws.as_tuple(), certify, out, status, _STATS, float(threshold))
+    return out, status == OK
