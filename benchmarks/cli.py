@@ -228,7 +228,7 @@ def es_summary(result: ESResult, contacts: ContactSet) -> str:
     if result.counts is not None and admissible:
         lines.append(f"force closure: {admissible - result.zero} of {admissible} "
                      f"({100 * result.force_closure_fraction:.2f} %); histogram over (0, Q_OWS]: {result.counts.tolist()}")
-    lines.append(f"exact hulls: {result.exact_hulls}; time: {result.wall_seconds:.2f} s wall, "
+    lines.append(f"exact evaluations: {result.exact_evaluations}; time: {result.wall_seconds:.2f} s wall, "
                  f"{result.cpu_seconds:.2f} s CPU (all workers)")
     return "\n".join(lines)
 

@@ -47,7 +47,7 @@ def test_es_equals_plain_enumeration(amphora, reference, kwargs):
     expected_counts, _ = np.histogram(values[values > 0], bins=result.bin_edges)
     assert np.array_equal(result.counts, expected_counts)
     assert result.bin_edges[-1] == pytest.approx(result.q_ows) and result.q_ows >= best
-    assert result.exact_hulls < len(grasps)  # bounds settled some grasps as Q1 = 0
+    assert result.exact_evaluations < len(grasps)  # bounds settled some grasps as Q1 = 0
 
 
 def test_pruned_es_is_a_separate_method_with_the_same_argmax(amphora, reference):
@@ -55,7 +55,7 @@ def test_pruned_es_is_a_separate_method_with_the_same_argmax(amphora, reference)
     pruned = ExhaustiveSearch(pruned=True, chunk=300).run(amphora, 3)
     assert (pruned.grasp, pruned.q1) == (plain.grasp, plain.q1)
     assert pruned.method == "es-pruned" and pruned.counts is None and pruned.zero is None
-    assert pruned.exact_hulls < plain.exact_hulls
+    assert pruned.exact_evaluations < plain.exact_evaluations
 
 
 def test_ties_break_to_the_lexicographically_smallest_grasp(object_contacts):

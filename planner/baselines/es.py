@@ -27,23 +27,23 @@ import numpy as np
 from numpy.typing import NDArray
 from tqdm import tqdm
 
-from planner.bounds import SupportBound
 from planner.constraints import Constraint, accepts_many
 from planner.contacts import ContactSet
 from planner.errors import OgcpError
+from planner.kernel import default_directions, q1_batch, support_table
 from planner.parallel import run_tasks, validate_backend
 from planner.quality import q1, q1_certificate
 from planner.result import plan_record
-from planner.tolerance import TOL
 
 from . import combinations
 
 ES_METHODS = ("es", "es-pruned")
 DEFAULT_CHUNK = 200_000
 DEFAULT_BINS = 50
-#: Grasps whose bounds are computed in one vectorised block inside a chunk.
+#: Grasps handed to the compiled kernel in one call inside a chunk.
 BOUND_BLOCK = 50_000
-BOUND_SEED = 0
+#: es-pruned: grasps per kernel call between updates of the cut.
+PRUNE_BATCH = 32
 
 
 @dataclass(frozen=True, eq=False)
@@ -57,7 +57,7 @@ class ChunkResult:
     zero: int
     excluded: int
     evaluated: int
-    exact_hulls: int
+    exact_evaluations: int
     cpu_seconds: float
 
     def to_dict(self) -> dict[str, Any]:
@@ -80,7 +80,8 @@ class ESResult:
         counts: Force-closure grasps per bin (``es`` only).
         zero: Grasps with Q1 = 0 (``es`` only).
         excluded: Grasps that fail a constraint (not in the histogram or the argmax).
-        exact_hulls: Grasps that needed the exact engine (the rest were settled by bounds).
+        exact_evaluations: Grasps whose Q1 needed the exact engine after the compiled batch
+            (force closure, or above the es-pruned cut); the rest were settled there.
         chunks: Number of chunks; ``resumed`` of them came from the checkpoint.
         resumed: Chunks read back from the checkpoint.
         cpu_seconds: CPU time summed over workers, resumed chunks included [s].
@@ -99,7 +100,7 @@ class ESResult:
     counts: NDArray[np.int64] | None
     zero: int | None
     excluded: int
-    exact_hulls: int
+    exact_evaluations: int
     chunks: int
     resumed: int
     cpu_seconds: float
@@ -125,7 +126,7 @@ class ESResult:
         stats = {
             "grasps": self.grasps,
             "excluded_by_constraints": self.excluded,
-            "exact_hulls": self.exact_hulls,
+            "exact_evaluations": self.exact_evaluations,
             "chunks": self.chunks,
             "resumed_chunks": self.resumed,
             "cpu_seconds": self.cpu_seconds,
@@ -154,30 +155,44 @@ def _chunk_task(
     for constraint in constraints:  # P(g) filters the grasps before any quality is computed
         grasps = grasps[accepts_many(constraint, grasps, contacts)]
     excluded = total - len(grasps)
-    bounds = SupportBound(wrenches, seed=BOUND_SEED)
-    support = bounds._support[:, : bounds.count]
     counts = np.zeros(len(edges) - 1, dtype=np.int64)
     zero = exact = 0
     best_q, best_g = 0.0, None
+    table = support_table(wrenches, default_directions())
+
+    def evaluate(batch: NDArray[np.int64], cut: float) -> NDArray[np.float64]:
+        """Q1 of the grasps (exact above ``cut``, an upper bound at or below it)."""
+        nonlocal exact
+        # One compiled call: support-table proofs of Q1 = 0, then the certified kernel; a
+        # grasp that provably cannot exceed the cut gets an upper bound instead.
+        values, ok = q1_batch(wrenches, batch, table=table, threshold=cut)
+        # At or above the cut every value is recomputed through q1_certificate so that it
+        # is the canonical (bit-identical) Q1 every other method reports for the grasp.
+        uncertain = ~ok | (values > 0) & (values >= cut)
+        for i in np.flatnonzero(uncertain):
+            values[i] = q1(wrenches[batch[i]].reshape(-1, 6))
+        exact += int(uncertain.sum())
+        return values
+
     for block_start in range(0, len(grasps), BOUND_BLOCK):
         block = grasps[block_start : block_start + BOUND_BLOCK]
-        upper = support[block].max(axis=1).min(axis=1)
-        candidates = np.flatnonzero(upper > TOL.force_closure)
-        zero += len(block) - len(candidates)
-        if pruned:  # visit high bounds first so the best value prunes early
-            candidates = candidates[np.argsort(-upper[candidates], kind="stable")]
-        for i in candidates:
-            if pruned and upper[i] < best_q:
-                break
-            value = q1(wrenches[block[i]].reshape(-1, 6))
-            exact += 1
-            if value <= 0:
-                zero += 1
-                continue
-            counts[min(int(np.searchsorted(edges, value, side="right")) - 1, len(counts) - 1)] += 1
-            grasp = tuple(int(c) for c in block[i])
-            if value > best_q or (value == best_q and grasp < best_g):
-                best_q, best_g = value, grasp
+        if pruned:
+            # Branch and bound: highest support bound first, the running best as the cut.
+            upper = table[block].max(axis=1).min(axis=1)
+            order = np.argsort(-upper, kind="stable")
+            for start in range(0, len(order), PRUNE_BATCH):
+                batch = np.sort(order[start : start + PRUNE_BATCH])
+                if upper[order[start]] < best_q:
+                    break
+                values = evaluate(block[batch], best_q)
+                best_q, best_g = _better(values, block[batch], best_q, best_g)
+            continue
+        values = evaluate(block, 0.0)
+        zero += int(np.sum(values <= 0))
+        positive = values[values > 0]
+        bins = np.minimum(np.searchsorted(edges, positive, side="right") - 1, len(counts) - 1)
+        counts += np.bincount(bins, minlength=len(counts))
+        best_q, best_g = _better(values, block, best_q, best_g)
     if best_g is None and len(grasps):
         # No grasp of the chunk is in force closure: all tie at 0, and the chunk's grasps
         # are in lexicographic order.
@@ -185,6 +200,19 @@ def _chunk_task(
     return ChunkResult(
         index, best_q, best_g, counts.tolist(), zero, excluded, total, exact, time.process_time() - cpu0
     )
+
+
+def _better(
+    values: NDArray[np.float64], grasps: NDArray[np.int64], best_q: float, best_g: tuple[int, ...] | None
+) -> tuple[float, tuple[int, ...] | None]:
+    """The incumbent after ``grasps`` (in lexicographic order): ties go to the smaller grasp."""
+    if not np.any(values > 0):
+        return best_q, best_g
+    top = float(values.max())
+    grasp = tuple(int(c) for c in grasps[int(np.flatnonzero(values == top)[0])])
+    if top > best_q or (top == best_q and (best_g is None or grasp < best_g)):
+        return top, grasp
+    return best_q, best_g
 
 
 class ExhaustiveSearch:
@@ -302,7 +330,7 @@ class ExhaustiveSearch:
             counts=None if self.pruned else counts,
             zero=None if self.pruned else int(sum(r.zero for r in results.values())),
             excluded=int(sum(r.excluded for r in results.values())),
-            exact_hulls=int(sum(r.exact_hulls for r in results.values())),
+            exact_evaluations=int(sum(r.exact_evaluations for r in results.values())),
             chunks=len(results),
             resumed=resumed,
             cpu_seconds=float(sum(r.cpu_seconds for r in results.values())),
