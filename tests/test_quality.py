@@ -197,3 +197,39 @@ def test_oracle_never_evaluates_a_union_twice(object_contacts):
     again = oracle.of_masks([oracle.mask_of(np.arange(20)), a])  # same union, other parts
     assert first == again == oracle.of_indices(np.arange(20))
     assert oracle.evaluations == 1 and oracle.cache_hits == 2
+
+
+def test_kernel_adversarial_sets(object_contacts):
+    box = object_contacts("box", 200, seed=3)
+    top = np.flatnonzero(np.isclose(box.normals[:, 2], -1.0))  # inward normal -z: the top face
+    assert len(top) >= 6
+    for g in (top[:3], top[:6], np.array([top[0], top[0], top[1]]), np.array([top[0]] * 3)):
+        w = box.subset_wrenches(g)
+        assert q1_certificate(w).q1 == q1_certificate(w, kernel=False).q1 == 0.0  # one face cannot hold
+    rng = np.random.default_rng(4)
+    for _ in range(40):  # duplicated contacts inside otherwise random grasps
+        g = rng.choice(200, 4, replace=False)
+        g[3] = g[0]
+        w = box.subset_wrenches(g)
+        assert q1_certificate(w).q1 == q1_certificate(w, kernel=False).q1
+
+
+def test_q1_is_invariant_to_translating_and_scaling_the_object(object_contacts):
+    # Only p - com enters the wrenches and torques are divided by rho, so moving the object
+    # or scaling it (rho scaled alike) leaves Q1 unchanged. (Rotation does not: the fixed
+    # tangent basis turns the linearised cone about the normal with the world axes.)
+    contacts = object_contacts("amphora", 100, seed=6)
+    shift, scale = np.array([0.3, -1.2, 2.5]), 3.7
+    moved = ContactSet(contacts.positions + shift, contacts.normals, contacts.com + shift,
+                       contacts.torque_scale, contacts.mu, contacts.cone_edges)
+    scaled = ContactSet(contacts.positions * scale, contacts.normals, contacts.com * scale,
+                        contacts.torque_scale * scale, contacts.mu, contacts.cone_edges)
+    rng = np.random.default_rng(8)
+    fc = 0
+    for _ in range(60):
+        g = rng.choice(100, int(rng.integers(3, 7)), replace=False)
+        a = q1(contacts.subset_wrenches(g))
+        assert q1(moved.subset_wrenches(g)) == pytest.approx(a, abs=1e-12)
+        assert q1(scaled.subset_wrenches(g)) == pytest.approx(a, abs=1e-12)
+        fc += a > 0
+    assert fc > 5

@@ -25,3 +25,17 @@ def test_super_contact_ogcp(benchmark, super_contact):
 def test_super_contact_scipy(benchmark, super_contact):
     benchmark.group = "q1-large"
     benchmark.pedantic(scipy_q1, args=(super_contact,), rounds=1, iterations=1)
+
+
+def test_small_grasps_batched_kernel(benchmark, box1000):
+    import numpy as np
+
+    from planner.kernel import default_directions, q1_batch, support_table
+
+    benchmark.group = "q1-small"
+    rng = np.random.default_rng(0)
+    grasps = np.array([rng.choice(1000, 3, replace=False) for _ in range(100)])
+    wrenches = np.asarray(box1000.wrenches)
+    table = support_table(wrenches, default_directions())
+    values, ok = benchmark(q1_batch, wrenches, grasps, table=table)
+    assert ok.all() and len(values) == 100
