@@ -33,6 +33,9 @@ from planner.tolerance import TOL
 DIM = 6
 #: The compiled kernel takes sets below 4096 wrenches (its ridge keys hold 12-bit indices).
 KERNEL_MAX = 4095
+#: Sets above KERNEL_MAX: seeded directions whose support points start the active set, and
+#: how many support points beyond the facet join it per round.
+ACTIVE_DIRECTIONS, ACTIVE_SEED, ACTIVE_ADD = 116, 0, 64
 #: Wrench sets up to this size are hulled directly: one qhull call beats the loop.
 DIRECT_HULL_MAX = 96
 #: With direction hints the active-set loop starts close to the answer and wins earlier.
@@ -137,9 +140,43 @@ def q1_certificate(
             return _certificate(w, direction, value, 0)
         if ok and np.all(np.isfinite(direction)):
             return Q1Certificate(0.0, float(np.max(w @ direction)), direction, 0)
+    if kernel and w.shape[0] > KERNEL_MAX:
+        cert = _kernel_active_set_q1(w)
+        if cert is not None:
+            return cert
     if w.shape[0] <= (DIRECT_HULL_MAX if hints is None else HINTED_DIRECT_HULL_MAX):
         return _full_hull_certificate(w)
     return _active_set_q1(w, hints)
+
+
+def _kernel_active_set_q1(w: NDArray[np.float64]) -> Q1Certificate | None:
+    """The active-set certificate with the compiled kernel on the subset (sets too large for it).
+
+    The kernel gives the nearest facet of conv(A) for a subset A; the support of the full
+    set along its normal bounds Q1 from above, the kernel's certified value from below,
+    and support points beyond the facet join A until the two agree. None when the kernel
+    cannot certify or A outgrows it (the caller then uses qhull).
+    """
+    rng = np.random.default_rng(ACTIVE_SEED)
+    directions = rng.normal(size=(ACTIVE_DIRECTIONS, DIM))
+    directions = np.vstack([np.eye(DIM), -np.eye(DIM), directions / np.linalg.norm(directions, axis=1, keepdims=True)])
+    active = np.zeros(len(w), dtype=bool)
+    active[np.argmax(w @ directions.T, axis=0)] = True
+    while active.sum() <= KERNEL_MAX:
+        ok, value, direction = kernel_q1(w[active])
+        if not ok or not np.all(np.isfinite(direction)):
+            return None  # a degenerate subset says nothing about the full set
+        support = w @ direction
+        top = float(support.max())
+        if value <= 0 and top <= TOL.force_closure:
+            return Q1Certificate(0.0, top, direction, 0)
+        if value > 0 and top - value <= TOL.q1_gap:
+            return _certificate(w, direction, value, 0)
+        beyond = np.flatnonzero((support > max(value, 0.0) + TOL.q1_gap) & ~active)
+        if beyond.size == 0:
+            return None
+        active[beyond[np.argsort(-support[beyond])[:ACTIVE_ADD]]] = True
+    return None
 
 
 def _active_set_q1(w: NDArray[np.float64], hints: NDArray[np.float64] | None) -> Q1Certificate:

@@ -233,3 +233,10 @@ def test_q1_is_invariant_to_translating_and_scaling_the_object(object_contacts):
         assert q1(scaled.subset_wrenches(g)) == pytest.approx(a, abs=1e-12)
         fc += a > 0
     assert fc > 5
+
+
+@pytest.mark.parametrize("name", ["donut", "amphora"])
+def test_sets_beyond_the_kernel_size_use_the_kernel_active_set(name, object_contacts):
+    w = object_contacts(name, 600, seed=0).wrenches.reshape(-1, 6)  # 4800 wrenches > 4095
+    fast, slow = q1_certificate(w), q1_certificate(w, kernel=False)
+    assert fast.q1 == slow.q1 > 0 and fast.hull_calls == 0 < slow.hull_calls
