@@ -44,6 +44,7 @@ from planner.constraints import Constraint, DistinctContacts
 from planner.contacts import ContactSet
 from planner.errors import OgcpError, choice_error
 from planner.oracle import GraspQuality, PackedMask
+from planner.provenance import provenance
 from planner.result import SearchResult, SearchStats, effective_branching_factor
 from planner.successors import SUCCESSORS, Indices, PartitionTree, make_partitioner
 from planner.symmetry import SymmetryFilter
@@ -162,6 +163,7 @@ class GraspPlanner:
         Raises:
             OgcpError: For invalid parameters, or when no grasp satisfies the constraints.
         """
+        provenance()  # recorded now: the commit and versions of the code that runs
         config = self.resolved_config()
         if not isinstance(m, (int, np.integer)) or m < 2:
             raise OgcpError(f"number of contacts m must be an integer >= 2, got {m!r}")

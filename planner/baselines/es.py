@@ -32,6 +32,7 @@ from planner.contacts import ContactSet
 from planner.errors import OgcpError
 from planner.kernel import default_directions, q1_batch, support_table
 from planner.parallel import run_tasks, validate_backend
+from planner.provenance import provenance
 from planner.quality import q1, q1_certificate
 from planner.result import plan_record
 
@@ -260,6 +261,7 @@ class ExhaustiveSearch:
         Raises:
             OgcpError: For invalid parameters or a checkpoint of a different run.
         """
+        provenance()  # recorded now: the commit and versions of the code that runs
         validate_backend(self.backend, self.address, self.jobs)
         n = len(contacts)
         if not isinstance(m, (int, np.integer)) or m < 2 or m > n:

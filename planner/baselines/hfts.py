@@ -33,6 +33,7 @@ from numpy.typing import NDArray
 from planner.contacts import ContactSet
 from planner.errors import OgcpError
 from planner.parallel import run_tasks, validate_backend
+from planner.provenance import provenance
 from planner.quality import q1, q1_certificate, signed_q1
 from planner.result import plan_record
 from planner.successors import KMeansPartitioner
@@ -250,6 +251,7 @@ class HFTS:
 
     def run(self, contacts: ContactSet, m: int) -> HFTSResult:
         """Run HFTS R times and collect the runs (best first in ``grasp``/``q1``)."""
+        provenance()  # recorded now: the commit and versions of the code that runs
         validate_backend(self.backend, self.address, self.jobs)
         for name in ("runs", "iterations"):
             value = getattr(self, name)
