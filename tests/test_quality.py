@@ -240,3 +240,15 @@ def test_sets_beyond_the_kernel_size_use_the_kernel_active_set(name, object_cont
     w = object_contacts(name, 600, seed=0).wrenches.reshape(-1, 6)  # 4800 wrenches > 4095
     fast, slow = q1_certificate(w), q1_certificate(w, kernel=False)
     assert fast.q1 == slow.q1 > 0 and fast.hull_calls == 0 < slow.hull_calls
+
+
+def test_kernel_is_safe_under_threads(object_contacts):
+    from concurrent.futures import ThreadPoolExecutor
+
+    contacts = object_contacts("sphere", 200, seed=1)
+    rng = np.random.default_rng(3)
+    sets = [contacts.subset_wrenches(rng.choice(200, int(rng.integers(3, 12)), replace=False)) for _ in range(200)]
+    serial = [q1(w) for w in sets]
+    with ThreadPoolExecutor(max_workers=4) as pool:
+        threaded = list(pool.map(q1, sets))
+    assert threaded == serial and any(v > 0 for v in serial)

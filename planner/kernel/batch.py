@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import functools
+import threading
 
 import numpy as np
 from numba import njit, prange
@@ -96,18 +97,20 @@ def _batch_parallel(
 # Public API
 # --------------------------------------------------------------------------------------
 
-_WS: Workspace | None = None
+#: One workspace per thread: Dask workers run several tasks in one process at once.
+_LOCAL = threading.local()
 #: Diagnostic counters: [EPA iterations, flat ridge pairs certified, facets created, certificates,
-#: pencil normals recomputed by elimination, unused].
+#: pencil normals recomputed by elimination, unused]. Shared; only indicative under threads.
 _STATS = np.zeros(6, dtype=np.int64)
 
 
 def _workspace(n: int) -> Workspace:
-    global _WS
-    if _WS is None or _WS.active.shape[0] < n:
+    workspace = getattr(_LOCAL, "workspace", None)
+    if workspace is None or workspace.active.shape[0] < n:
         # Hull size grows quickly with N in 6-D: give large sets room (alive facets).
-        _WS = Workspace(max(64, n), MAX_FACETS if n <= 64 else 1 << 17)
-    return _WS
+        workspace = Workspace(max(64, n), MAX_FACETS if n <= 64 else 1 << 17)
+        _LOCAL.workspace = workspace
+    return workspace
 
 
 def kernel_q1(wrenches: NDArray[np.float64], certify: bool = True) -> tuple[bool, float, NDArray[np.float64]]:
