@@ -14,7 +14,7 @@ from numpy.typing import NDArray
 
 from planner.bounds import SupportBound, Vector
 from planner.contacts import ContactSet
-from planner.quality import q1_certificate
+from planner.quality import KERNEL_MAX, q1_certificate
 from planner.tolerance import TOL
 
 PackedMask = NDArray[np.uint8]
@@ -66,14 +66,15 @@ class GraspQuality:
         if cached is not None:
             self.cache_hits += 1
             return cached
-        hints = None
-        if vectors is not None:
-            if self.bounds.bound(vectors) <= TOL.force_closure:
-                self.bound_rejections += 1
-                self._cache[key] = 0.0
-                return 0.0
-            hints = self.bounds.lowest_directions(vectors, HINT_DIRECTIONS)
+        if vectors is not None and self.bounds.bound(vectors) <= TOL.force_closure:
+            self.bound_rejections += 1
+            self._cache[key] = 0.0
+            return 0.0
         indices = np.flatnonzero(np.unpackbits(union, count=self.n))
+        hints = None
+        if vectors is not None and len(indices) * self.contacts.cone_edges > KERNEL_MAX:
+            # Hints only steer the qhull loop, which sets the kernel takes never reach.
+            hints = self.bounds.lowest_directions(vectors, HINT_DIRECTIONS)
         cert = q1_certificate(self.contacts.subset_wrenches(indices), hints)
         self.evaluations += 1
         self.hull_calls += cert.hull_calls
