@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import hashlib
 import itertools
-import os
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -30,6 +29,7 @@ from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 from scipy.spatial.distance import cdist
 
+from planner.cache import cache_dir as default_cache_dir
 from planner.contacts import ContactSet
 from planner.errors import OgcpError
 from planner.hands.sdh import (
@@ -128,7 +128,7 @@ class SDHReachability:
         if not (np.isfinite(threshold) and threshold > 0):
             raise OgcpError(f"reachability threshold must be a positive number, got {threshold!r}")
         self.samples, self.seed, self.threshold = samples, seed, float(threshold)
-        self.cache_dir = Path(cache_dir or os.environ.get("OGCP_CACHE") or Path.home() / ".cache" / "ogcp")
+        self.cache_dir = Path(cache_dir) if cache_dir else default_cache_dir()
         self.q, codes = self._load_or_sample()
         self.scale = np.maximum(codes.std(axis=0), 1e-9)
         self.codes = codes / self.scale
