@@ -6,15 +6,17 @@ Every invalid input ends in one line on stderr (``ogcp: error: ...``) and exit s
 from __future__ import annotations
 
 import argparse
+import importlib
 import json
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from planner import __version__
+from planner.atomic import write_json_atomic
 from planner.baselines.es import DEFAULT_BINS, DEFAULT_CHUNK, ES_METHODS, ESResult, ExhaustiveSearch
 from planner.baselines.hfts import HFTS, HFTSResult
 from planner.constraints import Constraint, MaxFingerSpread
@@ -29,6 +31,9 @@ from planner.successors import SUCCESSORS
 
 DEFAULT_CONTACTS = 100
 HANDS = ("sdh",)
+# Modules with a ``register(commands)`` function; each module must import its heavy
+# dependencies (MuJoCo, matplotlib) inside its handlers, not at import time.
+EXTRA_COMMAND_MODULES: tuple[str, ...] = ()
 
 
 def _positive_int(text: str) -> int:
@@ -114,7 +119,21 @@ def build_parser() -> argparse.ArgumentParser:
                       help="skip the A* run that reports the optimum next to the HFTS spread")
     plan.add_argument("--json", action="store_true", help="print one JSON object (schema ogcp.plan/1)")
     plan.add_argument("-o", "--output", type=Path, default=None, help="also write the JSON result to this file")
+    for register in command_registrars():
+        register(commands)
     return parser
+
+
+def command_registrars() -> list[Callable[[Any], None]]:
+    """``register(commands)`` of every command defined outside this module.
+
+    Each adds its sub-parser and sets ``handler`` (``args -> exit status``) as a default;
+    imported here, lazily, so that ``ogcp plan`` never pays for MuJoCo or matplotlib.
+    """
+    registrars: list[Callable[[Any], None]] = []
+    for name in EXTRA_COMMAND_MODULES:
+        registrars.append(importlib.import_module(name).register)
+    return registrars
 
 
 def load_contact_set(spec: str, args: argparse.Namespace) -> ContactSet:
@@ -138,16 +157,6 @@ def contact_set_record(contacts: ContactSet) -> dict[str, Any]:
         "cone_edges": contacts.cone_edges,
         "source": contacts.source,
     }
-
-
-def write_json_atomic(path: Path, data: dict[str, Any]) -> None:
-    """Write JSON so that a crash never leaves a truncated file."""
-    tmp = path.with_name(path.name + ".tmp")
-    try:
-        tmp.write_text(json.dumps(data, indent=1) + "\n")
-        tmp.replace(path)
-    except OSError as exc:
-        raise OgcpError(f"cannot write {path}: {exc.strerror or exc}") from exc
 
 
 def summary(result: SearchResult, contacts: ContactSet) -> str:
@@ -333,7 +342,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     handlers = {"contacts": run_contacts, "plan": run_plan}
     try:
-        return handlers[args.command](args)
+        handler = getattr(args, "handler", None) or handlers[args.command]
+        return int(handler(args))
     except OgcpError as exc:
         print(f"ogcp: error: {exc}", file=sys.stderr)
         return 2
