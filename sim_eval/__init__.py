@@ -1,5 +1,25 @@
-"""ogcp physics validation in MuJoCo (measured resistance of planned grasps against Q1).
+"""ogcp physics validation in MuJoCo: measured resistance of planned grasps against Q1.
 
-This package consumes plan results (schema ``ogcp.plan/1``); its modules arrive with the
-simulation work. It imports only the planner's value types, never its search.
+Each grasp is simulated with fingertip spheres at its contacts on a CoACD-decomposed object;
+disturbance wrenches are ramped along many directions until the object moves, and the
+measured resistance is compared with Q1 and with the analytic limit of the same actuation
+model. The package consumes plan results (schema ``ogcp.plan/1``) and the planner's value
+types; it never runs a search and never imports matplotlib.
 """
+
+from sim_eval.decompose import Decomposition, DecompositionSettings, decompose
+from sim_eval.evaluate import GraspEvaluator, evaluate_plan
+from sim_eval.result import SIM_SCHEMA, GraspSimResult, SimResult
+from sim_eval.settings import SimSettings
+
+__all__ = [
+    "SIM_SCHEMA",
+    "Decomposition",
+    "DecompositionSettings",
+    "GraspEvaluator",
+    "GraspSimResult",
+    "SimResult",
+    "SimSettings",
+    "decompose",
+    "evaluate_plan",
+]

@@ -1,0 +1,185 @@
+"""The object as a rigid body for simulation: convex parts, mass properties, surface distance.
+
+Mass and inertia come from the watertight mesh, never from the union of convex parts, whose
+overlaps would count some volume twice. Distances are exact point-triangle distances in numpy
+(no spatial index), which suits parts of tens to hundreds of faces.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Sequence
+
+import numpy as np
+import trimesh
+from numpy.typing import ArrayLike, NDArray
+from scipy.spatial import ConvexHull, QhullError
+
+from planner.contacts import NonWatertightWarning, mass_properties
+from planner.errors import OgcpError
+
+Part = tuple[NDArray[np.float64], NDArray[np.int64]]
+_PAIRS_PER_BLOCK = 200_000  # point-triangle pairs per vectorised block: bounds memory to a few tens of MB
+
+
+def is_closed_manifold(faces: NDArray[np.int64]) -> bool:
+    """CoACD's edge test: every directed edge occurs once and its reverse occurs too.
+
+    That holds exactly for a closed, consistently oriented surface. (CoACD also rejects
+    self-intersecting meshes, which this does not test.)
+
+    Args:
+        faces: Triangles as vertex indices, shape (f, 3).
+    """
+    faces = np.asarray(faces, dtype=np.int64)
+    edges = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
+    unique = np.unique(edges, axis=0)
+    if len(unique) != len(edges):
+        return False
+    # Every reversed edge is among the edges exactly when adding them creates no new row.
+    return len(np.unique(np.concatenate([unique, edges[:, ::-1]]), axis=0)) == len(unique)
+
+
+def hull_part(points: ArrayLike) -> Part | None:
+    """Convex hull of a point set as a closed mesh with outward faces; None when it has no volume.
+
+    Args:
+        points: Points, shape (n, 3) [m] (not modified).
+
+    Returns:
+        ``(vertices (v, 3), faces (f, 3))``, both read-only, or None for a flat or degenerate set.
+    """
+    try:
+        hull = trimesh.convex.convex_hull(np.array(points, dtype=np.float64), repair=True)
+    except (QhullError, ValueError):
+        return None
+    if len(hull.faces) < 4 or not hull.volume > 0:
+        return None
+    vertices = np.array(hull.vertices, dtype=np.float64)
+    faces = np.array(hull.faces, dtype=np.int64)
+    vertices.setflags(write=False)
+    faces.setflags(write=False)
+    return vertices, faces
+
+
+def object_inertia(mesh: trimesh.Trimesh, mass: float = 0.1) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Centre of mass and inertia tensor of the object at uniform density.
+
+    A closed, consistently oriented mesh gives exact values. For an open mesh the volume is
+    undefined: the COM is then the planner's (area-weighted surface centroid, see
+    :func:`planner.contacts.mass_properties`), so that simulated torques act about the same
+    point as the planned wrenches, and the inertia tensor is that of the mesh's convex hull
+    about the hull's own centroid; a :class:`NonWatertightWarning` says so.
+
+    Args:
+        mesh: Object mesh [m].
+        mass: Object mass [kg].
+
+    Returns:
+        ``(com, inertia)``: COM, shape (3,) [m]; inertia about the COM in the mesh frame,
+        shape (3, 3) [kg·m²], symmetric.
+
+    Raises:
+        OgcpError: For a non-positive mass, a closed mesh with inconsistent or inward faces,
+            or an open mesh whose convex hull is flat.
+    """
+    if isinstance(mass, bool) or not isinstance(mass, int | float) or not (0 < mass < float("inf")):
+        raise OgcpError(f"object mass must be a positive number of kilograms, got {mass!r}")
+    if mesh.is_watertight:
+        if not mesh.is_winding_consistent:
+            raise OgcpError("the object mesh is closed but its faces are not consistently oriented; "
+                            "its volume is undefined (repair it with trimesh.repair.fix_normals)")
+        volume = float(mesh.volume)
+        if not volume > 0:
+            raise OgcpError(f"the object mesh encloses a volume of {volume:.3g} m^3, which is not positive; "
+                            "its faces point inward (flip them with mesh.invert())")
+        com = np.array(mesh.center_mass, dtype=float)
+        inertia = np.array(mesh.moment_inertia, dtype=float) * (mass / volume)
+    else:
+        hull = mesh.convex_hull
+        if not hull.volume > 0:
+            raise OgcpError("the object mesh is open and its convex hull is flat: it has no volume to give a mass")
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", NonWatertightWarning)
+            com, _ = mass_properties(mesh)
+        warnings.warn("mesh is not watertight: centre of mass = area-weighted surface centroid (as planned), "
+                      "inertia from the convex hull", NonWatertightWarning, stacklevel=2)
+        inertia = np.array(hull.moment_inertia, dtype=float) * (mass / float(hull.volume))
+    return np.asarray(com, dtype=float), 0.5 * (inertia + inertia.T)
+
+
+def _segment_distance(p: NDArray[np.float64], a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Distance from points p (n, 1, 3) to segments a-b (1, f, 3), shape (n, f)."""
+    ab = b - a
+    length2 = np.einsum("...k,...k->...", ab, ab)
+    t = np.einsum("...k,...k->...", p - a, ab) / np.where(length2 > 0, length2, 1.0)
+    t = np.clip(t, 0.0, 1.0)[..., None]
+    return np.linalg.norm(p - (a + t * ab), axis=-1)
+
+
+def triangle_distances(points: NDArray[np.float64], triangles: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Exact Euclidean distance of every point to every triangle.
+
+    The nearest point of a triangle is the foot of the perpendicular when that foot lies in
+    the triangle, else it lies on one of the three edges.
+
+    Args:
+        points: Query points, shape (n, 3) [m].
+        triangles: Triangle corners, shape (f, 3, 3) [m].
+
+    Returns:
+        Distances, shape (n, f) [m].
+    """
+    p = points[:, None, :]
+    a, b, c = (triangles[None, :, i, :] for i in range(3))
+    normal = np.cross(b - a, c - a)
+    area2 = np.linalg.norm(normal, axis=-1)
+    # The foot is inside when it lies left of every edge, seen along the normal.
+    inside = area2 > 0
+    for start, end in ((a, b), (b, c), (c, a)):
+        inside = inside & (np.einsum("...k,...k->...", np.cross(end - start, p - start), normal) >= 0)
+    plane = np.abs(np.einsum("...k,...k->...", p - a, normal)) / np.where(area2 > 0, area2, 1.0)
+    edges = np.minimum(np.minimum(_segment_distance(p, a, b), _segment_distance(p, b, c)), _segment_distance(p, c, a))
+    return np.where(inside, plane, edges)
+
+
+def surface_distance(parts: Sequence[Part], points: ArrayLike) -> NDArray[np.float64]:
+    """Signed distance of points to the surface of the union of convex parts.
+
+    Outside every part the value is the exact distance to the union (the nearest part).
+    Inside some part it is minus the largest depth of the point in any single part; the
+    true depth in the union is at least that much (a point deep in the union may sit near
+    the boundary of each part it lies in), so negative values are bounds on the depth, not
+    exact depths. Points on the outer surface give 0.
+
+    Args:
+        parts: Convex parts, each ``(vertices (v, 3) [m], faces (f, 3))``.
+        points: Query points (e.g. planned contacts), shape (n, 3) [m].
+
+    Returns:
+        Signed distances, shape (n,) [m]: positive outside, negative inside.
+
+    Raises:
+        OgcpError: For no parts, a flat part or points that are not (n, 3).
+    """
+    points = np.asarray(points, dtype=np.float64)
+    if points.ndim != 2 or points.shape[1] != 3 or not np.all(np.isfinite(points)):
+        raise OgcpError(f"query points must be finite with shape (n, 3), got {points.shape}")
+    if len(parts) == 0:
+        raise OgcpError("cannot measure distance to an empty set of parts")
+    outside = np.full(len(points), np.inf)
+    depth = np.zeros(len(points))
+    for k, (vertices, faces) in enumerate(parts):
+        vertices = np.array(vertices, dtype=np.float64)
+        triangles = vertices[np.asarray(faces, dtype=np.int64)]
+        block = max(1, _PAIRS_PER_BLOCK // len(triangles))
+        for start in range(0, len(points), block):
+            chunk = slice(start, start + block)
+            outside[chunk] = np.minimum(outside[chunk], triangle_distances(points[chunk], triangles).min(axis=1))
+        try:
+            planes = ConvexHull(vertices).equations  # outward unit normals and offsets
+        except QhullError as exc:
+            raise OgcpError(f"part {k} is flat: it has no inside") from exc
+        # Inside a convex part the distance to its boundary is the distance to the nearest facet plane.
+        depth = np.maximum(depth, -(points @ planes[:, :3].T + planes[:, 3]).max(axis=1))
+    return np.where(depth > 0, -depth, outside)

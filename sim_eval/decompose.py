@@ -1,0 +1,513 @@
+"""Convex decomposition of object meshes for MuJoCo (which collides mesh geoms as convex hulls).
+
+:func:`decompose` splits a mesh into convex parts with CoACD (or takes its convex hull) and
+caches the result by content: the key is the sha256 of the mesh arrays, the settings (except
+the timeout) and the CoACD version. An entry is a folder ``<key>/`` holding ``parts.npz``,
+``meta.json`` and CoACD's log. It is written in a temporary folder beside it and renamed into
+place, so readers see a whole entry or none; an unreadable entry is recomputed, and when two
+processes write the same entry the first rename wins and the other uses it.
+
+CoACD runs in a child Python process, so that a run past the timeout can be killed and a crash
+in its native code cannot take the caller down; arrays travel through ``.npz`` files.
+Its log goes to a file and never to the terminal; it also tells whether CoACD's ``auto``
+preprocessing judged the mesh non-manifold and remeshed it.
+
+Non-watertight meshes: preprocess ``on`` (and ``auto``, for meshes that fail CoACD's manifold
+check) remeshes them into a closed manifold first; preprocess ``off`` needs a closed,
+consistently oriented mesh and is refused otherwise.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import importlib.metadata
+import inspect
+import io
+import json
+import math
+import numbers
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+import uuid
+import warnings
+import zipfile
+from dataclasses import asdict, dataclass, field, fields
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import trimesh
+from numpy.typing import NDArray
+from scipy.spatial import ConvexHull
+from tqdm import tqdm
+
+from planner.cache import cache_dir
+from planner.errors import OgcpError, choice_error
+from sim_eval.body import Part, hull_part, is_closed_manifold, object_inertia, surface_distance
+
+__all__ = [
+    "CacheWriteWarning",
+    "Decomposition",
+    "DecompositionSettings",
+    "cache_key",
+    "decompose",
+    "mesh_sha256",
+    "object_inertia",  # re-exported from sim_eval.body for the evaluator
+    "surface_distance",
+]
+
+SCHEMA = "ogcp.decomposition/1"
+METHODS = ("coacd", "convex_hull")
+PREPROCESS_MODES = ("auto", "on", "off")
+#: Settings that only exist in some CoACD releases; passed only when the installed one has them.
+OPTIONAL_COACD_ARGS = ("decimate", "max_ch_vertex")
+_POLL_S = 0.2  # [s] how often the parent checks on the child
+_MANIFOLD_LOG = re.compile(r"Mesh Manifoldness:\s*(true|false|1|0)", re.IGNORECASE)
+
+
+class CacheWriteWarning(UserWarning):
+    """A decomposition was computed but could not be stored in the cache."""
+
+
+#: Integer settings and their ranges (None: unbounded above); CoACD rejects a preprocess
+#: resolution outside 5-1000 and takes an unsigned 32-bit seed.
+_INT_RANGES = {"preprocess_resolution": (5, 1000), "resolution": (1, None), "mcts_nodes": (1, None),
+               "mcts_iterations": (1, None), "mcts_max_depth": (1, None), "max_ch_vertex": (4, None),
+               "seed": (0, 2**32 - 1)}
+
+
+def _number(value: object, integral: bool) -> bool:
+    kind = numbers.Integral if integral else numbers.Real
+    return isinstance(value, kind) and not isinstance(value, bool)
+
+
+@dataclass(frozen=True)
+class DecompositionSettings:
+    """How to split a mesh into convex parts (CoACD's parameters plus method and timeout).
+
+    Attributes:
+        method: ``"coacd"`` (approximate convex decomposition) or ``"convex_hull"`` (one part,
+            the hull of the mesh: exact for convex objects, fast for tests).
+        threshold: CoACD concavity threshold, 0.01-1 (smaller: more, tighter parts).
+        max_convex_hull: Most parts CoACD may return; -1 = no limit.
+        preprocess_mode: ``"auto"`` (remesh only meshes failing CoACD's manifold check),
+            ``"on"`` (always remesh) or ``"off"`` (never; the mesh must be closed).
+        preprocess_resolution: Voxel resolution of the remeshing, 5-1000.
+        resolution: Surface samples per part for CoACD's concavity metric.
+        mcts_nodes: Children per node of CoACD's cutting-plane tree search.
+        mcts_iterations: Iterations of the tree search.
+        mcts_max_depth: Depth of the tree search.
+        merge: Merge parts afterwards when the merge keeps concavity below threshold.
+        decimate: Limit the vertices of every part to ``max_ch_vertex``.
+        max_ch_vertex: Vertex limit per part when ``decimate`` is on.
+        seed: CoACD's random seed (fixed, so results repeat).
+        timeout_s: Wall-clock limit of one CoACD run [s]; not part of the cache key.
+    """
+
+    method: str = "coacd"
+    threshold: float = 0.05
+    max_convex_hull: int = -1
+    preprocess_mode: str = "auto"
+    preprocess_resolution: int = 50
+    resolution: int = 2000
+    mcts_nodes: int = 20
+    mcts_iterations: int = 150
+    mcts_max_depth: int = 3
+    merge: bool = True
+    decimate: bool = False
+    max_ch_vertex: int = 256
+    seed: int = 0
+    timeout_s: float = 300.0
+
+    def __post_init__(self) -> None:
+        if self.method not in METHODS:
+            raise choice_error("decomposition method", self.method, METHODS)
+        if self.preprocess_mode not in PREPROCESS_MODES:
+            raise choice_error("CoACD preprocess mode", self.preprocess_mode, PREPROCESS_MODES)
+        if not (_number(self.threshold, False) and 0.01 <= self.threshold <= 1.0):
+            raise OgcpError(f"CoACD threshold must be a number from 0.01 to 1, got {self.threshold!r}")
+        if not (_number(self.timeout_s, False) and 0 < self.timeout_s < math.inf):
+            raise OgcpError(f"decomposition timeout must be a positive number of seconds, got {self.timeout_s!r}")
+        if not (_number(self.max_convex_hull, True) and (self.max_convex_hull == -1 or self.max_convex_hull >= 1)):
+            raise OgcpError(f"max_convex_hull must be -1 (no limit) or an integer >= 1, got {self.max_convex_hull!r}")
+        for name, (low, high) in _INT_RANGES.items():
+            value = getattr(self, name)
+            if not (_number(value, True) and low <= value and (high is None or value <= high)):
+                bounds = f"from {low} to {high}" if high is not None else f">= {low}"
+                raise OgcpError(f"decomposition {name} must be an integer {bounds}, got {value!r}")
+            object.__setattr__(self, name, int(value))  # plain ints keep to_dict() JSON-ready
+        for name in ("merge", "decimate"):
+            if not isinstance(getattr(self, name), bool | np.bool_):
+                raise OgcpError(f"decomposition {name} must be true or false, got {getattr(self, name)!r}")
+            object.__setattr__(self, name, bool(getattr(self, name)))
+        object.__setattr__(self, "max_convex_hull", int(self.max_convex_hull))
+        object.__setattr__(self, "threshold", float(self.threshold))
+        object.__setattr__(self, "timeout_s", float(self.timeout_s))
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> DecompositionSettings:
+        """Settings from a mapping of field names (e.g. :meth:`to_dict` output or user JSON)."""
+        known = {f.name for f in fields(cls)}
+        for name in data:
+            if name not in known:
+                raise choice_error("decomposition setting", name, known)
+        return cls(**data)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON form: every field."""
+        return asdict(self)
+
+    def key_dict(self) -> dict[str, Any]:
+        """The fields that determine the parts: the hull ignores CoACD's; the timeout never counts."""
+        if self.method == "convex_hull":
+            return {"method": self.method}
+        return {k: v for k, v in self.to_dict().items() if k != "timeout_s"}
+
+
+@dataclass(frozen=True, eq=False)
+class Decomposition:
+    """Convex parts of one mesh.
+
+    Attributes:
+        parts: Per part ``(vertices (v, 3) [m], faces (f, 3))``: a closed convex hull with
+            outward faces; arrays are read-only.
+        meta: What was computed and how (schema ``ogcp.decomposition/1``): ``hull_count``,
+            ``volume_ratio`` (sum of part volumes / mesh volume, None for an open mesh),
+            ``compute_seconds``, ``remeshed``, versions, settings, mesh sha256 and sizes.
+        cache_path: The cache entry folder, or None when it could not be written.
+    """
+
+    parts: tuple[Part, ...]
+    meta: dict[str, Any] = field(default_factory=dict)
+    cache_path: Path | None = None
+
+    def meshes(self) -> list[trimesh.Trimesh]:
+        """The parts as trimesh meshes."""
+        return [trimesh.Trimesh(v, f, process=False) for v, f in self.parts]
+
+
+def coacd_version() -> str:
+    """Version of the installed CoACD ("missing" when it is not installed)."""
+    try:
+        return importlib.metadata.version("coacd")
+    except importlib.metadata.PackageNotFoundError:
+        return "missing"
+
+
+def _mesh_arrays(mesh: trimesh.Trimesh) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    vertices = np.ascontiguousarray(mesh.vertices, dtype=np.float64)
+    faces = np.ascontiguousarray(mesh.faces, dtype=np.int64)
+    if vertices.ndim != 2 or vertices.shape[1] != 3 or faces.ndim != 2 or faces.shape[1] != 3 or len(faces) == 0:
+        raise OgcpError("cannot decompose: the mesh holds no triangles")
+    if not np.all(np.isfinite(vertices)):
+        raise OgcpError("cannot decompose: the mesh has non-finite vertex coordinates")
+    if faces.min() < 0 or faces.max() >= len(vertices):
+        raise OgcpError("cannot decompose: the mesh has faces that index missing vertices")
+    return vertices, faces
+
+
+def _mesh_bytes(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> bytes:
+    # The counts separate the two arrays, so no other pair of arrays gives the same bytes.
+    header = f"{len(vertices)} {len(faces)}\n".encode()
+    return header + vertices.astype("<f8").tobytes() + faces.astype("<i8").tobytes()
+
+
+def mesh_sha256(mesh: trimesh.Trimesh) -> str:
+    """Hex sha256 of a mesh's vertices (float64) and faces (int64)."""
+    return hashlib.sha256(_mesh_bytes(*_mesh_arrays(mesh))).hexdigest()
+
+
+def cache_key(mesh: trimesh.Trimesh, settings: DecompositionSettings) -> str:
+    """Content key of a decomposition: sha256 of mesh arrays, settings (no timeout), CoACD version."""
+    settings_json = json.dumps(settings.key_dict(), sort_keys=True, separators=(",", ":"))
+    payload = _mesh_bytes(*_mesh_arrays(mesh)) + settings_json.encode() + b"\n" + coacd_version().encode()
+    return hashlib.sha256(payload).hexdigest()
+
+
+def _pack(parts: tuple[Part, ...]) -> bytes:
+    buffer = io.BytesIO()
+    np.savez(
+        buffer,
+        vertices=np.concatenate([v for v, _ in parts]),
+        faces=np.concatenate([f for _, f in parts]),
+        vertex_counts=np.array([len(v) for v, _ in parts], dtype=np.int64),
+        face_counts=np.array([len(f) for _, f in parts], dtype=np.int64),
+    )
+    return buffer.getvalue()
+
+
+def _unpack(path: Path) -> list[tuple[NDArray[np.float64], NDArray[np.int64]]]:
+    with np.load(path, allow_pickle=False) as data:
+        vertices, faces = data["vertices"], data["faces"]
+        vertex_counts, face_counts = data["vertex_counts"], data["face_counts"]
+    if len(vertex_counts) != len(face_counts) or vertex_counts.sum() != len(vertices) or face_counts.sum() != len(faces):
+        raise ValueError("part counts do not match the arrays")
+    v_split = np.split(np.asarray(vertices, dtype=np.float64).reshape(-1, 3), np.cumsum(vertex_counts)[:-1])
+    f_split = np.split(np.asarray(faces, dtype=np.int64).reshape(-1, 3), np.cumsum(face_counts)[:-1])
+    parts = []
+    for v, f in zip(v_split, f_split, strict=True):
+        if len(f) == 0 or f.min() < 0 or f.max() >= len(v):
+            raise ValueError("a part's faces index missing vertices")
+        parts.append((v, f))
+    return parts
+
+
+def _load_entry(folder: Path, key: str) -> Decomposition | None:
+    """A complete, readable cache entry, or None for a missing, partial or corrupt one."""
+    try:
+        meta = json.loads((folder / "meta.json").read_text())
+        loaded = _unpack(folder / "parts.npz")
+    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile):
+        return None  # missing, truncated or garbled: recomputed
+    if not isinstance(meta, dict) or meta.get("key") != key or meta.get("hull_count") != len(loaded):
+        return None
+    parts = []
+    for v, f in loaded:
+        v.setflags(write=False)
+        f.setflags(write=False)
+        parts.append((v, f))
+    return Decomposition(tuple(parts), meta, folder)
+
+
+def _write_synced(path: Path, data: bytes) -> None:
+    with open(path, "wb") as handle:
+        handle.write(data)
+        handle.flush()
+        os.fsync(handle.fileno())
+
+
+def _discard(folder: Path) -> None:
+    """Move a corrupt entry aside (one atomic rename) and delete it; another process may beat us."""
+    trash = folder.with_name(f".{folder.name}.{uuid.uuid4().hex}.trash")
+    try:
+        os.rename(folder, trash)
+    except FileNotFoundError:
+        return
+    shutil.rmtree(trash, ignore_errors=True)
+
+
+def _store(root: Path, key: str, parts: tuple[Part, ...], meta: dict[str, Any], log: str) -> Path | None:
+    """Write an entry atomically; returns the entry folder (ours or a concurrent writer's)."""
+    final = root / key
+    try:
+        root.mkdir(parents=True, exist_ok=True)
+        tmp = Path(tempfile.mkdtemp(dir=root, prefix=f".{key}.", suffix=".tmp"))
+    except OSError as exc:
+        warnings.warn(f"cannot write decomposition cache {root}: {exc.strerror or exc}", CacheWriteWarning, stacklevel=3)
+        return None
+    try:
+        _write_synced(tmp / "parts.npz", _pack(parts))
+        _write_synced(tmp / "coacd.log", log.encode())
+        _write_synced(tmp / "meta.json", (json.dumps(meta, indent=1) + "\n").encode())
+        os.chmod(tmp, 0o755)  # mkdtemp makes it private; a cache entry is for every user of the folder
+        for _ in range(2):
+            try:
+                os.rename(tmp, final)  # fails when `final` exists and is not empty
+                return final
+            except OSError:
+                if _load_entry(final, key) is not None:
+                    return final  # a concurrent writer finished first: use its entry
+                _discard(final)
+        warnings.warn(f"cannot store decomposition in {final}", CacheWriteWarning, stacklevel=3)
+        return None
+    except OSError as exc:
+        warnings.warn(f"cannot write decomposition cache {root}: {exc.strerror or exc}", CacheWriteWarning, stacklevel=3)
+        return None
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+def _coacd_kwargs(settings: DecompositionSettings) -> dict[str, Any]:
+    """Keyword arguments of ``coacd.run_coacd``, checked against the installed signature."""
+    try:
+        import coacd
+    except ImportError as exc:
+        raise OgcpError(f"CoACD is not importable ({exc}); install coacd or use method 'convex_hull'") from exc
+
+    accepted = inspect.signature(coacd.run_coacd).parameters
+    defaults = DecompositionSettings()
+    kwargs = {k: v for k, v in settings.key_dict().items() if k != "method"}
+    for name in OPTIONAL_COACD_ARGS:
+        if name not in accepted:
+            if kwargs[name] != getattr(defaults, name):
+                raise OgcpError(f"the installed CoACD {coacd_version()} has no {name} option")
+            del kwargs[name]
+    return kwargs
+
+
+def _child_command(workdir: Path) -> list[str]:
+    # The child runs this module's _child_main from source: importing sim_eval would load the
+    # whole package (MuJoCo included) just to call CoACD.
+    source = inspect.getsource(_child_main) + "\nimport sys\nsys.exit(_child_main(sys.argv[1]))\n"
+    return [sys.executable, "-c", source, str(workdir)]
+
+
+def _wait(proc: subprocess.Popen[bytes], timeout: float, name: str, progress: bool) -> None:
+    start = time.monotonic()
+    with tqdm(desc=f"CoACD {name}", bar_format="{desc}: {elapsed} elapsed", file=sys.stderr,
+              disable=not progress) as bar:
+        try:
+            while True:
+                remaining = timeout - (time.monotonic() - start)
+                if remaining <= 0:
+                    raise OgcpError(
+                        f"CoACD did not finish within {timeout:g} s on {name}; raise --timeout or increase threshold")
+                try:
+                    proc.wait(timeout=min(_POLL_S, remaining))
+                    return
+                except subprocess.TimeoutExpired:
+                    bar.refresh()
+        finally:
+            if proc.poll() is None:
+                proc.kill()
+                proc.wait()
+
+
+def _run_coacd(vertices: NDArray[np.float64], faces: NDArray[np.int64], settings: DecompositionSettings,
+               name: str, progress: bool) -> tuple[list[NDArray[np.float64]], float, str]:
+    """Run CoACD in a child process; returns part vertex sets, CoACD's wall time [s] and its log."""
+    kwargs = _coacd_kwargs(settings)
+    with tempfile.TemporaryDirectory(prefix="ogcp-coacd-") as tmp:
+        workdir = Path(tmp)
+        np.savez(workdir / "input.npz", vertices=vertices, faces=faces.astype(np.int32))
+        (workdir / "job.json").write_text(json.dumps(kwargs))
+        with open(workdir / "coacd.log", "wb") as log:
+            proc = subprocess.Popen(_child_command(workdir), stdout=log, stderr=subprocess.STDOUT,
+                                    stdin=subprocess.DEVNULL)
+            _wait(proc, settings.timeout_s, name, progress)
+        text = (workdir / "coacd.log").read_text(errors="replace")
+        if proc.returncode != 0:
+            error = workdir / "error.txt"
+            if error.is_file():
+                raise OgcpError(f"CoACD failed on {name}: {error.read_text().strip()}")
+            how = f"signal {-proc.returncode}" if proc.returncode < 0 else f"exit status {proc.returncode}"
+            last = next((line.strip() for line in reversed(text.splitlines()) if line.strip()), "no output")
+            raise OgcpError(f"CoACD crashed on {name} ({how}): {last}")
+        try:
+            with np.load(workdir / "parts.npz", allow_pickle=False) as data:
+                parts = [np.asarray(data[f"arr_{i}"], dtype=np.float64) for i in range(len(data.files))]
+            seconds = float(json.loads((workdir / "result.json").read_text())["seconds"])
+        except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as exc:
+            raise OgcpError(f"CoACD left no readable result on {name}: {exc}") from exc
+    return parts, seconds, text
+
+
+def _remeshed(settings: DecompositionSettings, log: str) -> bool | None:
+    if settings.method == "convex_hull" or settings.preprocess_mode == "off":
+        return False
+    if settings.preprocess_mode == "on":
+        return True
+    found = _MANIFOLD_LOG.search(log)  # "auto": CoACD remeshes what fails its manifold check
+    return None if found is None else found.group(1).lower() in ("false", "0")
+
+
+def decompose(mesh: trimesh.Trimesh, settings: DecompositionSettings | None = None, cache: Path | None = None,
+              progress: bool = False, name: str | None = None) -> Decomposition:
+    """Convex parts of a mesh, from the cache or computed (and then cached).
+
+    Args:
+        mesh: Object mesh [m] (not modified).
+        settings: Decomposition settings; default :class:`DecompositionSettings()`.
+        cache: Cache folder; default ``planner.cache.cache_dir("decompositions")``.
+        progress: Show an elapsed-time indicator on stderr while CoACD runs.
+        name: Object name for messages; default the mesh's ``metadata["name"]`` or its hash.
+
+    Returns:
+        The decomposition; parts whose hull is flat (no volume) are dropped and counted in
+        ``meta["dropped_parts"]``.
+
+    Raises:
+        OgcpError: For an empty mesh, an open mesh with preprocess ``off``, a CoACD run past
+            the timeout, a CoACD error or crash, or a decomposition without any solid part.
+    """
+    settings = settings or DecompositionSettings()
+    vertices, faces = _mesh_arrays(mesh)
+    key = cache_key(mesh, settings)
+    mesh_sha = mesh_sha256(mesh)
+    name = name or str(mesh.metadata.get("name") or mesh.metadata.get("file_name") or f"mesh {mesh_sha[:12]}")
+    root = Path(cache) if cache is not None else cache_dir("decompositions")
+    cached = _load_entry(root / key, key)
+    if cached is not None:
+        return cached
+    manifold = is_closed_manifold(faces)
+    if settings.method == "coacd":
+        if settings.preprocess_mode == "off" and not manifold:
+            raise OgcpError(f"{name} is not a closed, consistently oriented mesh; CoACD needs one with preprocess "
+                            "'off': use preprocess 'on' or 'auto' to remesh it")
+        raw, seconds, log = _run_coacd(vertices, faces, settings, name, progress)
+        hulls = [hull_part(v) for v in raw]
+    else:
+        start = time.perf_counter()
+        hulls, log = [hull_part(vertices)], ""
+        seconds = time.perf_counter() - start
+    parts = tuple(h for h in hulls if h is not None)
+    if not parts:
+        raise OgcpError(f"decomposition of {name} has no part with volume (is the mesh flat?)")
+    hull_volume = float(sum(ConvexHull(np.array(v)).volume for v, _ in parts))
+    mesh_volume = float(mesh.volume) if mesh.is_watertight and mesh.is_winding_consistent else None
+    meta = {
+        "schema": SCHEMA,
+        "key": key,
+        "name": name,
+        "method": settings.method,
+        "hull_count": len(parts),
+        "dropped_parts": len(hulls) - len(parts),
+        "part_vertices": [len(v) for v, _ in parts],
+        "hull_volume_sum": hull_volume,
+        "mesh_volume": mesh_volume,
+        "volume_ratio": hull_volume / mesh_volume if mesh_volume and mesh_volume > 0 else None,
+        "compute_seconds": seconds,
+        "preprocess_mode": settings.preprocess_mode if settings.method == "coacd" else None,
+        "input_closed_manifold": manifold,
+        "remeshed": _remeshed(settings, log),
+        "coacd_version": coacd_version(),
+        "settings": settings.key_dict(),
+        "mesh_sha256": mesh_sha,
+        "vertices": len(vertices),
+        "faces": len(faces),
+        "created": datetime.now(UTC).isoformat(timespec="seconds"),
+    }
+    stored = _store(root, key, parts, meta, log)
+    entry = _load_entry(stored, key) if stored is not None else None
+    return entry or Decomposition(parts, meta, None)
+
+
+def _child_main(workdir: str) -> int:
+    """Child process: CoACD on ``input.npz`` with ``job.json``; writes ``parts.npz``, ``result.json``.
+
+    Runs from its own source (see :func:`_child_command`), so it imports what it uses itself
+    and touches no module globals.
+    """
+    import json
+    import os
+    import time
+
+    import numpy as np
+
+    try:
+        import coacd
+
+        with open(os.path.join(workdir, "job.json")) as handle:
+            kwargs = json.load(handle)
+        with np.load(os.path.join(workdir, "input.npz")) as data:
+            mesh = coacd.Mesh(data["vertices"], data["faces"])
+        coacd.set_log_level("info")  # to the log file, where the parent reads the remeshing decision
+        start = time.perf_counter()
+        result = coacd.run_coacd(mesh, **kwargs)
+        seconds = time.perf_counter() - start
+        if not result:
+            raise RuntimeError("CoACD returned no parts")
+        np.savez(os.path.join(workdir, "parts.npz"), *[np.asarray(v, dtype=np.float64) for v, _ in result])
+        with open(os.path.join(workdir, "result.json"), "w") as handle:
+            json.dump({"seconds": seconds}, handle)
+    except Exception as exc:  # noqa: BLE001 - every failure must reach the parent as a message
+        with open(os.path.join(workdir, "error.txt"), "w") as handle:
+            handle.write(f"{type(exc).__name__}: {exc}".strip().splitlines()[0] + "\n")
+        return 1
+    return 0

@@ -1,0 +1,270 @@
+"""The loading protocol: preload and settle, then ramp disturbance wrenches until the object moves.
+
+Every direction's trial starts from the same settled state and runs in a batch through
+``mujoco.rollout`` (threads), with the disturbance as a per-step ``xfrc_applied`` control on
+the object: force and torque at its centre of mass, world frame. :func:`serial_trials` runs
+the same trials with a plain ``mj_step`` loop (the reference the rollout is checked against).
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+
+import mujoco
+import numpy as np
+from mujoco import rollout
+from numpy.typing import NDArray
+
+from sim_eval.scene import GraspScene
+from sim_eval.settings import SimSettings
+
+FULL_STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
+CONTROL_SPEC = mujoco.mjtState.mjSTATE_CTRL | mujoco.mjtState.mjSTATE_XFRC_APPLIED
+QPOS_OFFSET = 1  # the full physics state starts with the time, then qpos
+CREEP_WINDOW = 0.1  # [s] the end of settling over which the object must be still
+CONTACT_FRACTION = 0.01  # a tip touches when its normal force exceeds this fraction of F_max
+DIRECTIONS_PER_BATCH = 16  # bounds the rollout's state buffer
+RUNAWAY_RADII = 50.0  # a slide this many tip radii from its start has diverged
+
+
+@dataclass(frozen=True, eq=False)
+class Settled:
+    """The preloaded grasp after settling.
+
+    Attributes:
+        state: Full physics state, shape (nstate,).
+        pose: Object position [m] and quaternion, shape (7,).
+        gates: Validity gates: ``initial_penetration`` [m], ``tips_in_contact`` (count),
+            ``creep`` [m], ``diverged`` (bool), and ``valid`` (all passed).
+        normal_forces: Normal force of each tip on the object after settling, shape (m,) [N].
+    """
+
+    state: NDArray[np.float64]
+    pose: NDArray[np.float64]
+    gates: dict[str, float | int | bool]
+    normal_forces: NDArray[np.float64]
+
+
+@dataclass(frozen=True, eq=False)
+class TrialResult:
+    """Outcome of ramped trials.
+
+    Attributes:
+        failure_load: Load magnitude at which the object first moved beyond the thresholds, shape
+            (D,) [N, scaled wrench]; the ramp's final load where it never moved.
+        failed: Whether each trial reached the thresholds, shape (D,).
+        diverged: Whether each trial produced non-finite states, shape (D,).
+        steps: Physics steps per trial.
+    """
+
+    failure_load: NDArray[np.float64]
+    failed: NDArray[np.bool_]
+    diverged: NDArray[np.bool_]
+    steps: int
+    extra: dict[str, float] = field(default_factory=dict)
+
+
+def tip_normal_forces(scene: GraspScene, data: mujoco.MjData) -> NDArray[np.float64]:
+    """Summed normal force of each tip's contacts with the object, shape (m,) [N]."""
+    forces = np.zeros(scene.fingers)
+    wrench = np.zeros(6)
+    tip_index = {int(g): i for i, g in enumerate(scene.tip_geoms)}
+    for c in range(data.ncon):
+        contact = data.contact[c]
+        for geom in (contact.geom1, contact.geom2):
+            if geom in tip_index:
+                mujoco.mj_contactForce(scene.model, data, c, wrench)
+                forces[tip_index[geom]] += wrench[0]
+    return forces
+
+
+def _penetration(scene: GraspScene, data: mujoco.MjData) -> float:
+    depth = 0.0
+    for c in range(data.ncon):
+        depth = max(depth, -float(data.contact[c].dist))
+    return depth
+
+
+def _displacement(pose: NDArray[np.float64], reference: NDArray[np.float64]) -> tuple[NDArray, NDArray]:
+    """Translation [m] and rotation angle [deg] of poses (..., 7) relative to one reference pose."""
+    shift = np.linalg.norm(pose[..., :3] - reference[:3], axis=-1)
+    dots = np.abs(np.clip(np.einsum("...i,i->...", pose[..., 3:7], reference[3:7]), -1.0, 1.0))
+    angle = np.degrees(2.0 * np.arccos(np.minimum(dots, 1.0)))
+    return shift, angle
+
+
+def settle(scene: GraspScene, settings: SimSettings) -> Settled:
+    """Preload the grasp, let it settle and check the validity gates.
+
+    Args:
+        scene: The compiled grasp model.
+        settings: Simulation settings (``settle_time``, tolerances).
+
+    Returns:
+        The settled state with its gates.
+    """
+    model = scene.model
+    data = mujoco.MjData(model)
+    data.ctrl[:] = scene.preload_ctrl
+    mujoco.mj_forward(model, data)
+    penetration = _penetration(scene, data)
+    steps = max(1, round(settings.settle_time / model.opt.timestep))
+    window = min(steps, max(1, round(CREEP_WINDOW / model.opt.timestep)))
+    q = slice(scene.object_qpos, scene.object_qpos + 7)
+    diverged = False
+    # Tips flung far from the object (an unstable step size) count as divergence too.
+    slides = np.setdiff1d(np.arange(model.nq), np.arange(scene.object_qpos, scene.object_qpos + 7))
+    runaway = RUNAWAY_RADII * scene.tip_radius
+    window_start = data.qpos[q].copy()
+    for k in range(steps):
+        if k == steps - window:
+            window_start = data.qpos[q].copy()
+        mujoco.mj_step(model, data)
+        if not np.all(np.isfinite(data.qpos)) or np.max(np.abs(data.qpos[slides])) > runaway:
+            diverged = True
+            break
+    # MuJoCo resets the data when the acceleration blows up, so a rewound clock also means divergence.
+    rewound = data.time < (steps - 0.5) * model.opt.timestep
+    diverged = diverged or rewound or bool(data.warning[mujoco.mjtWarning.mjWARN_BADQACC].number)
+    pose = data.qpos[q].copy()
+    shift, _ = _displacement(pose, window_start) if not diverged else (np.inf, np.inf)
+    forces = tip_normal_forces(scene, data) if not diverged else np.zeros(scene.fingers)
+    touching = int(np.sum(forces > CONTACT_FRACTION * settings.max_normal_force))
+    gates: dict[str, float | int | bool] = {
+        "initial_penetration": penetration,
+        "tips_in_contact": touching,
+        "creep": float(shift),
+        "diverged": diverged,
+    }
+    gates["valid"] = bool(not diverged and penetration <= settings.penetration_tolerance
+                          and touching == scene.fingers and float(shift) <= settings.creep_tolerance)
+    state = np.empty(mujoco.mj_stateSize(model, FULL_STATE))
+    mujoco.mj_getState(model, data, state, FULL_STATE)
+    return Settled(state, pose, gates, forces)
+
+
+def _physical(directions: NDArray[np.float64], torque_scale: float) -> NDArray[np.float64]:
+    """Scaled directions (D, 6) -> xfrc rows (D, 6): force [N] and torque [N·m] per unit load."""
+    rows = np.array(directions, dtype=float)
+    rows[:, 3:] *= torque_scale
+    return rows
+
+
+def _controls(scene: GraspScene, loads: NDArray[np.float64], rows: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Per-step controls (D, nstep, nu + 6 nbody): preload ctrl and the object's xfrc."""
+    model = scene.model
+    trials, nstep = loads.shape
+    controls = np.zeros((trials, nstep, model.nu + 6 * model.nbody))
+    controls[:, :, : model.nu] = scene.preload_ctrl
+    start = model.nu + 6 * scene.object_body
+    controls[:, :, start : start + 6] = loads[:, :, None] * rows[:, None, :]
+    return controls
+
+
+def _first_failure(poses: NDArray[np.float64], reference: NDArray[np.float64],
+                   settings: SimSettings) -> tuple[NDArray[np.intp], NDArray[np.bool_], NDArray[np.bool_]]:
+    shift, angle = _displacement(poses, reference)
+    finite = np.all(np.isfinite(poses), axis=-1)
+    moved = (shift > settings.move_threshold) | (angle > settings.rotation_threshold) | ~finite
+    failed = moved.any(axis=1)
+    first = np.where(failed, moved.argmax(axis=1), poses.shape[1] - 1)
+    return first, failed, ~finite.all(axis=1)
+
+
+def ramp_trials(scene: GraspScene, settled: Settled, directions: NDArray[np.float64], rates: NDArray[np.float64],
+                duration: float, torque_scale: float, settings: SimSettings) -> TrialResult:
+    """Ramp a load along each direction from the settled state (batched rollout over threads).
+
+    Args:
+        scene: The compiled grasp model.
+        settled: The settled state the trials start from.
+        directions: Unit disturbance directions in scaled wrench space, shape (D, 6).
+        rates: Load rate of each direction, shape (D,) [N/s, scaled wrench].
+        duration: Length of every ramp [s].
+        torque_scale: rho [m] that turns scaled torques into N·m.
+        settings: Simulation settings (thresholds, threads).
+
+    Returns:
+        Failure loads and flags per direction.
+    """
+    model = scene.model
+    nstep = max(1, int(np.ceil(duration / model.opt.timestep)))
+    times = np.arange(nstep) * model.opt.timestep
+    rows = _physical(directions, torque_scale)
+    threads = settings.threads or os.cpu_count() or 1
+    datas = [mujoco.MjData(model) for _ in range(threads)]
+    loads_all = np.asarray(rates, dtype=float)[:, None] * times[None, :]
+    failure = np.empty(len(directions))
+    failed = np.zeros(len(directions), dtype=bool)
+    diverged = np.zeros(len(directions), dtype=bool)
+    q = slice(QPOS_OFFSET + scene.object_qpos, QPOS_OFFSET + scene.object_qpos + 7)
+    for begin in range(0, len(directions), DIRECTIONS_PER_BATCH):
+        batch = slice(begin, min(begin + DIRECTIONS_PER_BATCH, len(directions)))
+        loads = loads_all[batch]
+        controls = _controls(scene, loads, rows[batch])
+        initial = np.tile(settled.state, (len(loads), 1))
+        state, _ = rollout.rollout(model, datas, initial, controls, control_spec=CONTROL_SPEC)
+        first, hit, bad = _first_failure(state[:, :, q], settled.pose, settings)
+        failure[batch] = loads[np.arange(len(loads)), first]
+        failed[batch], diverged[batch] = hit, bad
+    return TrialResult(failure, failed, diverged, nstep)
+
+
+def serial_trials(scene: GraspScene, settled: Settled, directions: NDArray[np.float64], rates: NDArray[np.float64],
+                  duration: float, torque_scale: float, settings: SimSettings) -> TrialResult:
+    """The same trials as :func:`ramp_trials` with a plain serial ``mj_step`` loop (reference)."""
+    model = scene.model
+    data = mujoco.MjData(model)
+    nstep = max(1, int(np.ceil(duration / model.opt.timestep)))
+    rows = _physical(directions, torque_scale)
+    failure = np.empty(len(directions))
+    failed = np.zeros(len(directions), dtype=bool)
+    diverged = np.zeros(len(directions), dtype=bool)
+    q = slice(scene.object_qpos, scene.object_qpos + 7)
+    for t, (row, rate) in enumerate(zip(rows, rates, strict=True)):
+        mujoco.mj_setState(model, data, settled.state, FULL_STATE)
+        data.ctrl[:] = scene.preload_ctrl
+        failure[t] = rate * (nstep - 1) * model.opt.timestep
+        for k in range(nstep):
+            load = rate * k * model.opt.timestep
+            data.xfrc_applied[scene.object_body] = load * row
+            mujoco.mj_step(model, data)
+            pose = data.qpos[q]
+            if not np.all(np.isfinite(pose)):
+                failure[t], failed[t], diverged[t] = load, True, True
+                break
+            shift, angle = _displacement(pose, settled.pose)
+            if shift > settings.move_threshold or angle > settings.rotation_threshold:
+                failure[t], failed[t] = load, True
+                break
+    return TrialResult(failure, failed, diverged, nstep)
+
+
+def hold_trials(scene: GraspScene, settled: Settled, loads: NDArray[np.float64], duration: float,
+                move_limit: float, rotation_limit: float, settings: SimSettings) -> NDArray[np.bool_]:
+    """Constant-load trials (weight test, DexGraspBench compatibility): does the grasp hold?
+
+    Args:
+        scene: The compiled grasp model.
+        settled: The settled start state.
+        loads: Physical wrenches on the object (force [N], torque [N·m]), shape (L, 6).
+        duration: Duration of each trial [s].
+        move_limit: Largest displacement that still passes [m].
+        rotation_limit: Largest rotation that still passes [deg].
+        settings: Simulation settings (threads).
+
+    Returns:
+        Pass flag per load, shape (L,).
+    """
+    model = scene.model
+    nstep = max(1, int(np.ceil(duration / model.opt.timestep)))
+    threads = settings.threads or os.cpu_count() or 1
+    datas = [mujoco.MjData(model) for _ in range(threads)]
+    controls = _controls(scene, np.ones((len(loads), nstep)), np.asarray(loads, dtype=float))
+    initial = np.tile(settled.state, (len(loads), 1))
+    state, _ = rollout.rollout(model, datas, initial, controls, control_spec=CONTROL_SPEC)
+    poses = state[:, :, QPOS_OFFSET + scene.object_qpos: QPOS_OFFSET + scene.object_qpos + 7]
+    shift, angle = _displacement(poses, settled.pose)
+    finite = np.all(np.isfinite(poses), axis=(1, 2))
+    return finite & (np.nanmax(shift, axis=1) < move_limit) & (np.nanmax(angle, axis=1) < rotation_limit)

@@ -1,0 +1,170 @@
+"""Every setting of a simulated grasp test, in one validated value recorded with each result."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, fields, replace
+from typing import Any
+
+from planner.errors import OgcpError, choice_error
+
+PROTOCOLS = ("resistance", "dexgraspbench")
+INTEGRATORS = ("implicitfast", "implicit", "euler", "rk4")
+CONES = ("elliptic", "pyramidal")
+SOLVERS = ("Newton", "CG", "PGS")
+
+
+@dataclass(frozen=True)
+class SimSettings:
+    """Physics, actuation and protocol settings of a simulated grasp test.
+
+    Actuation model (the analytic prediction uses the same one): each fingertip is a sphere
+    on three slides, one along its contact normal and two tangential. The normal slide is a
+    position servo whose force is capped at ``max_normal_force`` F_max; its target lies
+    ``target_factor * F_max / kp`` past the contact, so after settling every tip presses with
+    up to F_max and can trade normal force within [0, F_max] over ``servo_compliance`` of
+    travel. The tangential slides are stiff position servos holding the tip in place.
+
+    Attributes:
+        max_normal_force: Per-finger normal-force cap F_max [N].
+        tip_radius: Fingertip sphere radius [m]; None = ``tip_radius_ratio`` x the object's
+            bounding-box diagonal.
+        tip_radius_ratio: Default tip radius as a fraction of the bounding-box diagonal.
+        tip_mass: Mass of each fingertip body [kg].
+        slide_armature: Armature of every slide [kg]; keeps stiff servos stable at ``timestep``.
+        servo_compliance: F_max / kp of the normal servo [m].
+        tangential_compliance: F_max / kp of the tangential servos [m].
+        target_factor: Normal servo target depth in units of F_max / kp (> 1 saturates the preload).
+        object_mass: Object mass [kg]; inertia comes from the watertight mesh.
+        mu: Friction coefficient; None = the plan's contact-set mu.
+        timestep: Physics step [s].
+        integrator: MuJoCo integrator.
+        cone: Friction cone type.
+        impratio: Frictional-to-normal constraint impedance ratio.
+        noslip_iterations: Post-solve no-slip iterations (stop creep under sustained load).
+        solver: Constraint solver.
+        solver_iterations: Maximum solver iterations per step.
+        contact_solref: Contact solref (time constant [s], damping ratio).
+        contact_solimp: Contact solimp (dmin, dmax, width [m]).
+        gravity: Whether gravity acts during the resistance protocol.
+        settle_time: Duration of the preload phase before loading [s].
+        creep_tolerance: Largest object drift over the last 0.1 s of settling [m].
+        penetration_tolerance: Largest initial tip penetration accepted [m].
+        directions: Number of quasi-uniform 6-D directions besides the 12 axes and Q1's weakest.
+        direction_seed: Seed of those directions.
+        move_threshold: Object displacement that counts as failure [m].
+        rotation_threshold: Object rotation that counts as failure [deg].
+        ramp_time: Time for the load to reach the predicted resistance [s].
+        ramp_extent: Ramp end as a multiple of the predicted resistance.
+        min_ramp_fraction: Directions predicted (near) zero ramp towards this fraction of the
+            grasp's largest prediction.
+        prediction_cone_edges: Polygon edges of the friction cones in the prediction LP; MuJoCo's
+            cones are elliptic, so the prediction uses a fine polygon (error 1 - cos(pi / k)).
+        holding_load: Fixed load a grasp must resist in every direction to count as holding
+            (the label of the set-level ROC-AUC) [N, scaled wrench].
+        weight_test: Also hold the object's weight m g along the six force axes for 2 s.
+        protocol: "resistance" (ramp to failure) or "dexgraspbench" (fixed load, pass/fail).
+        threads: Rollout threads; None = all cores.
+    """
+
+    max_normal_force: float = 10.0
+    tip_radius: float | None = None
+    tip_radius_ratio: float = 0.04
+    tip_mass: float = 0.05
+    slide_armature: float = 0.5
+    servo_compliance: float = 2e-4
+    tangential_compliance: float = 1e-4
+    target_factor: float = 1.5
+    object_mass: float = 0.1
+    mu: float | None = None
+    timestep: float = 0.002
+    integrator: str = "implicitfast"
+    cone: str = "elliptic"
+    impratio: float = 10.0
+    noslip_iterations: int = 2
+    solver: str = "Newton"
+    solver_iterations: int = 100
+    contact_solref: tuple[float, float] = (0.004, 1.0)
+    contact_solimp: tuple[float, float, float] = (0.95, 0.99, 1e-4)
+    gravity: bool = False
+    settle_time: float = 0.5
+    creep_tolerance: float = 2e-5
+    penetration_tolerance: float = 1e-3
+    directions: int = 64
+    direction_seed: int = 0
+    move_threshold: float = 2e-3
+    rotation_threshold: float = 2.0
+    ramp_time: float = 4.0
+    ramp_extent: float = 1.5
+    min_ramp_fraction: float = 0.1
+    prediction_cone_edges: int = 32
+    holding_load: float = 1.0
+    weight_test: bool = False
+    protocol: str = "resistance"
+    threads: int | None = None
+
+    def __post_init__(self) -> None:
+        positive = ("max_normal_force", "tip_radius_ratio", "tip_mass", "servo_compliance", "tangential_compliance",
+                    "object_mass", "timestep", "impratio", "settle_time", "creep_tolerance", "penetration_tolerance",
+                    "move_threshold", "rotation_threshold", "ramp_time", "min_ramp_fraction", "holding_load")
+        for name in positive:
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+                raise OgcpError(f"simulation setting {name} must be a positive number, got {value!r}")
+        for name in ("tip_radius", "mu"):
+            value = getattr(self, name)
+            if value is not None and not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+                raise OgcpError(f"simulation setting {name} must be a positive number or unset, got {value!r}")
+        if not self.ramp_extent > 1.0:
+            raise OgcpError(f"simulation setting ramp_extent must be > 1, got {self.ramp_extent!r}")
+        if not self.target_factor > 1.0:
+            raise OgcpError(f"simulation setting target_factor must be > 1, got {self.target_factor!r}")
+        for name, low in (("noslip_iterations", 0), ("solver_iterations", 1), ("directions", 0),
+                          ("direction_seed", 0), ("prediction_cone_edges", 3)):
+            value = getattr(self, name)
+            if not isinstance(value, int) or isinstance(value, bool) or value < low:
+                raise OgcpError(f"simulation setting {name} must be an integer >= {low}, got {value!r}")
+        if not isinstance(self.gravity, bool) or not isinstance(self.weight_test, bool):
+            raise OgcpError("simulation settings gravity and weight_test must be true or false")
+        if self.threads is not None and (not isinstance(self.threads, int) or self.threads < 1):
+            raise OgcpError(f"simulation setting threads must be an integer >= 1 or unset, got {self.threads!r}")
+        for name, choices in (("protocol", PROTOCOLS), ("integrator", INTEGRATORS), ("cone", CONES),
+                              ("solver", SOLVERS)):
+            if getattr(self, name) not in choices:
+                raise choice_error(f"simulation setting {name}", getattr(self, name), choices)
+        if len(self.contact_solref) != 2 or len(self.contact_solimp) != 3:
+            raise OgcpError("contact_solref needs 2 numbers and contact_solimp 3")
+
+    @property
+    def servo_stiffness(self) -> float:
+        """kp of the normal servo [N/m]."""
+        return self.max_normal_force / self.servo_compliance
+
+    @property
+    def tangential_stiffness(self) -> float:
+        """kp of the tangential servos [N/m]."""
+        return self.max_normal_force / self.tangential_compliance
+
+    def with_updates(self, **changes: Any) -> SimSettings:
+        """A copy with some settings changed (validated)."""
+        return replace(self, **changes)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready form (recorded with every result)."""
+        data = asdict(self)
+        data["contact_solref"] = list(self.contact_solref)
+        data["contact_solimp"] = list(self.contact_solimp)
+        return data
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any] | None) -> SimSettings:
+        """Settings from a mapping (suite files, CLI); unknown keys are errors that list the valid ones."""
+        data = dict(data or {})
+        valid = [f.name for f in fields(cls)]
+        for key in data:
+            if key not in valid:
+                raise choice_error("simulation setting", key, valid)
+        for key in ("contact_solref", "contact_solimp"):
+            if key in data:
+                data[key] = tuple(float(v) for v in data[key])
+        return cls(**data)
