@@ -33,7 +33,7 @@ DEFAULT_CONTACTS = 100
 HANDS = ("sdh",)
 # Modules with a ``register(commands)`` function; each module must import its heavy
 # dependencies (MuJoCo, matplotlib) inside its handlers, not at import time.
-EXTRA_COMMAND_MODULES: tuple[str, ...] = ("benchmarks.cli_sim",)
+EXTRA_COMMAND_MODULES: tuple[str, ...] = ("benchmarks.cli_sim", "benchmarks.cli_assets")
 
 
 def _positive_int(text: str) -> int:

@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
+from planner.asset_registry import FETCHABLE_OBJECTS
 from planner.errors import OgcpError, choice_error
 
 DEFAULT_DIAGONAL = 0.2  # [m]
@@ -133,22 +134,33 @@ def load_mesh(path: str | Path) -> trimesh.Trimesh:
 
 
 def resolve_object(spec: str, diagonal: float = DEFAULT_DIAGONAL) -> tuple[trimesh.Trimesh, dict[str, object]]:
-    """Turn a user's object argument (a built-in name or a mesh path) into a mesh.
+    """Turn a user's object argument (a built-in name, a fetched name or a mesh path) into a mesh.
+
+    Fetched objects (``planner.asset_registry.FETCHABLE_OBJECTS``) come from the cache only;
+    nothing is downloaded here (``ogcp assets fetch`` does that).
 
     Args:
-        spec: Built-in object name or path to a mesh file.
-        diagonal: Bounding-box diagonal for built-in objects [m].
+        spec: Built-in object name, fetched object name, or path to a mesh file.
+        diagonal: Bounding-box diagonal for built-in and fetched objects [m].
 
     Returns:
         ``(mesh, source)`` where ``source`` describes the object for provenance records.
 
     Raises:
-        OgcpError: If ``spec`` is neither a built-in name nor a readable mesh.
+        OgcpError: If ``spec`` is none of these, or names a fetched object that is not cached.
     """
     if spec in BUILTIN_OBJECTS:
         return builtin_mesh(spec, diagonal), {"kind": "builtin", "name": spec, "diagonal": diagonal}
+    if spec in FETCHABLE_OBJECTS:
+        # Imported here because planner.assets builds on this module.
+        from planner.assets import load_fetched
+
+        return load_fetched(spec, diagonal)
     path = Path(spec)
     if path.suffix == "" and not path.exists():
-        raise choice_error("object", spec, list(BUILTIN_OBJECTS) + ["<path to a mesh file>"])
+        # Grouped rather than one sorted list, so that the user sees which names need a fetch first.
+        raise OgcpError(f"unknown object {spec!r}; valid choices: built-in {', '.join(sorted(BUILTIN_OBJECTS))}; "
+                        f"fetched with `ogcp assets fetch` {', '.join(sorted(FETCHABLE_OBJECTS))}; "
+                        "or a path to a mesh file")
     mesh = load_mesh(path)
     return mesh, {"kind": "mesh", "path": str(path), "sha256": file_sha256(path)}
