@@ -21,9 +21,9 @@ from planner.errors import OgcpError
 from sim_eval.body import hull_part, is_closed_manifold, object_inertia, surface_distance, triangle_distances
 from sim_eval.decompose import Decomposition, DecompositionSettings, cache_key, decompose
 
-# The package exports the function `decompose`, which hides the module of the same name as an
-# attribute of `sim_eval`; monkeypatching needs the module object itself.
+# Monkeypatching needs the module objects themselves (``decompose`` is also a function name).
 dec = importlib.import_module("sim_eval.decompose")
+coacd_runner = importlib.import_module("sim_eval.coacd_runner")
 
 #: CoACD settings small enough for a sub-second run on the test meshes.
 TINY = {"preprocess_resolution": 20, "resolution": 500, "mcts_nodes": 10, "mcts_iterations": 30, "mcts_max_depth": 2}
@@ -202,7 +202,7 @@ def test_a_run_past_the_timeout_is_killed(tmp_path: Path, monkeypatch: pytest.Mo
                                           capsys: pytest.CaptureFixture[str]) -> None:
     pid_file = tmp_path / "pid"
     sleeper = f"import os, time; open({str(pid_file)!r}, 'w').write(str(os.getpid())); time.sleep(60)"
-    monkeypatch.setattr(dec, "_child_command", lambda workdir: [sys.executable, "-c", sleeper])
+    monkeypatch.setattr(coacd_runner, "_child_command", lambda workdir: [sys.executable, "-c", sleeper])
     start = time.monotonic()
     with pytest.raises(OgcpError, match=r"CoACD did not finish within 1.5 s on tiny box; raise --timeout"):
         decompose(trimesh.creation.box(), DecompositionSettings(timeout_s=1.5), cache=tmp_path / "c",
@@ -224,7 +224,7 @@ def test_an_exception_in_the_child_surfaces_with_its_message(tmp_path: Path,
 
 def test_a_crashing_child_is_reported(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     crash = "import os; print('native trouble', flush=True); os.abort()"
-    monkeypatch.setattr(dec, "_child_command", lambda workdir: [sys.executable, "-c", crash])
+    monkeypatch.setattr(coacd_runner, "_child_command", lambda workdir: [sys.executable, "-c", crash])
     with pytest.raises(OgcpError, match=r"CoACD crashed on box \(signal 6\): native trouble"):
         decompose(trimesh.creation.box(), DecompositionSettings(), cache=tmp_path, name="box")
 
