@@ -59,6 +59,8 @@ def register(commands: Any) -> None:
     evaluate.add_argument("--threads", type=_positive_int, default=None, help="rollout threads (default: all cores)")
     evaluate.add_argument("--settings", type=Path, default=None, help="JSON file of further simulation settings")
     _add_decomposition_options(evaluate)
+    evaluate.add_argument("--render", type=Path, default=None, metavar="PNG",
+                          help="also save a picture of the best grasp after settling (needs MUJOCO_GL=egl/osmesa)")
     evaluate.add_argument("--json", action="store_true", help="print the ogcp.sim/1 record instead of a table")
     evaluate.add_argument("-o", "--output", type=Path, default=None, help="also write the ogcp.sim/1 record here")
     evaluate.set_defaults(handler=run_evaluate)
@@ -140,10 +142,28 @@ def run_evaluate(args: argparse.Namespace) -> int:
     result = evaluate_plan(record, _settings(args), _decomposition(args), progress=sys.stderr.isatty(),
                            max_grasps=args.max_grasps)
     data = result.to_dict()
+    if args.render is not None:
+        _render(record, args)
     if args.output is not None:
         write_json_atomic(args.output, data)
     print(json.dumps(data) if args.json else sim_summary(data))
     return 0
+
+
+def _render(record: dict[str, Any], args: argparse.Namespace) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib import pyplot as plt
+
+    from sim_eval.render import render_plan
+
+    image = render_plan(record, _settings(args), _decomposition(args))
+    try:
+        plt.imsave(args.render, image)
+    except OSError as exc:
+        raise OgcpError(f"cannot write {args.render}: {exc.strerror or exc}") from exc
+    print(f"picture of the best grasp: {args.render}", file=sys.stderr)
 
 
 def run_decompose(args: argparse.Namespace) -> int:

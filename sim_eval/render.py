@@ -1,0 +1,76 @@
+"""Offscreen picture of a settled grasp (needs an OpenGL backend: ``MUJOCO_GL=egl`` or ``osmesa``)."""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+from numpy.typing import NDArray
+
+from planner.errors import OgcpError
+from sim_eval.body import object_inertia
+from sim_eval.decompose import DecompositionSettings, decompose
+from sim_eval.protocol import FULL_STATE, Settled, settle
+from sim_eval.scene import GraspScene, build_scene
+from sim_eval.settings import SimSettings
+
+
+def render_grasp(scene: GraspScene, settled: Settled, width: int = 640, height: int = 480,
+                 azimuth: float = 135.0, elevation: float = -25.0) -> NDArray[np.uint8]:
+    """Render the settled grasp from a free camera looking at the object.
+
+    Args:
+        scene: The compiled grasp model.
+        settled: The settled state to show.
+        width: Image width [px].
+        height: Image height [px].
+        azimuth: Camera azimuth [deg].
+        elevation: Camera elevation [deg].
+
+    Returns:
+        RGB image, shape (height, width, 3).
+
+    Raises:
+        OgcpError: When no OpenGL context can be created (no display, EGL or OSMesa).
+    """
+    model = scene.model
+    model.vis.global_.offwidth = max(model.vis.global_.offwidth, width)
+    model.vis.global_.offheight = max(model.vis.global_.offheight, height)
+    model.vis.headlight.ambient[:] = 0.45  # the scene has no lights of its own
+    model.vis.headlight.diffuse[:] = 0.7
+    try:
+        renderer = mujoco.Renderer(model, height, width)
+    except Exception as exc:
+        raise OgcpError("offscreen rendering is not available here: set MUJOCO_GL=egl or MUJOCO_GL=osmesa "
+                        f"with the matching library installed (e.g. Debian's libosmesa6) ({type(exc).__name__})"
+                        ) from exc
+    data = mujoco.MjData(model)
+    mujoco.mj_setState(model, data, settled.state, FULL_STATE)
+    mujoco.mj_forward(model, data)
+    camera = mujoco.MjvCamera()
+    camera.lookat[:] = data.xipos[scene.object_body]
+    camera.distance = 4.0 * float(np.max(model.geom_rbound[scene.object_geoms])) + 10 * scene.tip_radius
+    camera.azimuth, camera.elevation = azimuth, elevation
+    try:
+        renderer.update_scene(data, camera)
+        return renderer.render().copy()
+    finally:
+        renderer.close()
+
+
+def render_plan(record: dict, settings: SimSettings | None = None, decomposition: DecompositionSettings | None = None,
+                grasp_index: int = 0, width: int = 640, height: int = 480) -> NDArray[np.uint8]:
+    """Picture of one grasp of an ``ogcp.plan/1`` record after settling (default: the best grasp)."""
+    from sim_eval.plan_input import plan_input
+
+    settings = settings or SimSettings()
+    plan = plan_input(record)
+    if not 0 <= grasp_index < len(plan.grasps):
+        raise OgcpError(f"grasp index {grasp_index} outside the plan's {len(plan.grasps)} grasps")
+    idx = np.asarray(plan.grasps[grasp_index], dtype=np.intp)
+    parts = decompose(plan.mesh, decomposition)
+    com, inertia = object_inertia(plan.mesh, settings.object_mass)
+    mu = settings.mu if settings.mu is not None else plan.contacts.mu
+    radius = settings.tip_radius or settings.tip_radius_ratio * float(np.linalg.norm(np.ptp(plan.mesh.vertices, axis=0)))
+    scene = build_scene(parts.parts, com, inertia, plan.contacts.positions[idx], plan.contacts.normals[idx],
+                        settings, mu, radius)
+    return render_grasp(scene, settle(scene, settings), width, height)
