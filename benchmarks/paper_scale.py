@@ -39,7 +39,7 @@ def _append(path: Path, row: dict[str, object]) -> None:
 def runs(args: argparse.Namespace) -> list[tuple[str, int, str, float]]:
     """(object, m, method, eps) of every run the arguments ask for."""
     todo = []
-    for name in args.objects.split(","):
+    for name in filter(None, args.objects.split(",")):  # --objects "" runs only the extra m
         todo.append((name, 3, "astar", 0.0))
         todo += [(name, 3, "wastar", float(eps)) for eps in args.eps.split(",") if eps]
         if args.es:

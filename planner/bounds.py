@@ -84,5 +84,7 @@ class SupportBound:
         directions is used, which is still a valid bound.
         """
         length = min(len(v) for v in vectors)
-        joint = vectors[0][:length] if len(vectors) == 1 else np.max([v[:length] for v in vectors], axis=0)
+        joint = vectors[0][:length]
+        for v in vectors[1:]:  # pairwise maxima: no stacked copy (this is the search's inner loop)
+            joint = np.maximum(joint, v[:length])
         return float(joint.min())

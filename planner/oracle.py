@@ -7,6 +7,7 @@ cost two Q1 evaluations.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 
 import numpy as np
@@ -60,7 +61,7 @@ class GraspQuality:
             masks: Packed membership masks of the super-contacts.
             vectors: Their support vectors, if known (enables the cheap rejection).
         """
-        union = masks[0] if len(masks) == 1 else np.bitwise_or.reduce(np.stack(masks), axis=0)
+        union = functools.reduce(np.bitwise_or, masks)
         key = union.tobytes()
         cached = self._cache.get(key)
         if cached is not None:

@@ -27,7 +27,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial import ConvexHull, QhullError
 
-from planner.kernel import kernel_q1
+from planner.kernel import FALLBACK, canonical_plane, evaluate_batch, kernel_q1, last_active
 from planner.tolerance import TOL
 
 DIM = 6
@@ -40,8 +40,6 @@ ACTIVE_DIRECTIONS, ACTIVE_SEED, ACTIVE_ADD = 116, 0, 64
 DIRECT_HULL_MAX = 96
 #: With direction hints the active-set loop starts close to the answer and wins earlier.
 HINTED_DIRECT_HULL_MAX = 24
-#: Wrenches this close to a certified facet's hyperplane are taken to lie on it [N].
-ON_FACET = 1e-11
 #: Nearest facets whose support points may join the active set per iteration.
 FACETS_PER_ROUND = 24
 
@@ -132,21 +130,28 @@ def q1_certificate(
     w = np.asarray(wrenches, dtype=float)
     if w.ndim != 2 or w.shape[1] != DIM or w.shape[0] <= DIM or not np.all(np.isfinite(w)):
         return _degenerate()
-    if not _affine_rank_ok(w):
-        return _degenerate()
+    seed = None
     if kernel and w.shape[0] <= KERNEL_MAX:
+        # The kernel applies the rank test itself wherever it could change the answer
+        # (Q1 <= sigma_min), so the SVD below is only paid on the qhull paths.
         ok, value, direction = kernel_q1(w)
         if ok and value > 0:
-            return _certificate(w, direction, value, 0)
+            return Q1Certificate(value, value, direction, 0)  # already canonical
         if ok and np.all(np.isfinite(direction)):
             return Q1Certificate(0.0, float(np.max(w @ direction)), direction, 0)
+        if not ok:
+            # The points the kernel put in its hull span the hull near the origin: seeded
+            # with them, the qhull loop usually ends after one call (speed only).
+            seed = last_active(len(w))
+    if not _affine_rank_ok(w):
+        return _degenerate()
     if kernel and w.shape[0] > KERNEL_MAX:
         cert = _kernel_active_set_q1(w)
         if cert is not None:
             return cert
-    if w.shape[0] <= (DIRECT_HULL_MAX if hints is None else HINTED_DIRECT_HULL_MAX):
+    if w.shape[0] <= (DIRECT_HULL_MAX if hints is None and seed is None else HINTED_DIRECT_HULL_MAX):
         return _full_hull_certificate(w)
-    return _active_set_q1(w, hints)
+    return _active_set_q1(w, hints, seed)
 
 
 def _kernel_active_set_q1(w: NDArray[np.float64]) -> Q1Certificate | None:
@@ -179,9 +184,14 @@ def _kernel_active_set_q1(w: NDArray[np.float64]) -> Q1Certificate | None:
     return None
 
 
-def _active_set_q1(w: NDArray[np.float64], hints: NDArray[np.float64] | None) -> Q1Certificate:
+def _active_set_q1(
+    w: NDArray[np.float64], hints: NDArray[np.float64] | None, seed: NDArray[np.intp] | None = None
+) -> Q1Certificate:
+    """The qhull active-set loop; ``seed`` (indices) joins the initial active set."""
     seeds = np.vstack([np.eye(DIM), -np.eye(DIM)] + ([] if hints is None else [np.atleast_2d(hints)]))
     active = [int(i) for i in np.argmax(w @ seeds.T, axis=0)]
+    if seed is not None:
+        active += [int(i) for i in seed]
     active = _complete_to_full_dimension(w, active)
     in_active = np.zeros(len(w), dtype=bool)
     in_active[active] = True
@@ -235,19 +245,39 @@ def _certificate(w: NDArray[np.float64], normal: NDArray[np.float64], offset: fl
     """Certificate of a facet, with its hyperplane refitted canonically.
 
     Different hulls (full or active-set, other seeds) find the same facet with
-    hyperplanes that differ in the last bits. Refitting the plane through the wrenches
-    that lie on it, in index order, makes the reported value a function of the wrench
-    set alone, so every method reports bit-identical Q1 for the same grasp.
+    hyperplanes that differ in the last bits. The compiled refit through the wrenches on
+    it (:func:`planner.kernel.canonical_plane`, the same code the kernel runs on its own
+    answers) makes the reported value a function of the wrench set alone, so every
+    method reports bit-identical Q1 for the same grasp.
     """
-    on = np.flatnonzero(np.abs(w @ normal - offset) <= ON_FACET)
-    if len(on) >= DIM:
-        points = w[on]
-        centre = points.mean(axis=0)
-        _, singular, vt = np.linalg.svd(points - centre)
-        if singular[DIM - 2] > TOL.rank * singular[0]:  # spans the 5 dimensions of a facet
-            refit = vt[DIM - 1] if vt[DIM - 1] @ normal > 0 else -vt[DIM - 1]
-            normal, offset = refit, float(refit @ centre)
-    return Q1Certificate(_clip(offset), offset, np.array(normal, dtype=float), hull_calls)
+    normal, offset, _ = canonical_plane(w, normal, offset)
+    return Q1Certificate(_clip(offset), offset, normal, hull_calls)
+
+
+def exact_q1_batch(
+    contact_wrenches: NDArray[np.float64], grasps: NDArray[np.int64], table: NDArray[np.float64], cut: float = 0.0
+) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """Exact Q1 of many grasps of one contact set: the compiled batch, qhull for the rest.
+
+    This is what exhaustive search does per grasp. The kernel's exact answers are already
+    canonical (refitted in compiled code), so only the grasps it could not certify go
+    through :func:`q1`.
+
+    Args:
+        contact_wrenches: Wrenches of every contact, shape (n, k, 6) [N].
+        grasps: Contact indices, shape (B, m).
+        table: :func:`planner.kernel.support_table` of ``contact_wrenches``.
+        cut: Values below ``cut - CUT_MARGIN`` may be upper bounds (branch and bound) [N].
+
+    Returns:
+        ``(q1, status)`` per grasp, shape (B,) each: the canonical Q1 (bit-identical to
+        every other method) or a bound below the cut, and the kernel's status
+        (``FALLBACK`` marks the grasps recomputed here).
+    """
+    values, status = evaluate_batch(contact_wrenches, grasps, table=table, threshold=cut)
+    for i in np.flatnonzero(status == FALLBACK):
+        values[i] = q1(contact_wrenches[grasps[i]].reshape(-1, DIM))
+    return values, status
 
 
 def signed_q1(wrenches: NDArray[np.float64]) -> float:

@@ -81,6 +81,38 @@ class SearchStats:
         }
 
 
+@dataclass(frozen=True)
+class SearchTree:
+    """The search tree of one run (paper Fig. 5), as parallel per-state lists.
+
+    State ids number the created states in creation order; the root is 0.
+
+    Attributes:
+        parent: Parent id per state; -1 for the root. Parents precede their children.
+        level: Tree level (depth) per state; 0 for the root.
+        visited: Whether the state was expanded.
+        f: Unweighted f per state: exact for states whose heuristic was finished (every
+            expanded state), otherwise the lower bound the search had reached [N].
+        path: Ids of the returned solution path, root first, goal last.
+    """
+
+    parent: tuple[int, ...]
+    level: tuple[int, ...]
+    visited: tuple[bool, ...]
+    f: tuple[float, ...]
+    path: tuple[int, ...]
+
+    def to_dict(self) -> dict[str, Any]:
+        """Compact JSON form: parallel lists (``visited`` as 0/1)."""
+        return {
+            "parent": list(self.parent),
+            "level": list(self.level),
+            "visited": [int(v) for v in self.visited],
+            "f": list(self.f),
+            "path": list(self.path),
+        }
+
+
 @dataclass(frozen=True, eq=False)
 class SearchResult:
     """The grasp a search returned, with its quality certificate.
@@ -100,6 +132,7 @@ class SearchResult:
         stats: Search statistics.
         config: Resolved search parameters (seed included).
         contact_source: Provenance of the contact set.
+        tree: The search tree, when the planner was asked to record it.
     """
 
     method: str
@@ -114,6 +147,7 @@ class SearchResult:
     stats: SearchStats
     config: dict[str, Any] = field(default_factory=dict)
     contact_source: dict[str, Any] = field(default_factory=dict)
+    tree: SearchTree | None = None
 
     @property
     def certified_gap(self) -> float:
@@ -131,6 +165,7 @@ class SearchResult:
             self.method, self.grasp, self.q1, self.q_ows, self.bound, self.positions, self.normals,
             stats=self.stats.to_dict(), config=self.config, contact_set=contact_set,
             eps=self.eps, eps_bound=self.eps_bound, source=self.contact_source,
+            **({} if self.tree is None else {"tree": self.tree.to_dict()}),
         )
 
 

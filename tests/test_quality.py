@@ -252,3 +252,68 @@ def test_kernel_is_safe_under_threads(object_contacts):
     with ThreadPoolExecutor(max_workers=4) as pool:
         threaded = list(pool.map(q1, sets))
     assert threaded == serial and any(v > 0 for v in serial)
+
+
+@pytest.mark.parametrize("name", OBJECTS)
+def test_batched_es_path_is_bit_identical_to_single_calls_and_qhull(name, object_contacts):
+    from planner.kernel import BOUND, FALLBACK, default_directions, support_table
+    from planner.quality import exact_q1_batch
+
+    contacts = object_contacts(name, 300, seed=3)
+    rng = np.random.default_rng(6)
+    grasps = np.array([rng.choice(300, 3, replace=False) for _ in range(300)])
+    table = support_table(contacts.wrenches, default_directions())
+    values, status = exact_q1_batch(contacts.wrenches, grasps, table)
+    assert not np.any(status == BOUND)
+    fc = 0
+    for g, value in zip(grasps, values):
+        w = contacts.subset_wrenches(g)
+        assert value == q1(w) == q1_certificate(w, kernel=False).q1  # bit for bit
+        fc += value > 0
+    assert fc > 10
+    # Branch-and-bound mode: exact at or above the cut, bounds strictly below it.
+    cut = float(np.median(values[values > 0]))
+    cut_values, cut_status = exact_q1_batch(contacts.wrenches, grasps, table, cut)
+    exact = (cut_status != BOUND) & (cut_status != FALLBACK)
+    assert np.all(cut_values[exact] == values[exact])
+    assert np.all(cut_values[cut_status == BOUND] < cut - 1e-9)
+    assert np.all(cut_values[cut_status == BOUND] >= values[cut_status == BOUND] - 1e-12)  # rounding
+    assert np.all(cut_status[values >= cut] != BOUND)
+
+
+def test_canonical_plane_refits_through_the_points_on_the_facet():
+    from planner.kernel import canonical_plane
+
+    rng = np.random.default_rng(2)
+    normal = rng.normal(size=6)
+    normal /= np.linalg.norm(normal)
+    basis = np.linalg.svd(normal[None, :])[2][1:]  # 5 directions inside the hyperplane
+    on = 0.3 * normal + rng.normal(size=(9, 5)) @ basis
+    below = 0.3 * normal - rng.uniform(0.1, 1.0, size=(20, 1)) * normal + rng.normal(size=(20, 5)) @ basis
+    w = np.vstack([below[:10], on, below[10:]])
+    tilted = normal + 1e-14 * rng.normal(size=6)
+    refit, offset, ok = canonical_plane(w, tilted / np.linalg.norm(tilted), 0.3)
+    assert ok and offset == pytest.approx(0.3, abs=1e-14) and np.allclose(refit, normal, atol=1e-13)
+    again = canonical_plane(w, normal, 0.3)
+    assert np.array_equal(again[0], refit) and again[1] == offset  # depends on the on-facet set only
+    flat = np.vstack([below, 0.3 * normal + rng.normal(size=(9, 3)) @ basis[:3]])  # on-facet rank 3
+    assert not canonical_plane(flat, normal, 0.3)[2]
+
+
+def test_fallback_seeded_by_the_kernel_hull_gives_the_same_bits(object_contacts, monkeypatch):
+    from planner import quality
+
+    real = quality.kernel_q1
+
+    def uncertified(w, certify=True):  # as if every certificate failed
+        real(w, certify)
+        return False, float("nan"), np.full(6, np.nan)
+
+    contacts = object_contacts("box", 200, seed=3)
+    rng = np.random.default_rng(1)
+    sets = [contacts.subset_wrenches(rng.choice(200, int(rng.integers(4, 12)), replace=False)) for _ in range(20)]
+    expected = [q1_certificate(w).q1 for w in sets]
+    monkeypatch.setattr(quality, "kernel_q1", uncertified)
+    seeded = [q1_certificate(w) for w in sets]
+    assert [c.q1 for c in seeded] == expected and any(v > 0 for v in expected)
+    assert all(c.hull_calls >= 1 for c in seeded if c.q1 > 0)

@@ -30,3 +30,8 @@ def small_grasps(box1000: ContactSet) -> list[np.ndarray]:
 def super_contact(box1000: ContactSet) -> np.ndarray:
     """A 100-contact super-contact (800 wrenches)."""
     return box1000.subset_wrenches(np.random.default_rng(1).choice(1000, 100, replace=False))
+
+
+@pytest.fixture(scope="session")
+def sphere1000() -> ContactSet:
+    return sample_contacts(builtin_mesh("sphere"), 1000, seed=0)

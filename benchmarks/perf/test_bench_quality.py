@@ -39,3 +39,19 @@ def test_small_grasps_batched_kernel(benchmark, box1000):
     table = support_table(wrenches, default_directions())
     values, ok = benchmark(q1_batch, wrenches, grasps, table=table)
     assert ok.all() and len(values) == 100
+
+
+def test_sphere_grasps_es_path(benchmark, sphere1000):
+    """What ES does per grasp on the sphere (half the grasps in force closure, canonical refit)."""
+    import numpy as np
+
+    from planner.kernel import default_directions, support_table
+    from planner.quality import exact_q1_batch
+
+    benchmark.group = "q1-small"
+    rng = np.random.default_rng(0)
+    grasps = np.array([rng.choice(1000, 3, replace=False) for _ in range(300)])
+    wrenches = np.asarray(sphere1000.wrenches)
+    table = support_table(wrenches, default_directions())
+    values, _ = benchmark(exact_q1_batch, wrenches, grasps, table)
+    assert np.mean(values > 0) > 0.3

@@ -30,10 +30,11 @@ from tqdm import tqdm
 from planner.constraints import Constraint, accepts_many
 from planner.contacts import ContactSet
 from planner.errors import OgcpError
-from planner.kernel import default_directions, q1_batch, support_table
+from planner.kernel import FALLBACK, OK, default_directions, support_table
+from planner.kernel.geometry import CUT_MARGIN
 from planner.parallel import run_tasks, validate_backend
 from planner.provenance import provenance
-from planner.quality import q1, q1_certificate
+from planner.quality import exact_q1_batch, q1_certificate
 from planner.result import plan_record
 
 from . import combinations
@@ -81,8 +82,9 @@ class ESResult:
         counts: Force-closure grasps per bin (``es`` only).
         zero: Grasps with Q1 = 0 (``es`` only).
         excluded: Grasps that fail a constraint (not in the histogram or the argmax).
-        exact_evaluations: Grasps whose Q1 needed the exact engine after the compiled batch
-            (force closure, or above the es-pruned cut); the rest were settled there.
+        exact_evaluations: Grasps whose Q1 needed an exact hull (the compiled expanding
+            polytope, or qhull where it could not certify); the rest were settled by the
+            support table or, for es-pruned, by a bound below the cut.
         chunks: Number of chunks; ``resumed`` of them came from the checkpoint.
         resumed: Chunks read back from the checkpoint.
         cpu_seconds: CPU time summed over workers, resumed chunks included [s].
@@ -162,17 +164,10 @@ def _chunk_task(
     table = support_table(wrenches, default_directions())
 
     def evaluate(batch: NDArray[np.int64], cut: float) -> NDArray[np.float64]:
-        """Q1 of the grasps (exact above ``cut``, an upper bound at or below it)."""
+        """Q1 of the grasps (exact at or above ``cut``, an upper bound below it)."""
         nonlocal exact
-        # One compiled call: support-table proofs of Q1 = 0, then the certified kernel; a
-        # grasp that provably cannot exceed the cut gets an upper bound instead.
-        values, ok = q1_batch(wrenches, batch, table=table, threshold=cut)
-        # At or above the cut every value is recomputed through q1_certificate so that it
-        # is the canonical (bit-identical) Q1 every other method reports for the grasp.
-        uncertain = ~ok | (values > 0) & (values >= cut)
-        for i in np.flatnonzero(uncertain):
-            values[i] = q1(wrenches[batch[i]].reshape(-1, 6))
-        exact += int(uncertain.sum())
+        values, status = exact_q1_batch(wrenches, batch, table, cut)
+        exact += int(np.count_nonzero((status == OK) | (status == FALLBACK)))
         return values
 
     for block_start in range(0, len(grasps), BOUND_BLOCK):
@@ -183,7 +178,9 @@ def _chunk_task(
             order = np.argsort(-upper, kind="stable")
             for start in range(0, len(order), PRUNE_BATCH):
                 batch = np.sort(order[start : start + PRUNE_BATCH])
-                if upper[order[start]] < best_q:
+                # The margin keeps a grasp whose canonical Q1 ties the best (a rounding
+                # error above its true value) in play for the lexicographic tie-break.
+                if upper[order[start]] < best_q - CUT_MARGIN:
                     break
                 values = evaluate(block[batch], best_q)
                 best_q, best_g = _better(values, block[batch], best_q, best_g)

@@ -11,7 +11,8 @@ Design (three stages, every early answer is a proof, not a heuristic):
    support of every contact, ``max_j w_cj . u``, is tabulated once. For a grasp the
    support of the union is the max over its contacts. Any u with support <= 1e-9 proves
    Q1 <= 1e-9, i.e. reported Q1 = 0 (Q1 <= h(u) for every unit u). This rejects most
-   non-force-closure grasps in well under a microsecond.
+   non-force-closure grasps in well under a microsecond (and, in threshold mode, any
+   grasp whose support falls below the threshold by ``CUT_MARGIN``).
 
 2. **Expanding polytope (EPA / lazy beneath-beyond).** Start from a full-dimensional
    simplex of W (greedy farthest points), keep a closed simplicial complex of facets
@@ -50,11 +51,33 @@ Design (three stages, every early answer is a proof, not a heuristic):
    (overflow, a degenerate simplex, a broken horizon), the kernel returns a FALLBACK
    status and :mod:`planner.quality` answers with its qhull paths instead.
 
+4. **Canonical refit** (:mod:`planner.kernel.refit`). The certified facet's hyperplane is
+   refitted through the wrenches within 1e-11 of it, in index order (Householder QR with
+   column pivoting, plain IEEE arithmetic in a fixed order). The qhull paths of
+   :mod:`planner.quality` hand their facets to the same compiled routine, so the reported
+   Q1 depends on the wrench set alone and is bit-identical across every method.
+
+Statuses: ``OK`` (exact, canonical), ``FALLBACK`` (not certified: use qhull), ``BOUND``
+(threshold mode: an upper bound at least ``CUT_MARGIN`` below the threshold), ``ZERO``
+(batch: Q1 = 0 proven by the support table).
+
 Numerical tolerances: eps = 1e-11 * max|w| for visibility / convergence (points within
 eps of a facet hyperplane are treated as on it, which moves Q1 by at most eps), 1e-9 for
 force closure and rank (identical to ``planner.tolerance.TOL``).
 """
 
-from planner.kernel.batch import default_directions, kernel_q1, q1_batch, support_table
+from planner.kernel.batch import (
+    canonical_plane,
+    default_directions,
+    evaluate_batch,
+    kernel_q1,
+    last_active,
+    q1_batch,
+    support_table,
+)
+from planner.kernel.geometry import BOUND, FALLBACK, OK, ZERO
 
-__all__ = ["default_directions", "kernel_q1", "q1_batch", "support_table"]
+__all__ = [
+    "BOUND", "FALLBACK", "OK", "ZERO", "canonical_plane", "default_directions", "evaluate_batch", "kernel_q1",
+    "last_active", "q1_batch", "support_table",
+]

@@ -10,6 +10,8 @@ from numba import njit
 
 from planner.kernel.certify import _certify
 from planner.kernel.geometry import (
+    BOUND,
+    CUT_MARGIN,
     DIM,
     FALLBACK,
     FC_TOL,
@@ -23,6 +25,7 @@ from planner.kernel.geometry import (
     _ridge_key,
     _support,
 )
+from planner.kernel.refit import _canonical_plane
 
 # --------------------------------------------------------------------------------------
 # Workspace
@@ -94,15 +97,22 @@ def _q1_kernel(
     """Q1 of the first ``n`` rows of ``P`` (status, value); see :mod:`planner.kernel`.
 
     ``direction`` (6,) receives the unit normal of the facet that settled the answer: the
-    certified nearest facet, or a direction whose support proves Q1 = 0. It is left
-    untouched when no facet was involved (degenerate input, fallback).
+    certified nearest facet, or a direction whose support proves Q1 = 0; when only the
+    certificate failed, the nearest facet found (a hint, not a proof). It is left
+    untouched when no facet was involved (degenerate input, other fallbacks).
 
-    With ``threshold`` > 0 the loop stops as soon as a support value s <= threshold proves
-    Q1 <= threshold and returns that upper bound s (0 if s <= 1e-9): callers that only
-    need grasps better than a threshold (branch and bound) save most of the hull work.
+    With ``threshold`` > 0 the loop stops as soon as a support value
+    s < threshold - CUT_MARGIN proves Q1 < threshold and returns ``(BOUND, s)``: callers
+    that only need grasps at least as good as a threshold (branch and bound) save most of
+    the hull work, and a grasp whose Q1 ties the threshold still gets its exact value.
+
+    An exact answer is canonical: the certified facet's hyperplane is refitted through
+    the points on it (:func:`planner.kernel.refit._canonical_plane`), so every path
+    reports the bit-identical Q1 for the same wrench set.
 
     Returns:
-        ``(OK, q1)`` or ``(FALLBACK, nan)`` when the result could not be certified.
+        ``(OK, q1)``, ``(BOUND, s)`` (threshold mode) or ``(FALLBACK, nan)`` when the
+        result could not be certified.
     """
     FV, FU, FD, FN, alive, vis, free, horizon, hkey, hcnt, hown, hstamp, used, gen, active, M, perm, R = ws
     if n <= DIM:
@@ -202,22 +212,26 @@ def _q1_kernel(
         if s <= FC_TOL:
             direction[:] = FU[f]
             return OK, 0.0  # h(u) <= 1e-9 for a unit u proves Q1 <= 1e-9
-        if s <= threshold:
+        if s < threshold - CUT_MARGIN:
             direction[:] = FU[f]
-            return OK, s  # proven Q1 <= s <= threshold: an upper bound, not Q1
+            return BOUND, s  # proven Q1 <= s < threshold: an upper bound, not Q1
         dmin = FD[f]
         if s - dmin <= eps:
             # Converged: Q1 <= s (support) and, once certified, Q1 >= dmin.
             if dmin <= FC_TOL:
                 return OK, 0.0
             if certify and not _certify(P, FV, FU, FD, FN, alive, hw, eps, scale, B7, stats):
+                direction[:] = FU[f]  # uncertified, but a good seed for the caller's fallback
                 return FALLBACK, np.nan
             # The reference calls the set rank-deficient only if sigma_min <= 1e-9 sigma_max,
             # and Q1 <= sigma_min, so its SVD test can only matter for tiny Q1.
             if dmin <= 1e-8 * scale * n and not _reference_rank_ok(P, n):
                 return OK, 0.0
-            direction[:] = FU[f]
-            return OK, dmin
+            value, refitted = _canonical_plane(P, n, FU[f], dmin, R, direction)
+            if not refitted:
+                direction[:] = FU[f]
+                value = dmin
+            return OK, value if value > FC_TOL else 0.0
         if active[idx]:
             return FALLBACK, np.nan  # an active point beyond the complex: rounding trouble
         active[idx] = True

@@ -22,9 +22,15 @@ COND_TOL = 1e-10
 #: (N > 64) get 2**17. Overflow returns the fallback status, never a wrong value.
 MAX_FACETS = 8192
 
-# Kernel status codes.
+# Kernel status codes: exact (canonical) Q1, no certified answer, an upper bound below the
+# caller's threshold (threshold mode only), Q1 = 0 proven by the support table (batch only).
 OK = 0
 FALLBACK = 1
+BOUND = 2
+ZERO = 3
+#: Threshold mode returns a bound only this far below the threshold [N]: canonical Q1 can
+#: sit a rounding error above the true value, and a tie with the threshold must be exact.
+CUT_MARGIN = 1e-9
 
 
 
