@@ -33,7 +33,12 @@ DEFAULT_CONTACTS = 100
 HANDS = ("sdh",)
 # Modules with a ``register(commands)`` function; each module must import its heavy
 # dependencies (MuJoCo, matplotlib) inside its handlers, not at import time.
-EXTRA_COMMAND_MODULES: tuple[str, ...] = ("benchmarks.cli_sim", "benchmarks.cli_assets")
+EXTRA_COMMAND_MODULES: tuple[str, ...] = (
+    "benchmarks.cli_sim",
+    "benchmarks.cli_assets",
+    "benchmarks.cli_suite",
+    "benchmarks.cli_plot",
+)
 
 
 def _positive_int(text: str) -> int:

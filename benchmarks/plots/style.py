@@ -1,0 +1,227 @@
+"""One look for every figure: fonts, sizes, the method colours, and saving.
+
+Figures are built on :class:`matplotlib.figure.Figure` directly (never ``pyplot``), so
+nothing here depends on the interactive backend or leaks global figure state. Saving
+writes a vector PDF with TrueType (Type 42) fonts for papers and a PNG for the README.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, ParamSpec, TypeVar
+
+from planner.errors import OgcpError
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
+
+#: IEEE two-column widths [in].
+SINGLE_COLUMN = 3.5
+DOUBLE_COLUMN = 7.16
+DEFAULT_DPI = 200
+#: Height of one legend row [in] (8 pt text plus spacing).
+LEGEND_ROW = 0.17
+FORMATS = ("pdf", "png")
+SAVE_FORMATS = ("pdf", "png", "svg")
+
+STYLE: dict[str, Any] = {
+    # Type 42 keeps text as embedded TrueType: editable, searchable, accepted by IEEE/PDF-A checks.
+    "pdf.fonttype": 42,
+    "ps.fonttype": 42,
+    "font.family": "DejaVu Sans",
+    "mathtext.fontset": "dejavusans",
+    "font.size": 8,
+    "axes.titlesize": 8,
+    "axes.labelsize": 8,
+    "xtick.labelsize": 8,
+    "ytick.labelsize": 8,
+    "legend.fontsize": 8,
+    "legend.frameon": False,
+    "legend.handlelength": 1.6,
+    "axes.linewidth": 0.6,
+    "axes.spines.top": False,
+    "axes.spines.right": False,
+    "xtick.major.width": 0.6,
+    "ytick.major.width": 0.6,
+    "lines.linewidth": 1.0,
+    "lines.markersize": 3.5,
+    "grid.linewidth": 0.4,
+    "grid.alpha": 0.4,
+    "savefig.dpi": DEFAULT_DPI,
+    "svg.hashsalt": "ogcp",  # stable element ids: reruns give identical SVG files
+    "figure.dpi": 100,
+}
+
+# Okabe-Ito: distinguishable with the common colour-vision deficiencies and in greyscale print.
+METHOD_COLOURS: dict[str, str] = {
+    "astar": "#D55E00",
+    "wastar": "#009E73",
+    "dijkstra": "#CC79A7",
+    "es": "#0072B2",
+    "es-pruned": "#56B4E9",
+    "hfts": "#E69F00",
+}
+METHOD_TITLES: dict[str, str] = {
+    "astar": "A*", "wastar": "WA*", "dijkstra": "Dijkstra", "es": "ES", "es-pruned": "ES (pruned)", "hfts": "HFTS",
+}
+#: Qualitative colours for series that are not methods (objects, successor variants).
+SERIES_COLOURS = ("#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "#000000", "#F0E442",
+                  "#7F7F7F", "#8C510A")
+#: Largest eps of the WA* shading: eps above it get the darkest shade.
+EPS_SHADE_MAX = 1.5
+
+P = ParamSpec("P")
+R = TypeVar("R")
+
+
+def _mix(colour: str, target: str, amount: float) -> str:
+    from matplotlib.colors import to_hex, to_rgb
+
+    a, b = to_rgb(colour), to_rgb(target)
+    return to_hex(tuple((1 - amount) * x + amount * y for x, y in zip(a, b)))
+
+
+def method_colour(method: str, eps: float | None = None, constraint: str = "") -> str:
+    """The colour of a method in every figure.
+
+    Args:
+        method: ``astar``, ``wastar``, ``dijkstra``, ``es``, ``es-pruned`` or ``hfts``
+            (anything else is grey).
+        eps: WA* inflation: larger eps, darker green (clipped at ``EPS_SHADE_MAX``).
+        constraint: Name of the constraint of a constrained variant (``""``: none); hand
+            constraints are darker, other constraints lighter than the method's colour.
+
+    Returns:
+        A hex colour.
+    """
+    colour = METHOD_COLOURS.get(method, "#7F7F7F")
+    if method == "wastar" and eps is not None and math.isfinite(eps):
+        share = min(max(eps, 0.0), EPS_SHADE_MAX) / EPS_SHADE_MAX
+        colour = _mix(_mix(colour, "#FFFFFF", 0.45), "#003322", share)
+    if constraint:
+        hand = constraint.lower().startswith(("sdh", "hand"))
+        colour = _mix(colour, "#000000", 0.45) if hand else _mix(colour, "#FFFFFF", 0.45)
+    return colour
+
+
+def series_colour(index: int) -> str:
+    """Colour of the ``index``-th series that is not a method (cycles)."""
+    return SERIES_COLOURS[index % len(SERIES_COLOURS)]
+
+
+def variant_colours(methods: Sequence[str]) -> list[str]:
+    """Colours of series that are variants of methods: a method's first variant gets its colour."""
+    colours: list[str | None] = []
+    seen: set[str] = set()
+    for method in methods:
+        first = method not in seen and method in METHOD_COLOURS
+        seen.add(method)
+        colours.append(METHOD_COLOURS[method] if first else None)
+    spare = iter(c for c in SERIES_COLOURS if c not in colours)
+    return [c if c is not None else next(spare, "#7F7F7F") for c in colours]
+
+
+@contextmanager
+def style() -> Iterator[None]:
+    """Apply :data:`STYLE` to figures created and saved inside the block."""
+    import matplotlib
+
+    with matplotlib.rc_context(STYLE):
+        yield
+
+
+def styled(function: Callable[P, R]) -> Callable[P, R]:
+    """Build the decorated function's figure under :func:`style`."""
+
+    @functools.wraps(function)
+    def wrapper(*args: P.args, **kwargs: P.kwargs) -> R:
+        with style():
+            return function(*args, **kwargs)
+
+    return wrapper
+
+
+def new_figure(panels: int, width: float | None = None, panel_height: float = 1.9,
+               max_columns: int = 3, polar: bool = False) -> tuple[Figure, list[Axes]]:
+    """A figure with ``panels`` axes in a grid at a paper column width.
+
+    Args:
+        panels: Number of axes (>= 1).
+        width: Figure width [in]; default: one column for a single panel, else two.
+        panel_height: Height of one row [in].
+        max_columns: Most panels per row.
+        polar: Polar axes.
+
+    Returns:
+        The figure (constrained layout) and its axes, row by row; surplus grid cells are removed.
+    """
+    from matplotlib.figure import Figure
+
+    columns = min(panels, max_columns)
+    rows = math.ceil(panels / columns)
+    width = width or (SINGLE_COLUMN if panels == 1 else DOUBLE_COLUMN)
+    figure = Figure(figsize=(width, panel_height * rows), layout="constrained")
+    grid = figure.subplots(rows, columns, squeeze=False,
+                           subplot_kw={"projection": "polar"} if polar else None)
+    axes = [ax for row in grid for ax in row]
+    for ax in axes[panels:]:
+        ax.remove()
+    return figure, axes[:panels]
+
+
+def shared_legend(figure: Figure, axes: Sequence[Axes], columns: int = 4) -> None:
+    """One legend below the panels with every distinct labelled series of ``axes``."""
+    handles: dict[str, Any] = {}
+    for ax in axes:
+        for handle, label in zip(*ax.get_legend_handles_labels()):
+            handles.setdefault(label, handle)
+    if handles:
+        add_legend(figure, list(handles.values()), list(handles), columns)
+
+
+def add_legend(figure: Figure, handles: Sequence[Any], labels: Sequence[str], columns: int) -> None:
+    """A legend below the panels; the figure grows by the legend's height so the panels keep theirs."""
+    ncols = legend_columns(figure, labels, columns)
+    rows = math.ceil(len(labels) / ncols)
+    figure.set_figheight(figure.get_figheight() + LEGEND_ROW * rows + 0.05)
+    figure.legend(list(handles), list(labels), loc="outside lower center", ncols=ncols)
+
+
+def legend_columns(figure: Figure, labels: Sequence[str], most: int) -> int:
+    """As many legend columns (up to ``most``) as fit the figure's width with the longest label."""
+    size = float(STYLE["legend.fontsize"])
+    # Average glyph ~0.55 em; handle, padding and column spacing ~4.5 em per entry.
+    entry = size * (0.55 * max(len(label) for label in labels) + 4.5)
+    fit = int(figure.get_figwidth() * 72 // entry)
+    return max(1, min(most, len(labels), fit))
+
+
+def save_figure(figure: Figure, out: str | Path, name: str, formats: Sequence[str] = FORMATS,
+                dpi: int = DEFAULT_DPI) -> list[Path]:
+    """Write ``figure`` as ``out/name.<format>`` for each format.
+
+    Raises:
+        OgcpError: For an unknown format or a file that cannot be written.
+    """
+    unknown = sorted(set(formats) - set(SAVE_FORMATS))
+    if unknown:
+        raise OgcpError(f"unknown figure format {unknown[0]!r}; valid choices: {', '.join(SAVE_FORMATS)}")
+    out = Path(out)
+    written = []
+    with style():
+        for fmt in formats:
+            path = out / f"{name}.{fmt}"
+            try:
+                out.mkdir(parents=True, exist_ok=True)
+                # Fixed metadata keeps reruns byte-comparable (no creation date in the PDF).
+                metadata = {"pdf": {"CreationDate": None}, "svg": {"Date": None}}.get(fmt)
+                figure.savefig(path, format=fmt, dpi=dpi, metadata=metadata)
+            except OSError as exc:
+                raise OgcpError(f"cannot write {path}: {exc.strerror or exc}") from exc
+            written.append(path)
+    return written
