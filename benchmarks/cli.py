@@ -102,6 +102,8 @@ def build_parser() -> argparse.ArgumentParser:
     plan.add_argument("--heuristic-branching", type=_int, default=None, help="b of the heuristic (default: --branching)")
     plan.add_argument("--symmetry", action="store_true", help="approximate geometric symmetry removal (may lose optimality)")
     plan.add_argument("--ordered", action="store_true", help="keep finger order (the paper's raw search tree)")
+    plan.add_argument("--record-tree", action="store_true",
+                      help="keep the search tree (parent, level, f, visited per state) in the JSON result")
     plan.add_argument("--kmeans-iterations", type=_int, default=10, help="k-means iterations t for fc (default 10)")
     plan.add_argument("--position-weight", type=_float, default=1.0, help="position weight in fc features (default 1)")
     plan.add_argument("--max-spread", type=_float, default=None, metavar="METRES",
@@ -314,6 +316,8 @@ def run_hfts(args: argparse.Namespace, contacts: ContactSet) -> int:
 
 
 def run_plan(args: argparse.Namespace) -> int:
+    if args.record_tree and args.method in (*ES_METHODS, "hfts"):
+        raise OgcpError(f"--record-tree applies to methods astar, dijkstra, wastar (got {args.method!r})")
     contacts = load_contact_set(args.object, args)
     if args.method in ES_METHODS:
         return run_es(args, contacts)
@@ -324,7 +328,7 @@ def run_plan(args: argparse.Namespace) -> int:
         method=args.method, eps=args.eps, branching=args.branching, successor=args.successor,
         heuristic=args.heuristic, heuristic_branching=args.heuristic_branching, symmetry=args.symmetry,
         ordered=args.ordered, seed=args.seed, kmeans_iterations=args.kmeans_iterations,
-        position_weight=args.position_weight, constraints=constraints,
+        position_weight=args.position_weight, constraints=constraints, record_tree=args.record_tree,
     )
     result = planner.plan(contacts, args.fingers, progress=sys.stderr.isatty())
     record = result.to_dict(contact_set_record(contacts))

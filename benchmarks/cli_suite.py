@@ -33,6 +33,9 @@ def register(commands: Any) -> None:
     suite.add_argument("--retry-errors", action="store_true", help="with --resume: rerun cells recorded as errors")
     suite.add_argument("--max-cells", type=_positive_int, default=None, metavar="N",
                        help="stop after N cells (continue later with --resume)")
+    suite.add_argument("--only", action="append", default=[], metavar="KEY=VALUE[,VALUE]",
+                       help="run only matching cells; keys object, method, group, label, m, contacts; "
+                            "repeat to narrow (the rest: a later run with --resume)")
     suite.add_argument("--no-simulation", action="store_true",
                        help="skip the simulation even if the suite enables it (a different suite hash)")
     suite.set_defaults(handler=run_suite)
@@ -67,7 +70,7 @@ def run_suite(args: argparse.Namespace) -> int:
     if args.no_simulation:
         suite = suite.without_simulation()
     runner = SuiteRunner(suite, args.out, jobs=args.jobs, backend=args.backend, address=args.address,
-                         resume=args.resume, retry_errors=args.retry_errors, max_cells=args.max_cells,
+                         resume=args.resume, retry_errors=args.retry_errors, max_cells=args.max_cells, only=args.only,
                          progress=sys.stderr.isatty())
     summary = runner.run()
     print(summary_table(suite, summary.records))

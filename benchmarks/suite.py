@@ -13,7 +13,7 @@ import datetime
 import os
 import platform
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -23,6 +23,7 @@ from tqdm import tqdm
 from benchmarks.cells import run_cell
 from benchmarks.store import LOCK, ResultStore
 from benchmarks.suite_config import Suite
+from benchmarks.suite_select import Selection, is_selected, parse_selection
 from planner.errors import OgcpError
 from planner.parallel import run_tasks, validate_backend
 from planner.provenance import provenance
@@ -63,6 +64,8 @@ class SuiteRunner:
         resume: Continue the run recorded in ``out`` (same suite hash), skipping its finished cells.
         retry_errors: With ``resume``, also rerun cells recorded as errors (the new record supersedes).
         max_cells: Stop after running this many cells (the rest: a later ``resume``).
+        only: Run only the cells matching these ``KEY=VALUE[,VALUE...]`` items
+            (:mod:`benchmarks.suite_select`); the others stay for a later ``resume``.
         progress: Show a progress bar on stderr.
         log: Where one-line notices go (default: stderr).
     """
@@ -77,6 +80,7 @@ class SuiteRunner:
         resume: bool = False,
         retry_errors: bool = False,
         max_cells: int | None = None,
+        only: Sequence[str] = (),
         progress: bool = False,
         log: Callable[[str], None] | None = None,
     ) -> None:
@@ -88,6 +92,7 @@ class SuiteRunner:
         self.resume = resume
         self.retry_errors = retry_errors
         self.max_cells = max_cells
+        self.only = tuple(only)
         self.progress = progress
         self.log = log or (lambda text: print(text, file=sys.stderr))
 
@@ -103,6 +108,7 @@ class SuiteRunner:
             raise OgcpError("--retry-errors applies with --resume only")
         if self.max_cells is not None and (not isinstance(self.max_cells, int) or self.max_cells < 1):
             raise OgcpError(f"max_cells must be an integer >= 1, got {self.max_cells!r}")
+        selection = parse_selection(self.only, self.suite.cells)
         store = ResultStore(self.out)
         fresh = _is_fresh(self.out)
         if not fresh and not self.resume:
@@ -118,7 +124,7 @@ class SuiteRunner:
             report = store.read()
             for problem in report.problems:
                 self.log(f"ogcp: warning: {problem}")
-            return self._run_cells(store, manifest, report.latest())
+            return self._run_cells(store, manifest, report.latest(), selection)
 
     def _check_manifest(self, store: ResultStore, fresh: bool) -> dict[str, Any]:
         manifest = None if fresh else store.read_manifest()
@@ -146,7 +152,7 @@ class SuiteRunner:
         return {
             "started_at": _now(), "git_commit": info["git_commit"], "versions": info["versions"],
             "jobs": self.jobs, "backend": self.backend, "address": self.address, "resume": self.resume,
-            "retry_errors": self.retry_errors, "max_cells": self.max_cells,
+            "retry_errors": self.retry_errors, "max_cells": self.max_cells, "only": list(self.only),
         }
 
     def _new_manifest(self, session: dict[str, Any]) -> dict[str, Any]:
@@ -165,7 +171,8 @@ class SuiteRunner:
             "sessions": [session],
         }
 
-    def _run_cells(self, store: ResultStore, manifest: dict[str, Any], done: dict[str, dict[str, Any]]) -> RunSummary:
+    def _run_cells(self, store: ResultStore, manifest: dict[str, Any], done: dict[str, dict[str, Any]],
+                   selection: Selection) -> RunSummary:
         ids = {c.id for c in self.suite.cells}
         stray = set(done) - ids
         if stray:
@@ -174,6 +181,7 @@ class SuiteRunner:
         todo = [c for c in self.suite.cells
                 if c.id not in done or (self.retry_errors and done[c.id].get("status") == "error")]
         skipped = len(self.suite.cells) - len(todo)
+        todo = [c for c in todo if is_selected(c, selection)]
         if self.max_cells is not None:
             todo = todo[: self.max_cells]
         missing = [n for n in self.suite.unfetched_objects() if any(c.object.spec == n for c in todo)]

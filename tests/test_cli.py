@@ -109,6 +109,15 @@ def test_readable_summary(capsys, plan_run):
         json.loads(text)
 
 
+def test_record_tree_writes_the_search_tree(capsys):
+    assert main(["plan", "box", "-n", "24", "-m", "3", "--record-tree", "--json"]) == 0
+    record = json.loads(capsys.readouterr().out)
+    tree = record["tree"]
+    assert len(tree["parent"]) == len(tree["level"]) == len(tree["f"]) == record["stats"]["created"]
+    assert sum(tree["visited"]) == record["stats"]["visited"]
+    assert tree["path"][0] == 0 and tree["parent"][0] == -1
+
+
 def _contact_json(tmp_path, bad_normal) -> str:
     normals = [[0.0, 0.0, 1.0], bad_normal, [1.0, 0.0, 0.0]]
     data = {"schema": "ogcp.contacts/1", "positions": [[0.0, 0.0, 0.0], [0.1, 0.0, 0.0], [0.0, 0.1, 0.0]],
@@ -133,6 +142,7 @@ ERROR_CASES = {
     "dijkstra heuristic": (["plan", "box", "-n", "8", "--method", "dijkstra", "--heuristic", "fc"], "no heuristic"),
     "astar eps": (["plan", "box", "-n", "8", "--method", "astar", "--eps", "0.3"], "applies to method 'wastar'"),
     "bad max spread": (["plan", "box", "-n", "8", "--max-spread", "0"], "maximum finger spread"),
+    "tree of es": (["plan", "box", "-n", "8", "--method", "es", "--record-tree"], "applies to methods astar"),
     "bad cone edges": (["contacts", "box", "-n", "8", "--cone-edges", "2", "-o", "x.json"], "cone_edges"),
 }
 

@@ -16,7 +16,8 @@ def readme_commands() -> list[str]:
 def test_readme_has_exactly_a_main_command_and_a_test_command():
     commands = readme_commands()
     assert len(commands) == 2
-    assert any("bin/ogcp plan " in c for c in commands)
+    main = next(c for c in commands if not c.endswith("-m pytest"))
+    assert "bin/ogcp suite quick " in main and "--resume" in main and "bin/ogcp plot results/quick" in main
     assert any(c.endswith("-m pytest") for c in commands)
 
 

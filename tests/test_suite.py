@@ -68,8 +68,6 @@ TINY_CELLS = 2 * 8
 
 
 def _ogcp(argv: list[str], monkeypatch: pytest.MonkeyPatch) -> tuple[int, str, str]:
-    if "benchmarks.cli_suite" not in cli.EXTRA_COMMAND_MODULES:
-        monkeypatch.setattr(cli, "EXTRA_COMMAND_MODULES", (*cli.EXTRA_COMMAND_MODULES, "benchmarks.cli_suite"))
     out, err = io.StringIO(), io.StringIO()
     with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
         status = cli.main(argv)
@@ -380,13 +378,34 @@ def test_simulation_is_called_lazily_with_the_plan(tmp_path, monkeypatch):
     assert "sim_eval.evaluate_plan is not available" in failed["error"]["message"]
 
 
-def test_record_tree_is_passed_through_or_refused(tmp_path):
+def test_record_tree_is_passed_through(tmp_path):
     text = "schema_version = 1\nobjects = ['box']\ncontacts = 12\n[[methods]]\nmethod = 'astar'\nrecord_tree = true\n"
     record = SuiteRunner(parse_suite(text), tmp_path).run().records.popitem()[1]
-    if record["status"] == "ok":
-        assert "tree" in record["plan"]
-    else:
-        assert "record_tree = true needs a GraspPlanner" in record["error"]["message"]
+    assert record["status"] == "ok"
+    tree = record["plan"]["tree"]
+    path = tree["path"]
+    assert path[0] == 0 and all(tree["parent"][child] == parent for parent, child in itertools.pairwise(path))
+    assert all(tree["visited"][state] for state in path[:-1])
+
+
+def test_slices_selected_with_only_add_up_to_the_full_run(tiny_file, serial_run, tmp_path, monkeypatch):
+    out = tmp_path / "out"
+    status, text, _ = _ogcp(["suite", str(tiny_file), "--out", str(out), "--only", "object=box",
+                             "--only", "method=es,hfts"], monkeypatch)
+    assert status == 0 and "3 cells run, 0 already recorded, 0 errors, 13 remaining" in text
+    assert {(r["params"]["object"], r["params"]["method"]) for r in _results(out).values()} == {
+        ("box", "es"), ("box", "hfts")}
+    again = SuiteRunner(load_suite(tiny_file), out, resume=True, only=["object=box"]).run()
+    assert (again.ran, again.remaining) == (5, 8)
+    rest = SuiteRunner(load_suite(tiny_file), out, resume=True).run()
+    assert rest.ran == 8 and _results(out) == _results(serial_run)
+    assert [s["only"] for s in ResultStore(out).read_manifest()["sessions"]] == [
+        ["object=box", "method=es,hfts"], ["object=box"], []]
+    for only, message in [(["object=bunny"], "no cell of this suite has it; the suite has object = box, sphere"),
+                          (["colour=red"], "valid choices: contacts, group, label, m, method, object"),
+                          (["object"], "--only takes KEY=VALUE")]:
+        with pytest.raises(OgcpError, match=message):
+            SuiteRunner(load_suite(tiny_file), tmp_path / "bad", only=only).run()
 
 
 def test_runner_refuses_bad_options_and_foreign_folders(tmp_path):
