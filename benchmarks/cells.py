@@ -33,13 +33,15 @@ SIMULATION_ARGUMENTS = ("decomposition", "max_grasps")
 TRACEBACK_LINES = 15
 
 
-def run_cell(cell: Cell, simulation: dict[str, Any] | None = None) -> dict[str, Any]:
+def run_cell(cell: Cell, simulation: dict[str, Any] | None = None, time_limit: float | None = None) -> dict[str, Any]:
     """Run one cell and return its JSON-ready record.
 
     Args:
         cell: The cell.
         simulation: Settings passed to ``sim_eval.evaluate_plan`` (the suite's
             ``[simulation]`` table without ``enabled``); None skips the simulation.
+        time_limit: Wall-clock budget of a search cell (astar, wastar, dijkstra) [s]; past
+            it the cell is recorded as a ``SearchTimeout`` error. None: unlimited.
 
     Returns:
         The record (see the README's ``results.jsonl`` section for its keys).
@@ -50,7 +52,7 @@ def run_cell(cell: Cell, simulation: dict[str, Any] | None = None) -> dict[str, 
         "status": "ok", "error": None, "plan": None, "simulation": None, "simulation_seconds": None,
     }
     try:
-        record["plan"] = plan_record(cell, contact_set(cell))
+        record["plan"] = plan_record(cell, contact_set(cell), time_limit)
         if simulation is not None:
             sim0 = time.perf_counter()
             record["simulation"] = simulate(record["plan"], simulation)
@@ -94,7 +96,7 @@ def _constraints(params: dict[str, Any]) -> tuple[list[Constraint], SDHReachabil
     return constraints, hand
 
 
-def plan_record(cell: Cell, contacts: ContactSet) -> dict[str, Any]:
+def plan_record(cell: Cell, contacts: ContactSet, time_limit: float | None = None) -> dict[str, Any]:
     """Run the cell's method and return its ``ogcp.plan/1`` record.
 
     Raises:
@@ -104,7 +106,7 @@ def plan_record(cell: Cell, contacts: ContactSet) -> dict[str, Any]:
     constraints, hand = _constraints(params)
     described = contact_set_record(contacts)
     if cell.method in SEARCH_METHODS:
-        record = _search(cell, params, constraints, contacts, described)
+        record = _search(cell, params, constraints, contacts, described, time_limit)
     elif cell.method in EXHAUSTIVE_METHODS:
         search = ExhaustiveSearch(pruned=cell.method == "es-pruned", chunk=params["chunk"],
                                   bins=params.get("bins", DEFAULT_BINS), constraints=constraints)
@@ -119,13 +121,13 @@ def plan_record(cell: Cell, contacts: ContactSet) -> dict[str, Any]:
 
 
 def _search(cell: Cell, params: dict[str, Any], constraints: list[Constraint], contacts: ContactSet,
-            described: dict[str, Any]) -> dict[str, Any]:
+            described: dict[str, Any], time_limit: float | None) -> dict[str, Any]:
     options = {key: params[key] for key in ("branching", "successor", "heuristic", "heuristic_branching",
                                             "symmetry", "ordered", "seed", "kmeans_iterations", "position_weight")}
     if cell.method == "wastar":
         options["eps"] = params["eps"]
     result = GraspPlanner(method=cell.method, constraints=constraints, record_tree=params["record_tree"],
-                          **options).plan(contacts, cell.m)
+                          time_limit=time_limit, **options).plan(contacts, cell.m)
     return result.to_dict(described)
 
 

@@ -102,6 +102,9 @@ def build_parser() -> argparse.ArgumentParser:
     plan.add_argument("--heuristic-branching", type=_int, default=None, help="b of the heuristic (default: --branching)")
     plan.add_argument("--symmetry", action="store_true", help="approximate geometric symmetry removal (may lose optimality)")
     plan.add_argument("--ordered", action="store_true", help="keep finger order (the paper's raw search tree)")
+    plan.add_argument("--time-limit", type=_float, default=None, metavar="SECONDS",
+                      help="stop A*/WA*/Dijkstra after this many seconds with the best grasp so far and a "
+                           "certified bound on the optimum (exit status 2)")
     plan.add_argument("--record-tree", action="store_true",
                       help="keep the search tree (parent, level, f, visited per state) in the JSON result")
     plan.add_argument("--kmeans-iterations", type=_int, default=10, help="k-means iterations t for fc (default 10)")
@@ -316,8 +319,9 @@ def run_hfts(args: argparse.Namespace, contacts: ContactSet) -> int:
 
 
 def run_plan(args: argparse.Namespace) -> int:
-    if args.record_tree and args.method in (*ES_METHODS, "hfts"):
-        raise OgcpError(f"--record-tree applies to methods astar, dijkstra, wastar (got {args.method!r})")
+    for flag, given in (("--record-tree", args.record_tree), ("--time-limit", args.time_limit is not None)):
+        if given and args.method in (*ES_METHODS, "hfts"):
+            raise OgcpError(f"{flag} applies to methods astar, dijkstra, wastar (got {args.method!r})")
     contacts = load_contact_set(args.object, args)
     if args.method in ES_METHODS:
         return run_es(args, contacts)
@@ -329,6 +333,7 @@ def run_plan(args: argparse.Namespace) -> int:
         heuristic=args.heuristic, heuristic_branching=args.heuristic_branching, symmetry=args.symmetry,
         ordered=args.ordered, seed=args.seed, kmeans_iterations=args.kmeans_iterations,
         position_weight=args.position_weight, constraints=constraints, record_tree=args.record_tree,
+        time_limit=args.time_limit,
     )
     result = planner.plan(contacts, args.fingers, progress=sys.stderr.isatty())
     record = result.to_dict(contact_set_record(contacts))

@@ -36,6 +36,9 @@ def register(commands: Any) -> None:
     suite.add_argument("--only", action="append", default=[], metavar="KEY=VALUE[,VALUE]",
                        help="run only matching cells; keys object, method, group, label, m, contacts; "
                             "repeat to narrow (the rest: a later run with --resume)")
+    suite.add_argument("--time-limit", type=_float, default=None, metavar="SECONDS",
+                       help="wall-clock budget per search cell (astar, wastar, dijkstra); a cell past it is "
+                            "recorded as an error (rerun with --resume --retry-errors)")
     suite.add_argument("--no-simulation", action="store_true",
                        help="skip the simulation even if the suite enables it (a different suite hash)")
     suite.set_defaults(handler=run_suite)
@@ -71,6 +74,7 @@ def run_suite(args: argparse.Namespace) -> int:
         suite = suite.without_simulation()
     runner = SuiteRunner(suite, args.out, jobs=args.jobs, backend=args.backend, address=args.address,
                          resume=args.resume, retry_errors=args.retry_errors, max_cells=args.max_cells, only=args.only,
+                         time_limit=args.time_limit,
                          progress=sys.stderr.isatty())
     summary = runner.run()
     print(summary_table(suite, summary.records))

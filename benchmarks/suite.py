@@ -64,6 +64,9 @@ class SuiteRunner:
         resume: Continue the run recorded in ``out`` (same suite hash), skipping its finished cells.
         retry_errors: With ``resume``, also rerun cells recorded as errors (the new record supersedes).
         max_cells: Stop after running this many cells (the rest: a later ``resume``).
+        time_limit: Wall-clock budget of each search cell [s] (an execution policy, not part
+            of the suite: a cell past it is recorded as an error, to rerun with
+            ``retry_errors`` and a larger limit). None: unlimited.
         only: Run only the cells matching these ``KEY=VALUE[,VALUE...]`` items
             (:mod:`benchmarks.suite_select`); the others stay for a later ``resume``.
         progress: Show a progress bar on stderr.
@@ -81,6 +84,7 @@ class SuiteRunner:
         retry_errors: bool = False,
         max_cells: int | None = None,
         only: Sequence[str] = (),
+        time_limit: float | None = None,
         progress: bool = False,
         log: Callable[[str], None] | None = None,
     ) -> None:
@@ -93,6 +97,7 @@ class SuiteRunner:
         self.retry_errors = retry_errors
         self.max_cells = max_cells
         self.only = tuple(only)
+        self.time_limit = time_limit
         self.progress = progress
         self.log = log or (lambda text: print(text, file=sys.stderr))
 
@@ -109,6 +114,10 @@ class SuiteRunner:
         if self.max_cells is not None and (not isinstance(self.max_cells, int) or self.max_cells < 1):
             raise OgcpError(f"max_cells must be an integer >= 1, got {self.max_cells!r}")
         selection = parse_selection(self.only, self.suite.cells)
+        limit = self.time_limit
+        if limit is not None and (isinstance(limit, bool) or not isinstance(limit, (int, float)) or not limit > 0
+                                  or limit == float("inf")):
+            raise OgcpError(f"time_limit must be a number of seconds > 0, got {limit!r}")
         store = ResultStore(self.out)
         fresh = _is_fresh(self.out)
         if not fresh and not self.resume:
@@ -153,6 +162,7 @@ class SuiteRunner:
             "started_at": _now(), "git_commit": info["git_commit"], "versions": info["versions"],
             "jobs": self.jobs, "backend": self.backend, "address": self.address, "resume": self.resume,
             "retry_errors": self.retry_errors, "max_cells": self.max_cells, "only": list(self.only),
+            "time_limit": self.time_limit,
         }
 
     def _new_manifest(self, session: dict[str, Any]) -> dict[str, Any]:
@@ -194,7 +204,7 @@ class SuiteRunner:
         bar = tqdm(total=len(self.suite.cells), initial=skipped, unit="cell", desc=self.suite.name,
                    disable=not self.progress)
         try:
-            tasks = [(cell, settings if cell.simulate else None) for cell in todo]
+            tasks = [(cell, settings if cell.simulate else None, self.time_limit) for cell in todo]
             finished = run_tasks(run_cell, tasks, self.jobs, self.backend, self.address) if tasks else iter(())
             for record in finished:
                 store.append(record)

@@ -11,7 +11,7 @@ Typical use::
 
 from planner.constraints import DistinctContacts, MaxFingerSpread
 from planner.contacts import ContactSet, sample_contacts
-from planner.errors import OgcpError
+from planner.errors import OgcpError, SearchTimeout
 from planner.objects import BUILTIN_OBJECTS, builtin_mesh, load_mesh, resolve_object
 from planner.quality import Q1Certificate, q1, q1_certificate
 from planner.result import SearchResult, SearchStats
@@ -31,6 +31,7 @@ __all__ = [
     "Q1Certificate",
     "SearchResult",
     "SearchStats",
+    "SearchTimeout",
     "builtin_mesh",
     "load_mesh",
     "q1",

@@ -13,6 +13,26 @@ class OgcpError(ValueError):
     """
 
 
+class SearchTimeout(OgcpError):
+    """A search stopped at its time limit before it could return a certified grasp.
+
+    Attributes:
+        seconds: The time limit that was reached [s].
+        visited: States expanded until then.
+        best_q1: Best exact Q1 of a grasp seen so far (None if no grasp was evaluated) [N].
+        upper_bound: Certified upper bound on the optimal Q1 at that moment [N].
+    """
+
+    def __init__(self, method: str, seconds: float, visited: int, best_q1: float | None, upper_bound: float) -> None:
+        best = "no grasp evaluated yet" if best_q1 is None else f"best Q1 found {best_q1:.6f}"
+        super().__init__(f"{method} stopped at its time limit of {seconds:g} s after {visited} expansions "
+                         f"({best}; the optimum is at most {upper_bound:.6f})")
+        self.seconds = seconds
+        self.visited = visited
+        self.best_q1 = best_q1
+        self.upper_bound = upper_bound
+
+
 def choice_error(what: str, given: object, valid: Iterable[str]) -> OgcpError:
     """Build the error for an unknown name, listing the valid choices.
 

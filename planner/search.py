@@ -78,6 +78,9 @@ class GraspPlanner:
         record_tree: Keep the search tree (every created state's parent, level, f and
             whether it was expanded, and the solution path) in ``SearchResult.tree``,
             e.g. for the paper's circular plot (Fig. 5).
+        time_limit: Wall-clock budget of :meth:`plan` [s]; past it the search raises
+            :class:`~planner.errors.SearchTimeout` with the best grasp found and a certified
+            upper bound on the optimum. None: unlimited.
     """
 
     def __init__(
@@ -95,6 +98,7 @@ class GraspPlanner:
         position_weight: float = 1.0,
         constraints: Sequence[Constraint] = (),
         record_tree: bool = False,
+        time_limit: float | None = None,
     ) -> None:
         self.method = method
         self.eps = eps
@@ -109,6 +113,7 @@ class GraspPlanner:
         self.position_weight = position_weight
         self.constraints = constraints
         self.record_tree = record_tree
+        self.time_limit = time_limit
 
     def resolved_config(self) -> dict[str, Any]:
         """Validate the parameters and fill in method-dependent defaults.
@@ -165,6 +170,7 @@ class GraspPlanner:
 
         Raises:
             OgcpError: For invalid parameters, or when no grasp satisfies the constraints.
+            SearchTimeout: When ``time_limit`` runs out first (a subclass of OgcpError).
         """
         provenance()  # recorded now: the commit and versions of the code that runs
         config = self.resolved_config()
@@ -173,7 +179,11 @@ class GraspPlanner:
         if m > len(contacts):
             raise OgcpError(f"m = {m} exceeds the number of contacts |C| = {len(contacts)}")
         config["m"] = int(m)
-        search = Search(contacts, int(m), config, [DistinctContacts(), *self.constraints], self.record_tree)
+        limit = self.time_limit
+        if limit is not None and not (isinstance(limit, (int, float)) and math.isfinite(limit) and limit > 0):
+            raise OgcpError(f"time_limit must be a number of seconds > 0 or None, got {limit!r}")
+        search = Search(contacts, int(m), config, [DistinctContacts(), *self.constraints], self.record_tree,
+                        None if limit is None else float(limit))
         with tqdm(desc=config["method"], unit=" expansions", disable=not progress, leave=False) as bar:
             search.on_expand = lambda f: (bar.update(), bar.set_postfix(f=f"{f:.6f}", refresh=False))
             return search.run()

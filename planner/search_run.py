@@ -32,7 +32,7 @@ import numpy as np
 from planner.bounds import Vector
 from planner.constraints import Constraint
 from planner.contacts import ContactSet
-from planner.errors import OgcpError
+from planner.errors import OgcpError, SearchTimeout
 from planner.oracle import PackedMask
 from planner.result import SearchResult, SearchStats, SearchTree, effective_branching_factor
 from planner.search_space import SearchSpace, State
@@ -71,14 +71,16 @@ class Search(SearchSpace):
         config: Resolved configuration (:meth:`planner.search.GraspPlanner.resolved_config`).
         constraints: Grasp constraints, distinct contacts included.
         record_tree: Keep every created state for :attr:`SearchResult.tree`.
+        time_limit: Wall-clock budget [s]; None: unlimited.
     """
 
     def __init__(
         self, contacts: ContactSet, m: int, config: dict[str, Any], constraints: list[Constraint],
-        record_tree: bool = False,
+        record_tree: bool = False, time_limit: float | None = None,
     ) -> None:
         super().__init__(contacts, m, config, constraints)
         self.eps = config["eps"]
+        self.time_limit = time_limit
         self._pending: dict[State, tuple[Ranked, int, float]] = {}
         # Heuristic children are successors only on the expansion tree and without the
         # symmetry filter; otherwise only created terminal states become incumbents.
@@ -116,10 +118,13 @@ class Search(SearchSpace):
         q0 = self.q0 = self.exact(root)
         open_list: list[Entry] = []
         self.push(open_list, 0.0, 0, root, EXACT_G, 0.0, 0)
+        deadline = math.inf if self.time_limit is None else wall0 + self.time_limit
         while open_list:
             entry = heapq.heappop(open_list)
             key, neg_depth, _, state, lower, stage, g, ident = entry
             depth = -neg_depth
+            if time.perf_counter() > deadline:
+                self.stop_at_deadline(lower, open_list)
             if stage == BOUND:
                 q = self.exact(state)
                 g = q0 - q
@@ -143,6 +148,15 @@ class Search(SearchSpace):
                 return self.finish(open_list, wall0, cpu0)
             self.expand(open_list, state, depth, key, lower, g, ident)
         raise OgcpError("no grasp satisfies the constraints")
+
+    def stop_at_deadline(self, lower: float, open_list: list[Entry]) -> None:
+        """Raise :class:`SearchTimeout` with the best grasp so far and the certified bound."""
+        # Every unexplored grasp lies below an open state whose stored lower bound of f
+        # bounds its cost (the popped state included), so q0 - min bounds the optimum.
+        lowest = min([lower] + [entry[4] for entry in open_list])
+        best = None if self.incumbent is None else self.incumbent.q
+        upper = max(self.q0 - lowest, best if best is not None else 0.0)
+        raise SearchTimeout(self.config["method"], float(self.time_limit), sum(self.visited.values()), best, upper)
 
     def expand(
         self, open_list: list[Entry], state: State, depth: int, key: float, lower: float, g: float, ident: int

@@ -143,6 +143,8 @@ ERROR_CASES = {
     "astar eps": (["plan", "box", "-n", "8", "--method", "astar", "--eps", "0.3"], "applies to method 'wastar'"),
     "bad max spread": (["plan", "box", "-n", "8", "--max-spread", "0"], "maximum finger spread"),
     "tree of es": (["plan", "box", "-n", "8", "--method", "es", "--record-tree"], "applies to methods astar"),
+    "time limit of es": (["plan", "box", "-n", "8", "--method", "es", "--time-limit", "5"], "applies to methods"),
+    "time limit 0": (["plan", "box", "-n", "8", "--time-limit", "0"], "time_limit must be"),
     "bad cone edges": (["contacts", "box", "-n", "8", "--cone-edges", "2", "-o", "x.json"], "cone_edges"),
 }
 

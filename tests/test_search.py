@@ -4,11 +4,13 @@ from __future__ import annotations
 
 import itertools
 import math
+import types
 
 import numpy as np
 import pytest
 
-from planner.errors import OgcpError
+from planner import search_run
+from planner.errors import OgcpError, SearchTimeout
 from planner.quality import q1
 from planner.result import effective_branching_factor
 from planner.search import GraspPlanner
@@ -155,8 +157,34 @@ def test_symmetry_removal_is_approximate_but_sound(object_contacts, optimum):
         ({"seed": -1}, 3, "seed"),
         ({}, 1, "m must be"),
         ({}, 99, "exceeds"),
+        ({"time_limit": 0}, 3, "time_limit must be"),
+        ({"time_limit": float("nan")}, 3, "time_limit must be"),
     ],
 )
 def test_invalid_parameters_are_rejected(kwargs, m, message, object_contacts):
     with pytest.raises(OgcpError, match=message):
         GraspPlanner(**kwargs).plan(object_contacts("box", 12, 0), m)
+
+
+@pytest.mark.parametrize("method, eps", [("astar", None), ("wastar", 0.5), ("dijkstra", None)])
+def test_time_limit_stops_with_a_sound_bound(method, eps, object_contacts, optimum, monkeypatch):
+    """A fake clock ticks 1 s per reading, so the limit cuts the search at every depth in turn."""
+    contacts = object_contacts("amphora", 26, 2)
+    best = optimum("amphora", 26, 3, 2)
+    full = GraspPlanner(method=method, eps=eps, seed=2).plan(contacts, 3)
+    stops = 0
+    for limit in (1, 2, 5, 10, 20, 40, 80, 10_000):
+        ticks = itertools.count()
+        monkeypatch.setattr(search_run, "time", types.SimpleNamespace(
+            perf_counter=lambda clock=ticks: float(next(clock)), process_time=lambda: 0.0))
+        try:
+            result = GraspPlanner(method=method, eps=eps, seed=2, time_limit=limit).plan(contacts, 3)
+        except SearchTimeout as stop:
+            stops += 1
+            assert stop.seconds == limit and stop.visited <= full.stats.visited
+            assert stop.upper_bound >= best - 1e-12
+            assert stop.best_q1 is None or stop.best_q1 <= best + 1e-12
+            assert f"time limit of {limit} s" in str(stop) and isinstance(stop, OgcpError)
+        else:
+            assert result.grasp == full.grasp and result.q1 == full.q1
+    assert 1 <= stops < 8  # the smallest limits stop it, the largest does not

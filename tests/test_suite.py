@@ -426,3 +426,19 @@ def test_runner_refuses_bad_options_and_foreign_folders(tmp_path):
     with ResultStore(tmp_path / "busy").lock(), pytest.raises(OgcpError, match="in use"):
         SuiteRunner(suite, tmp_path / "busy").run()
     assert json.loads(json.dumps(suite.seeds())) == {"contact_seeds": [0], "method_seeds": [0]}
+
+
+def test_time_limit_records_search_cells_as_errors_and_retry_completes(tiny_file, serial_run, tmp_path):
+    out = tmp_path / "out"
+    limited = SuiteRunner(load_suite(tiny_file), out, time_limit=1e-9).run()
+    failed = [r for r in limited.records.values() if r["status"] == "error"]
+    assert {r["params"]["method"] for r in failed} == {"astar", "wastar", "dijkstra"}
+    assert all(r["error"]["type"] == "SearchTimeout" and "time limit" in r["error"]["message"] for r in failed)
+    assert all(r["status"] == "ok" for r in limited.records.values() if r["params"]["method"] in ("es", "hfts"))
+    retried = SuiteRunner(load_suite(tiny_file), out, resume=True, retry_errors=True).run()
+    assert retried.ran == len(failed) and retried.errors == 0
+    latest = ResultStore(out).read().latest()  # a retried cell's new record supersedes its error
+    assert len(latest) == TINY_CELLS and {k: _comparable(v) for k, v in latest.items()} == _results(serial_run)
+    assert [s["time_limit"] for s in ResultStore(out).read_manifest()["sessions"]] == [1e-9, None]
+    with pytest.raises(OgcpError, match="time_limit must be a number of seconds > 0"):
+        SuiteRunner(load_suite(tiny_file), tmp_path / "bad", time_limit=-1).run()
