@@ -32,6 +32,7 @@ class SimGrasp:
     """One valid simulated grasp.
 
     Attributes:
+        grasp: Its sorted contact indices (the same grasp may come from several cells).
         q1: Its Q1.
         measured_min: Smallest measured resistance over the directions [N] (None if not all measured).
         min_censored: Whether that smallest value is a lower bound (the object never moved).
@@ -41,6 +42,7 @@ class SimGrasp:
         fidelity: ``|measured / predicted - 1|`` per direction (NaN where undefined).
     """
 
+    grasp: tuple[int, ...]
     q1: float | None
     measured_min: float | None
     min_censored: bool
@@ -74,7 +76,9 @@ def valid_grasps(cell: CellData) -> list[SimGrasp]:
         fidelity = _array(g.get("fidelity"))
         low = number(g.get("measured_min"))
         at_min = bool(len(measured) and np.isfinite(measured).all() and censored[int(np.argmin(measured))])
-        out.append(SimGrasp(number(g.get("q1")), low, at_min, predicted, measured, censored,
+        indices = g.get("grasp")
+        grasp = tuple(sorted(int(i) for i in indices)) if isinstance(indices, list) else (id(g),)
+        out.append(SimGrasp(grasp, number(g.get("q1")), low, at_min, predicted, measured, censored,
                             fidelity if len(fidelity) == len(measured) else np.full(len(measured), np.nan)))
     return out
 
@@ -117,10 +121,13 @@ def sim_q1_vs_resistance(run: RunData, notes: list[str] | None = None) -> Figure
     figure, axes = new_figure(len(groups), panel_height=2.0)
     lower_bounds = False
     for ax, (problem, cells) in zip(axes, groups.items()):
-        xs, ys = [], []
+        # A grasp returned by several methods (A* and ES) is one sample of the correlation.
+        unique: dict[tuple[int, ...], tuple[float, float]] = {}
         for cell, grasps in cells:
-            points = [(g.q1, g.measured_min, g.min_censored) for g in grasps
-                      if g.q1 is not None and g.measured_min is not None]
+            kept = [g for g in grasps if g.q1 is not None and g.measured_min is not None]
+            for g in kept:
+                unique.setdefault(g.grasp, (g.q1, g.measured_min))
+            points = [(g.q1, g.measured_min, g.min_censored) for g in kept]
             if not points:
                 continue
             q1, low, cut = (np.array(v) for v in zip(*points))
@@ -130,8 +137,7 @@ def sim_q1_vs_resistance(run: RunData, notes: list[str] | None = None) -> Figure
                 lower_bounds = True
                 ax.scatter(q1[cut], low[cut], s=12, marker="^", facecolors="none", edgecolors=colour,
                            linewidths=0.6, label=None)
-            xs += list(q1)
-            ys += list(low)
+        xs, ys = [q for q, _ in unique.values()], [low for _, low in unique.values()]
         ax.set_title(f"{names[problem]}\n{_rank_correlations(xs, ys)}")
         ax.set_xlabel("$Q_1$")
         ax.set_ylabel("min. measured resistance [N]")
