@@ -21,8 +21,32 @@ def _version(package: str) -> str | None:
 @lru_cache(maxsize=1)
 def git_commit() -> str | None:
     """Commit of the ogcp checkout this code runs from, with ``-dirty`` if modified; None outside git."""
-    root = Path(__file__).resolve().parent.parent
+    return checkout_commit(Path(__file__).resolve().parent.parent)
+
+
+def checkout_commit(root: Path) -> str | None:
+    """Commit of the git checkout whose top level is ``root``, with ``-dirty`` if tracked files changed.
+
+    Args:
+        root: Folder expected to be the top level of a checkout.
+
+    Returns:
+        The commit hash, or None when ``root`` is not a checkout's top level (a folder nested in
+        some other repository counts as not) or git is unavailable.
+    """
+    root = Path(root).resolve()
     try:
+        toplevel = subprocess.run(
+            ["git", "-C", str(root), "rev-parse", "--show-toplevel"],
+            capture_output=True,
+            text=True,
+            timeout=5,
+            check=True,
+        ).stdout.strip()
+        # A wheel install inside some other repository (a venv in a user's project) must not
+        # report that repository's commit as ogcp's.
+        if Path(toplevel).resolve() != root:
+            return None
         commit = subprocess.run(
             ["git", "-C", str(root), "rev-parse", "HEAD"], capture_output=True, text=True, timeout=5, check=True
         ).stdout.strip()

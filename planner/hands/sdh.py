@@ -1,6 +1,6 @@
 """Kinematic model of the Schunk SDH three-finger hand (7 DOF), the numpy twin of its MJCF.
 
-Frames and signs (the same in ``assets/hands/sdh.xml``):
+Frames and signs (the same in ``sdh.xml`` beside this module):
 
 - Palm frame: z is the palm axis; the finger bases lie at ``z = PALM_HEIGHT`` on an
   equilateral triangle of side 0.066 m centred (to rounding) on that axis. Finger 1 rotates
@@ -81,7 +81,8 @@ TIP_SITES = ("tip_1", "tip_2", "tip_3")
 
 _PROXIMAL = np.array([1, 3, 5])
 _DISTAL = np.array([2, 4, 6])
-_MODEL_PATH = Path(__file__).resolve().parents[2] / "assets" / "hands" / "sdh.xml"
+# Package data (pyproject), so a wheel install carries it as well as a checkout.
+_MODEL_PATH = Path(__file__).resolve().with_name("sdh.xml")
 
 
 @dataclass(frozen=True, eq=False)
@@ -216,17 +217,17 @@ def _is_natural(value: object) -> bool:
 
 
 def sdh_model_path() -> Path:
-    """Path of the SDH MJCF, ``assets/hands/sdh.xml`` in the repository.
+    """Path of the SDH MJCF, ``planner/hands/sdh.xml`` (shipped as package data).
 
     Returns:
         The absolute path of the model file.
 
     Raises:
-        OgcpError: If the file is missing (assets ship with a source checkout only).
+        OgcpError: If the file is missing (a broken install).
     """
     if not _MODEL_PATH.is_file():
         raise OgcpError(
-            f"SDH model not found at {_MODEL_PATH}; ogcp's assets ship with the repository, so install it "
-            "from a checkout (pip install -e .)"
+            f"SDH model not found at {_MODEL_PATH}; the ogcp install is incomplete, reinstall it "
+            "(pip install --force-reinstall ogcp, or pip install -e . from a checkout)"
         )
     return _MODEL_PATH
