@@ -38,7 +38,7 @@ class FetchableObject:
             re-built mirror copy may differ while the mesh inside is identical).
         vertices: Vertex count after loading, repair and scaling.
         watertight: Whether the repaired mesh is watertight (the volume centroid is then the COM).
-        repair: What the deterministic repair changes for this file (see ``planner.assets.repair_mesh``).
+        repair: What the deterministic repair changes for this file (see ``planner.mesh_repair.repair_mesh``).
         description: One line for ``ogcp assets list``.
     """
 
