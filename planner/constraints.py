@@ -50,13 +50,16 @@ def accepts_many(constraint: Constraint, grasps: NDArray[np.intp], contacts: Con
 
 
 def _has_distinct_representatives(sets: Sequence[Indices]) -> bool:
-    """Hall's condition via augmenting paths on at most m candidates per set.
+    """Hall's condition via augmenting paths over the sets with fewer than m elements.
 
-    A set with at least m elements can always be served last (at most m - 1 of its
-    elements are taken), so trimming every set to its first m elements is exact.
+    A set with at least m elements can always be served last (the others take at most
+    m - 1 of its elements), so only the smaller sets need a matching. Near the root every
+    set is that large, which makes this check free for most states of a search.
     """
     m = len(sets)
-    candidates = [list(map(int, s[:m])) for s in sets]
+    candidates = [list(map(int, s)) for s in sets if len(s) < m]
+    if len(candidates) < 2:
+        return all(len(s) for s in sets)
     owner: dict[int, int] = {}
 
     def augment(i: int, seen: set[int]) -> bool:
@@ -69,7 +72,7 @@ def _has_distinct_representatives(sets: Sequence[Indices]) -> bool:
                 return True
         return False
 
-    return all(augment(i, set()) for i in range(m))
+    return all(augment(i, set()) for i in range(len(candidates)))
 
 
 class DistinctContacts:
