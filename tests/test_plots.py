@@ -232,6 +232,10 @@ def test_fig4_histogram_per_problem_with_every_method_marked(run_data):
     assert list(hfts.get_xdata()) == pytest.approx([0.05, 0.28])  # min-max of the runs
     assert box.get_yscale() == "log"  # counts span 4000 : 1
     assert _figure_legend(figure) == _labels(box)
+    # The axis ends just past the highest bar or marker, not at Q_OWS (0.5), the histogram's range.
+    highest = max(max(np.ravel(line.get_xdata())) for line in box.lines)
+    highest = max(highest, max(bar.get_x() + bar.get_width() for bar in box.patches if bar.get_height() > 0))
+    assert 1.08 * highest < 0.5 and box.get_xlim()[1] == pytest.approx(1.08 * highest)
 
 
 def test_fig5_circular_tree_with_visited_states_and_the_solution_path(run_data):

@@ -104,7 +104,12 @@ def _histogram_panel(ax: Axes, es: CellData, others: list[CellData], title: str)
     ax.set_title("\n".join([title, ", ".join(s for s in summary if s)]))
     ax.set_xlabel("$Q_1$")
     ax.set_ylabel("grasps")
-    ax.set_xlim(0, edges[-1] * 1.02)
+    # Axis up to the highest bar or marker, not to Q_OWS (the histogram's range), which can
+    # be several times the optimum and squeeze the distribution into a corner.
+    reach = [float(edges[np.flatnonzero(counts)[-1] + 1])] if np.any(counts) else []
+    reach += [c.q1 for c in others if c.q1 is not None] + [number(c.plan.get("bound")) or 0.0 for c in others]
+    reach += [number(r.get("q1")) or 0.0 for c in others for r in c.plan.get("runs") or [] if isinstance(r, dict)]
+    ax.set_xlim(0, min(edges[-1], max(reach, default=edges[-1])) * 1.08)
     # Markers sit in axes coordinates vertically, so a log count axis does not move them.
     across = ax.get_xaxis_transform()
     optimal = [c for c in others if c.method in ("astar", "dijkstra") and not c.variant.get("symmetry")]
