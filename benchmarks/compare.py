@@ -27,9 +27,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from benchmarks.store import ResultStore
-from benchmarks.suite_params import EXHAUSTIVE_METHODS, OPTIMAL_METHODS
-from planner.errors import OgcpError, choice_error
+from benchmarks.suite.store import ResultStore
+from benchmarks.suite.params import EXHAUSTIVE_METHODS, OPTIMAL_METHODS
+from planner.infra.errors import OgcpError, choice_error
 
 TIME_KEYS = ("cpu", "plan", "wall")
 CONTACT_KEYS = ("object", "contacts", "contact_seed", "m", "mu", "cone_edges", "diagonal")

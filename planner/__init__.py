@@ -9,14 +9,14 @@ Typical use::
     print(result.grasp, result.q1)
 """
 
-from planner.constraints import DistinctContacts, MaxFingerSpread
-from planner.contacts import ContactSet, sample_contacts
-from planner.errors import OgcpError, SearchTimeout
+from planner.grasp.constraints import DistinctContacts, MaxFingerSpread
+from planner.grasp.contact_set import ContactSet, sample_contacts
+from planner.infra.errors import OgcpError, SearchTimeout
 from planner.objects import BUILTIN_OBJECTS, builtin_mesh, load_mesh, resolve_object
-from planner.quality import Q1Certificate, q1, q1_certificate
-from planner.result import SearchResult, SearchStats
-from planner.search import GraspPlanner
-from planner.tolerance import TOL
+from planner.grasp.quality import Q1Certificate, q1, q1_certificate
+from planner.search.result import SearchResult, SearchStats
+from planner.search.grasp_planner import GraspPlanner
+from planner.infra.tolerance import TOL
 
 __version__ = "0.1.0"
 

@@ -7,7 +7,7 @@ model. The package consumes plan results (schema ``ogcp.plan/1``) and the planne
 types; it never runs a search and never imports matplotlib.
 """
 
-from sim_eval.decompose import Decomposition, DecompositionSettings
+from sim_eval.decomposition.decompose import Decomposition, DecompositionSettings
 from sim_eval.evaluate import GraspEvaluator, evaluate_plan
 from sim_eval.result import SIM_SCHEMA, GraspSimResult, SimResult
 from sim_eval.settings import SimSettings

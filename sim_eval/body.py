@@ -15,8 +15,8 @@ import trimesh
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import ConvexHull, QhullError
 
-from planner.contacts import NonWatertightWarning, mass_properties
-from planner.errors import OgcpError
+from planner.grasp.contact_set import NonWatertightWarning, mass_properties
+from planner.infra.errors import OgcpError
 
 Part = tuple[NDArray[np.float64], NDArray[np.int64]]
 _PAIRS_PER_BLOCK = 200_000  # point-triangle pairs per vectorised block: bounds memory to a few tens of MB
@@ -67,7 +67,7 @@ def object_inertia(mesh: trimesh.Trimesh, mass: float = 0.1) -> tuple[NDArray[np
 
     A closed, consistently oriented mesh gives exact values. For an open mesh the volume is
     undefined: the COM is then the planner's (area-weighted surface centroid, see
-    :func:`planner.contacts.mass_properties`), so that simulated torques act about the same
+    :func:`planner.grasp.contact_set.mass_properties`), so that simulated torques act about the same
     point as the planned wrenches, and the inertia tensor is that of the mesh's convex hull
     about the hull's own centroid; a :class:`NonWatertightWarning` says so.
 

@@ -24,12 +24,12 @@ import trimesh
 from numpy.typing import NDArray
 from tqdm.auto import tqdm
 
-from planner.contacts import ContactSet
-from planner.errors import OgcpError
-from planner.provenance import provenance
-from planner.quality import q1_certificate
+from planner.grasp.contact_set import ContactSet
+from planner.infra.errors import OgcpError
+from planner.infra.provenance import provenance
+from planner.grasp.quality import q1_certificate
 from sim_eval.body import object_inertia, surface_distance
-from sim_eval.decompose import Decomposition, DecompositionSettings, decompose
+from sim_eval.decomposition.decompose import Decomposition, DecompositionSettings, decompose
 from sim_eval.directions import direction_set
 from sim_eval.metrics import fidelity, set_metrics
 from sim_eval.predict import predicted_resistance

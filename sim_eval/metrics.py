@@ -17,7 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import stats
 
-from planner.errors import OgcpError
+from planner.infra.errors import OgcpError
 
 #: Fewer finite pairs than this make a rank correlation meaningless (NaN).
 MIN_PAIRS = 3

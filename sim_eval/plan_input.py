@@ -15,10 +15,10 @@ from typing import Any
 import numpy as np
 import trimesh
 
-from planner.contacts import ContactSet, sample_contacts
-from planner.errors import OgcpError
+from planner.grasp.contact_set import ContactSet, sample_contacts
+from planner.infra.errors import OgcpError
 from planner.objects import DEFAULT_DIAGONAL, file_sha256, resolve_object
-from planner.result import PLAN_SCHEMA
+from planner.records.plan import PLAN_SCHEMA
 
 POSITION_TOLERANCE = 1e-9  # [m] recorded vs re-sampled contact positions
 

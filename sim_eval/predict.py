@@ -2,7 +2,7 @@
 
 The simulated hand presses m point fingertips on the object, each with a normal force of at
 most ``F_max`` (the grip budget) and Coulomb friction ``mu`` linearised by the same cone edges
-as the planner (:func:`planner.wrench.contact_wrenches`, normal component 1, so the weights of
+as the planner (:func:`planner.grasp.wrench.contact_wrenches`, normal component 1, so the weights of
 one finger's edges sum to its normal force). A disturbance ``s d`` (``d`` a unit 6-vector in
 the planner's scaled wrench space ``[force, torque / rho]``) is resisted when contact forces
 ``lambda_ij >= 0`` exist with::
@@ -26,8 +26,8 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.optimize import linprog
 
-from planner.errors import OgcpError
-from planner.wrench import contact_wrenches
+from planner.infra.errors import OgcpError
+from planner.grasp.wrench import contact_wrenches
 
 DIM = 6
 #: Allowed deviation of a normal or direction norm from 1.

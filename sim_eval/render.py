@@ -6,9 +6,9 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from planner.errors import OgcpError
+from planner.infra.errors import OgcpError
 from sim_eval.body import object_inertia
-from sim_eval.decompose import DecompositionSettings, decompose
+from sim_eval.decomposition.decompose import DecompositionSettings, decompose
 from sim_eval.protocol import FULL_STATE, Settled, settle
 from sim_eval.scene import GraspScene, build_scene
 from sim_eval.settings import SimSettings

@@ -15,7 +15,7 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from planner.wrench import tangent_basis
+from planner.grasp.wrench import tangent_basis
 from sim_eval.settings import SimSettings
 
 _INTEGRATORS = {

@@ -6,7 +6,7 @@ import math
 from dataclasses import asdict, dataclass, fields, replace
 from typing import Any
 
-from planner.errors import OgcpError, choice_error
+from planner.infra.errors import OgcpError, choice_error
 
 PROTOCOLS = ("resistance", "dexgraspbench")
 INTEGRATORS = ("implicitfast", "implicit", "euler", "rk4")

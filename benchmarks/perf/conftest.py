@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from planner import builtin_mesh, sample_contacts
-from planner.contacts import ContactSet
+from planner.grasp.contact_set import ContactSet
 
 
 @pytest.fixture(scope="session")

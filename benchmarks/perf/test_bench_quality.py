@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from benchmarks.q1_speed import scipy_q1
-from planner.quality import q1
+from benchmarks.studies.q1_speed import scipy_q1
+from planner.grasp.quality import q1
 
 
 def test_small_grasps_ogcp(benchmark, small_grasps):
@@ -30,7 +30,7 @@ def test_super_contact_scipy(benchmark, super_contact):
 def test_small_grasps_batched_kernel(benchmark, box1000):
     import numpy as np
 
-    from planner.kernel import default_directions, q1_batch, support_table
+    from planner.grasp.kernel import default_directions, q1_batch, support_table
 
     benchmark.group = "q1-small"
     rng = np.random.default_rng(0)
@@ -45,8 +45,8 @@ def test_sphere_grasps_es_path(benchmark, sphere1000):
     """What ES does per grasp on the sphere (half the grasps in force closure, canonical refit)."""
     import numpy as np
 
-    from planner.kernel import default_directions, support_table
-    from planner.quality import exact_q1_batch
+    from planner.grasp.kernel import default_directions, support_table
+    from planner.grasp.quality import exact_q1_batch
 
     benchmark.group = "q1-small"
     rng = np.random.default_rng(0)

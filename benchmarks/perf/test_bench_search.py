@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from planner.baselines.es import _chunk_task
-from planner.search import GraspPlanner
+from planner.search.grasp_planner import GraspPlanner
 
 
 def test_es_chunk(benchmark, box200):

@@ -1,7 +1,7 @@
 """Simulation throughput: direction-trials per second, rollout over threads vs a serial mj_step loop.
 
 Both benchmarks run the same 16 ramped trials from the same settled pinch grasp, so their
-medians compare directly (``python -m benchmarks.sim_study`` prints the ratio on a real grasp).
+medians compare directly (``python -m benchmarks.studies.sim_study`` prints the ratio on a real grasp).
 """
 
 from __future__ import annotations

@@ -15,8 +15,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from benchmarks.store import MANIFEST, RESULTS, read_results
-from planner.errors import OgcpError
+from benchmarks.suite.store import MANIFEST, RESULTS, read_results
+from planner.infra.errors import OgcpError
 
 from .style import METHOD_TITLES
 
@@ -267,7 +267,7 @@ def _missing(manifest: dict[str, Any] | None, recorded: set[str]) -> str | None:
 
 def _suite_cells(suite: dict[str, Any]) -> dict[str, str] | None:
     """id -> description of every cell of the manifest's suite, or None when it cannot be re-read."""
-    from benchmarks.suite_config import parse_suite
+    from benchmarks.suite.config import parse_suite
 
     text = suite.get("content")
     if not isinstance(text, str):

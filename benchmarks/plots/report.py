@@ -7,7 +7,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from planner.errors import OgcpError
+from planner.infra.errors import OgcpError
 
 from .data import RunData, SkipFigure, load_run
 from .figures import fig4_q1_histograms, fig6_states_per_level, fig7_iterations_f, fig8_wastar_tradeoff

@@ -14,7 +14,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, ParamSpec, TypeVar
 
-from planner.errors import OgcpError
+from planner.infra.errors import OgcpError
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes

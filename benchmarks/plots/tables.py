@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from planner.errors import OgcpError
+from planner.infra.errors import OgcpError
 
 from .data import CellData, RunData, SkipFigure
 from .style import METHOD_TITLES

@@ -27,15 +27,15 @@ import numpy as np
 from numpy.typing import NDArray
 from tqdm import tqdm
 
-from planner.constraints import Constraint, accepts_many
-from planner.contacts import ContactSet
-from planner.errors import OgcpError
-from planner.kernel import FALLBACK, OK, default_directions, support_table
-from planner.kernel.geometry import CUT_MARGIN
-from planner.parallel import run_tasks, validate_backend
-from planner.provenance import provenance
-from planner.quality import exact_q1_batch, q1_certificate
-from planner.result import plan_record
+from planner.grasp.constraints import Constraint, accepts_many
+from planner.grasp.contact_set import ContactSet
+from planner.infra.errors import OgcpError
+from planner.grasp.kernel import FALLBACK, OK, default_directions, support_table
+from planner.grasp.kernel.geometry import CUT_MARGIN
+from planner.infra.parallel import run_tasks, validate_backend
+from planner.infra.provenance import provenance
+from planner.grasp.quality import exact_q1_batch, q1_certificate
+from planner.records.plan import plan_record
 
 from . import combinations
 

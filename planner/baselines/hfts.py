@@ -30,14 +30,14 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from planner.contacts import ContactSet
-from planner.errors import OgcpError
-from planner.parallel import run_tasks, validate_backend
-from planner.provenance import provenance
-from planner.quality import q1, q1_certificate, signed_q1
-from planner.result import plan_record
-from planner.successors import KMeansPartitioner
-from planner.wrench import contact_wrenches
+from planner.grasp.contact_set import ContactSet
+from planner.infra.errors import OgcpError
+from planner.infra.parallel import run_tasks, validate_backend
+from planner.infra.provenance import provenance
+from planner.grasp.quality import q1, q1_certificate, signed_q1
+from planner.records.plan import plan_record
+from planner.search.partitions import KMeansPartitioner
+from planner.grasp.wrench import contact_wrenches
 
 TOP_CLUSTERS = 12
 CHILD_CLUSTERS = 4

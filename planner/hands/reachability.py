@@ -29,9 +29,9 @@ from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 from scipy.spatial.distance import cdist
 
-from planner.cache import cache_dir as default_cache_dir
-from planner.contacts import ContactSet
-from planner.errors import OgcpError
+from planner.infra.cache import cache_dir as default_cache_dir
+from planner.grasp.contact_set import ContactSet
+from planner.infra.errors import OgcpError
 from planner.hands.sdh import (
     BASE_ROTATION_SIGN,
     DISTAL_LENGTH,

@@ -28,7 +28,7 @@ from types import MappingProxyType
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from planner.errors import OgcpError
+from planner.infra.errors import OgcpError
 
 PALM_HEIGHT = 0.0745
 """Height of the finger bases above the palm origin, along palm z [m]."""

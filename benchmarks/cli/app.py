@@ -1,0 +1,46 @@
+"""The ``ogcp`` command line: thin argument parsing over the Python API.
+
+Every invalid input ends in one line on stderr (``ogcp: error: ...``) and exit status 2.
+Each command module registers its sub-parser and handler; they import their heavy
+dependencies (MuJoCo, matplotlib) inside the handlers, so ``ogcp plan`` never pays for them.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+
+from benchmarks.cli import assets, plan, plot, simulate, suite
+from planner import __version__
+from planner.infra.errors import OgcpError
+
+#: The command modules, in the order ``ogcp --help`` lists their commands.
+COMMAND_MODULES = (plan, simulate, assets, suite, plot)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of the ``ogcp`` command."""
+    parser = argparse.ArgumentParser(prog="ogcp", description="Optimal grasp contact planning and benchmarking.")
+    parser.add_argument("--version", action="version", version=f"ogcp {__version__}")
+    commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    for module in COMMAND_MODULES:
+        module.register(commands)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``ogcp`` console script."""
+    args = build_parser().parse_args(argv)
+    try:
+        return int(args.handler(args))
+    except OgcpError as exc:
+        print(f"ogcp: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("ogcp: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

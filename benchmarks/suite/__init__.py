@@ -1,0 +1,1 @@
+"""Benchmark suites: TOML definitions expanded into cells, the resumable runner and its results store."""

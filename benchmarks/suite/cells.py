@@ -1,0 +1,153 @@
+"""Running one suite cell: contact set, method, optional simulation, one result record.
+
+:func:`run_cell` is what worker processes execute. It never raises for a failing method
+or simulation: the failure is recorded in the cell (``status = "error"``, the message and
+the traceback's tail) and the suite goes on. Contact sets and hand models are cached per
+process, so a worker that runs many cells on one object samples its contacts once.
+"""
+
+from __future__ import annotations
+
+import datetime
+import time
+import traceback
+from functools import lru_cache
+from typing import Any
+
+from planner.records.plan import contact_set_record, hand_record
+from benchmarks.suite.store import jsonable
+from benchmarks.suite.config import Cell
+from benchmarks.suite.params import EXHAUSTIVE_METHODS, SEARCH_METHODS
+from planner.baselines.es import DEFAULT_BINS, ExhaustiveSearch
+from planner.baselines.hfts import HFTS
+from planner.grasp.constraints import Constraint, MaxFingerSpread
+from planner.grasp.contact_set import ContactSet, sample_contacts
+from planner.infra.errors import OgcpError
+from planner.hands.reachability import SDHReachability
+from planner.objects import resolve_object
+from planner.search.grasp_planner import GraspPlanner
+
+CELL_SCHEMA = "ogcp.cell/1"
+#: Keys of the [simulation] table that are arguments of evaluate_plan, not simulation settings.
+SIMULATION_ARGUMENTS = ("decomposition", "max_grasps")
+TRACEBACK_LINES = 15
+
+
+def run_cell(cell: Cell, simulation: dict[str, Any] | None = None, time_limit: float | None = None) -> dict[str, Any]:
+    """Run one cell and return its JSON-ready record.
+
+    Args:
+        cell: The cell.
+        simulation: Settings passed to ``sim_eval.evaluate_plan`` (the suite's
+            ``[simulation]`` table without ``enabled``); None skips the simulation.
+        time_limit: Wall-clock budget of a search cell (astar, wastar, dijkstra) [s]; past
+            it the cell is recorded as a ``SearchTimeout`` error. None: unlimited.
+
+    Returns:
+        The record (see the README's ``results.jsonl`` section for its keys).
+    """
+    wall0, cpu0 = time.perf_counter(), time.process_time()
+    record: dict[str, Any] = {
+        "schema": CELL_SCHEMA, "id": cell.id, "params": cell.params(), "groups": list(cell.groups),
+        "status": "ok", "error": None, "plan": None, "simulation": None, "simulation_seconds": None,
+    }
+    try:
+        record["plan"] = plan_record(cell, contact_set(cell), time_limit)
+        if simulation is not None:
+            sim0 = time.perf_counter()
+            record["simulation"] = simulate(record["plan"], simulation)
+            record["simulation_seconds"] = time.perf_counter() - sim0
+    except Exception as exc:  # noqa: BLE001 - a failing cell is data, never the end of the suite
+        lines = traceback.format_exc().rstrip().splitlines()
+        message = (str(exc).strip().splitlines() or [""])[0]
+        record["status"] = "error"
+        record["error"] = {"type": type(exc).__name__, "message": message,
+                           "traceback": "\n".join(lines[-TRACEBACK_LINES:])}
+    record["wall_seconds"] = time.perf_counter() - wall0
+    record["cpu_seconds"] = time.process_time() - cpu0
+    record["finished_at"] = datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")
+    return jsonable(record)
+
+
+def contact_set(cell: Cell) -> ContactSet:
+    """The cell's contact set (cached per process)."""
+    return _contacts(cell.object.path or cell.object.spec, cell.diagonal, cell.contacts, cell.contact_seed,
+                     cell.mu, cell.cone_edges)
+
+
+@lru_cache(maxsize=8)
+def _contacts(spec: str, diagonal: float | None, n: int, seed: int, mu: float, cone_edges: int) -> ContactSet:
+    mesh, source = resolve_object(spec) if diagonal is None else resolve_object(spec, diagonal)
+    return sample_contacts(mesh, n, seed, mu, cone_edges, source)
+
+
+@lru_cache(maxsize=4)
+def _hand(threshold: float) -> SDHReachability:
+    return SDHReachability(threshold=threshold)
+
+
+def _constraints(params: dict[str, Any]) -> tuple[list[Constraint], SDHReachability | None]:
+    constraints: list[Constraint] = []
+    if params.get("max_spread") is not None:
+        constraints.append(MaxFingerSpread(params["max_spread"]))
+    hand = _hand(params["hand_threshold"]) if params.get("hand") == "sdh" else None
+    if hand is not None:
+        constraints.append(hand)
+    return constraints, hand
+
+
+def plan_record(cell: Cell, contacts: ContactSet, time_limit: float | None = None) -> dict[str, Any]:
+    """Run the cell's method and return its ``ogcp.plan/1`` record.
+
+    Raises:
+        OgcpError: For parameters the installed planner does not support.
+    """
+    params = dict(cell.variant)
+    constraints, hand = _constraints(params)
+    described = contact_set_record(contacts)
+    if cell.method in SEARCH_METHODS:
+        record = _search(cell, params, constraints, contacts, described, time_limit)
+    elif cell.method in EXHAUSTIVE_METHODS:
+        search = ExhaustiveSearch(pruned=cell.method == "es-pruned", chunk=params["chunk"],
+                                  bins=params.get("bins", DEFAULT_BINS), constraints=constraints)
+        record = search.run(contacts, cell.m).to_dict(described)
+    else:
+        search = HFTS(runs=params["runs"], seed=params["seed"], iterations=params["iterations"],
+                      position_weight=params["position_weight"], hand=hand)
+        record = search.run(contacts, cell.m).to_dict(described)
+    if hand is not None:
+        record["hand"] = hand_record(hand, record["grasp"], contacts)
+    return record
+
+
+def _search(cell: Cell, params: dict[str, Any], constraints: list[Constraint], contacts: ContactSet,
+            described: dict[str, Any], time_limit: float | None) -> dict[str, Any]:
+    options = {key: params[key] for key in ("branching", "successor", "heuristic", "heuristic_branching",
+                                            "symmetry", "ordered", "seed", "kmeans_iterations", "position_weight")}
+    if cell.method == "wastar":
+        options["eps"] = params["eps"]
+    result = GraspPlanner(method=cell.method, constraints=constraints, record_tree=params["record_tree"],
+                          time_limit=time_limit, **options).plan(contacts, cell.m)
+    return result.to_dict(described)
+
+
+def simulate(plan: dict[str, Any], settings: dict[str, Any]) -> dict[str, Any]:
+    """The ``ogcp.sim/1`` record of a plan, from ``sim_eval.evaluate_plan``.
+
+    Args:
+        plan: The ``ogcp.plan/1`` record.
+        settings: Simulation settings; ``decomposition`` (a table) and ``max_grasps`` go to
+            ``evaluate_plan`` as their own arguments.
+
+    Raises:
+        OgcpError: When the simulation API is not installed.
+    """
+    try:
+        from sim_eval import evaluate_plan  # lazy: MuJoCo loads only when a suite simulates
+    except ImportError as exc:
+        raise OgcpError(f"simulation is enabled but sim_eval.evaluate_plan is not available ({exc}); "
+                        "set [simulation] enabled = false or pass --no-simulation") from exc
+    options = dict(settings)
+    extra = {key: options.pop(key) for key in SIMULATION_ARGUMENTS if key in options}
+    result = evaluate_plan(plan, options, **extra)
+    return result.to_dict() if hasattr(result, "to_dict") else result

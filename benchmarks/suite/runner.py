@@ -1,0 +1,268 @@
+"""Running a suite into an output folder, resumably, serially or in parallel.
+
+Cells are independent: they run through :func:`planner.infra.parallel.run_tasks` (serial,
+local processes or a Dask cluster) and the main process appends each finished record
+to ``results.jsonl``, so the folder is the same whatever ran the cells, apart from the
+order of the lines and the timings. ``resume`` skips cells whose id is already recorded
+and refuses a folder written by a different suite (another hash).
+"""
+
+from __future__ import annotations
+
+import datetime
+import os
+import platform
+import sys
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from tqdm import tqdm
+
+from benchmarks.suite.cells import run_cell
+from benchmarks.suite.store import LOCK, ResultStore
+from benchmarks.suite.config import Suite
+from benchmarks.suite.select import Selection, is_selected, parse_selection
+from planner.infra.errors import OgcpError
+from planner.infra.parallel import run_tasks, validate_backend
+from planner.infra.provenance import provenance
+
+MANIFEST_SCHEMA = "ogcp.suite-run/1"
+
+
+@dataclass(frozen=True)
+class RunSummary:
+    """Outcome of :meth:`SuiteRunner.run`.
+
+    Attributes:
+        cells: Cells in the suite.
+        skipped: Cells already recorded (resume) and not rerun.
+        ran: Cells run now.
+        errors: Cells recorded as errors, over the whole folder.
+        remaining: Cells still to run (``max_cells`` stopped the run).
+        records: id -> latest record of every recorded cell of the suite.
+    """
+
+    cells: int
+    skipped: int
+    ran: int
+    errors: int
+    remaining: int
+    records: dict[str, dict[str, Any]]
+
+
+class SuiteRunner:
+    """Runs a suite's cells into an output folder.
+
+    Args:
+        suite: The validated suite.
+        out: Output folder; must be empty or absent unless ``resume``.
+        jobs: Worker processes (1: serial in this process).
+        backend: ``loky`` or ``dask``.
+        address: Dask scheduler ``HOST:PORT``.
+        resume: Continue the run recorded in ``out`` (same suite hash), skipping its finished cells.
+        retry_errors: With ``resume``, also rerun cells recorded as errors (the new record supersedes).
+        max_cells: Stop after running this many cells (the rest: a later ``resume``).
+        time_limit: Wall-clock budget of each search cell [s] (an execution policy, not part
+            of the suite: a cell past it is recorded as an error, to rerun with
+            ``retry_errors`` and a larger limit). None: unlimited.
+        only: Run only the cells matching these ``KEY=VALUE[,VALUE...]`` items
+            (:mod:`benchmarks.suite.select`); the others stay for a later ``resume``.
+        progress: Show a progress bar on stderr.
+        log: Where one-line notices go (default: stderr).
+    """
+
+    def __init__(
+        self,
+        suite: Suite,
+        out: str | Path,
+        jobs: int = 1,
+        backend: str = "loky",
+        address: str | None = None,
+        resume: bool = False,
+        retry_errors: bool = False,
+        max_cells: int | None = None,
+        only: Sequence[str] = (),
+        time_limit: float | None = None,
+        progress: bool = False,
+        log: Callable[[str], None] | None = None,
+    ) -> None:
+        self.suite = suite
+        self.out = Path(out)
+        self.jobs = jobs
+        self.backend = backend
+        self.address = address
+        self.resume = resume
+        self.retry_errors = retry_errors
+        self.max_cells = max_cells
+        self.only = tuple(only)
+        self.time_limit = time_limit
+        self.progress = progress
+        self.log = log or (lambda text: print(text, file=sys.stderr))
+
+    def run(self) -> RunSummary:
+        """Run every cell not yet recorded and return the summary.
+
+        Raises:
+            OgcpError: For invalid options, a non-empty folder without ``resume``, a folder
+                of another suite, or a folder in use.
+        """
+        validate_backend(self.backend, self.address, self.jobs)
+        if self.retry_errors and not self.resume:
+            raise OgcpError("--retry-errors applies with --resume only")
+        if self.max_cells is not None and (not isinstance(self.max_cells, int) or self.max_cells < 1):
+            raise OgcpError(f"max_cells must be an integer >= 1, got {self.max_cells!r}")
+        selection = parse_selection(self.only, self.suite.cells)
+        limit = self.time_limit
+        if limit is not None and (isinstance(limit, bool) or not isinstance(limit, (int, float)) or not limit > 0
+                                  or limit == float("inf")):
+            raise OgcpError(f"time_limit must be a number of seconds > 0, got {limit!r}")
+        store = ResultStore(self.out)
+        fresh = _is_fresh(self.out)
+        if not fresh and not self.resume:
+            raise OgcpError(f"{self.out} is not empty; pass --resume to continue the run recorded there, "
+                            "or choose another --out")
+        if not fresh and not store.manifest_path.exists():
+            raise OgcpError(f"{self.out} holds no manifest.json: not an ogcp suite folder; choose another --out")
+        with store.lock():
+            manifest = self._check_manifest(store, fresh)
+            cut = store.cut_partial_tail()
+            if cut:
+                self.log(f"ogcp: removed an incomplete last line ({cut} bytes) from {store.results_path}")
+            report = store.read()
+            for problem in report.problems:
+                self.log(f"ogcp: warning: {problem}")
+            return self._run_cells(store, manifest, report.latest(), selection)
+
+    def _check_manifest(self, store: ResultStore, fresh: bool) -> dict[str, Any]:
+        manifest = None if fresh else store.read_manifest()
+        session = self._session()
+        if manifest is None:
+            manifest = self._new_manifest(session)
+        else:
+            recorded = manifest.get("suite", {}).get("hash")
+            if recorded != self.suite.hash:
+                held = f"{self.out} holds suite {manifest.get('suite', {}).get('name')!r} with hash {recorded}"
+                if recorded == self.suite.without_simulation().hash:
+                    raise OgcpError(f"{held}, run with --no-simulation; resume with --no-simulation too")
+                raise OgcpError(f"{held}; this suite's hash is {self.suite.hash}: the suite changed, "
+                                "use another --out")
+            first = manifest.get("sessions", [{}])[0].get("git_commit")
+            if first != session["git_commit"]:
+                self.log(f"ogcp: warning: resuming with git commit {session['git_commit']}; "
+                         f"the run started with {first}")
+            manifest["sessions"] = [*manifest.get("sessions", []), session]
+        store.write_manifest(manifest)
+        return manifest
+
+    def _session(self) -> dict[str, Any]:
+        info = provenance()
+        return {
+            "started_at": _now(), "git_commit": info["git_commit"], "versions": info["versions"],
+            "jobs": self.jobs, "backend": self.backend, "address": self.address, "resume": self.resume,
+            "retry_errors": self.retry_errors, "max_cells": self.max_cells, "only": list(self.only),
+            "time_limit": self.time_limit,
+        }
+
+    def _new_manifest(self, session: dict[str, Any]) -> dict[str, Any]:
+        info = provenance()
+        suite = self.suite
+        return {
+            "schema": MANIFEST_SCHEMA,
+            "suite": {"name": suite.name, "source": suite.source, "hash": suite.hash, "cells": len(suite.cells),
+                      "simulation_enabled": suite.simulate, "content": suite.text},
+            "seeds": suite.seeds(),
+            "started_at": session["started_at"],
+            "versions": info["versions"],
+            "git_commit": info["git_commit"],
+            "python": info["python"],
+            "cpu": {"model": _cpu_model(), "count": os.cpu_count(), "platform": platform.platform()},
+            "sessions": [session],
+        }
+
+    def _run_cells(self, store: ResultStore, manifest: dict[str, Any], done: dict[str, dict[str, Any]],
+                   selection: Selection) -> RunSummary:
+        ids = {c.id for c in self.suite.cells}
+        stray = set(done) - ids
+        if stray:
+            self.log(f"ogcp: warning: {len(stray)} records in {store.results_path} are not cells of this suite")
+        done = {k: v for k, v in done.items() if k in ids}
+        todo = [c for c in self.suite.cells
+                if c.id not in done or (self.retry_errors and done[c.id].get("status") == "error")]
+        skipped = len(self.suite.cells) - len(todo)
+        todo = [c for c in todo if is_selected(c, selection)]
+        if self.max_cells is not None:
+            todo = todo[: self.max_cells]
+        missing = [n for n in self.suite.unfetched_objects() if any(c.object.spec == n for c in todo)]
+        if missing:
+            self.log(f"ogcp: warning: objects not fetched yet: {', '.join(missing)}; their cells will be recorded "
+                     f"as errors (run `ogcp assets fetch {' '.join(missing)}`, then --resume --retry-errors)")
+        settings = ({k: v for k, v in self.suite.simulation.items() if k != "enabled"}
+                    if self.suite.simulate else None)
+        records = dict(done)
+        bar = tqdm(total=len(self.suite.cells), initial=skipped, unit="cell", desc=self.suite.name,
+                   disable=not self.progress)
+        try:
+            tasks = [(cell, settings if cell.simulate else None, self.time_limit) for cell in todo]
+            finished = run_tasks(run_cell, tasks, self.jobs, self.backend, self.address) if tasks else iter(())
+            for record in finished:
+                store.append(record)
+                records[record["id"]] = record
+                bar.update()
+                if record["status"] == "error":
+                    error = record["error"]
+                    tqdm.write(f"ogcp: cell {record['id']} ({_describe(record)}) failed: "
+                               f"{error['type']}: {error['message']}", file=sys.stderr)
+        finally:
+            bar.close()
+        errors = sum(1 for r in records.values() if r.get("status") == "error")
+        return RunSummary(len(self.suite.cells), skipped, len(todo), errors,
+                          len(self.suite.cells) - len(records), records)
+
+
+def summary_table(suite: Suite, records: dict[str, dict[str, Any]]) -> str:
+    """One line per object and label: cells done, errors, best Q1, summed wall seconds."""
+    rows: dict[tuple[str, str], list[dict[str, Any]]] = {}
+    for cell in suite.cells:
+        rows.setdefault((cell.object.spec, cell.label), [])
+        if cell.id in records:
+            rows[(cell.object.spec, cell.label)].append(records[cell.id])
+    totals = {key: sum(1 for c in suite.cells if (c.object.spec, c.label) == key) for key in rows}
+    width = max([len(label) for _, label in rows] + [6])
+    lines = [f"{'object':<12} {'method':<{width}} {'done':>9} {'errors':>6} {'best Q1':>10} {'wall s':>9}"]
+    for (obj, label), found in rows.items():
+        values = [r["plan"]["q1"] for r in found if r.get("status") == "ok" and r.get("plan")]
+        best = f"{max(values):10.6f}" if values else f"{'-':>10}"
+        errors = sum(1 for r in found if r.get("status") == "error")
+        wall = sum(r.get("wall_seconds") or 0.0 for r in found)
+        lines.append(f"{obj:<12} {label:<{width}} {f'{len(found)}/{totals[(obj, label)]}':>9} {errors:>6} "
+                     f"{best} {wall:9.2f}")
+    return "\n".join(lines)
+
+
+def _describe(record: dict[str, Any]) -> str:
+    p = record["params"]
+    return f"{p['object']} n={p['contacts']} seed={p['contact_seed']} m={p['m']} {p['label']}"
+
+
+def _is_fresh(directory: Path) -> bool:
+    """Absent, or holding nothing but a lock file left by an earlier attempt."""
+    if directory.exists() and not directory.is_dir():
+        raise OgcpError(f"--out {directory} is a file, not a folder")
+    return not directory.exists() or all(p.name == LOCK for p in directory.iterdir())
+
+
+def _now() -> str:
+    return datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")
+
+
+def _cpu_model() -> str:
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8") as handle:
+            for line in handle:
+                if line.startswith("model name"):
+                    return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or platform.machine()

@@ -1,0 +1,43 @@
+"""Grasps on a contact set: contacts, friction cones and wrenches, the exact Q1, bounds, constraints.
+
+Everything here is a value or a pure function of a contact set; the search
+(:mod:`planner.search`) and the baselines (:mod:`planner.baselines`) build on it. The
+compiled exact-Q1 kernel lives in :mod:`planner.grasp.kernel`.
+"""
+
+from planner.grasp.constraints import Constraint, DistinctContacts, MaxFingerSpread, accepts_many
+from planner.grasp.contact_set import (
+    DEFAULT_CONE_EDGES,
+    DEFAULT_MU,
+    ContactSet,
+    NonWatertightWarning,
+    mass_properties,
+    sample_contacts,
+)
+from planner.grasp.quality import Q1Certificate, exact_q1_batch, q1, q1_certificate, signed_q1
+from planner.grasp.subset_quality import GraspQuality
+from planner.grasp.support_bound import SupportBound
+from planner.grasp.wrench import cone_edges, contact_wrenches, tangent_basis
+
+__all__ = [
+    "DEFAULT_CONE_EDGES",
+    "DEFAULT_MU",
+    "Constraint",
+    "ContactSet",
+    "DistinctContacts",
+    "GraspQuality",
+    "MaxFingerSpread",
+    "NonWatertightWarning",
+    "Q1Certificate",
+    "SupportBound",
+    "accepts_many",
+    "cone_edges",
+    "contact_wrenches",
+    "exact_q1_batch",
+    "mass_properties",
+    "q1",
+    "q1_certificate",
+    "sample_contacts",
+    "signed_q1",
+    "tangent_basis",
+]

@@ -1,0 +1,252 @@
+"""Contact sets C: point contacts (position, inward normal) plus the Q1 conventions.
+
+A :class:`ContactSet` carries everything Q1 needs, so every method that receives the same
+set computes the same quality: positions, inward unit normals, the wrench reference
+(centre of mass), the torque scale rho, the friction coefficient mu and the number of
+cone edges k.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import math
+import warnings
+from dataclasses import dataclass, field
+from functools import cached_property
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import trimesh
+from numpy.typing import NDArray
+
+from planner.infra.errors import OgcpError
+from planner.infra.tolerance import TOL
+from planner.grasp.wrench import contact_wrenches
+
+SCHEMA = "ogcp.contacts/1"
+DEFAULT_MU = 0.5
+DEFAULT_CONE_EDGES = 8
+
+
+class NonWatertightWarning(UserWarning):
+    """The mesh is not watertight, so its volume centroid is undefined."""
+
+
+def _readonly(array: NDArray[np.float64]) -> NDArray[np.float64]:
+    array = np.array(array, dtype=float)
+    array.setflags(write=False)
+    return array
+
+
+@dataclass(frozen=True, eq=False)
+class ContactSet:
+    """A finite set of frictional point contacts on one object.
+
+    Attributes:
+        positions: Contact points, shape (n, 3) [m].
+        normals: Inward unit surface normals, shape (n, 3).
+        com: Wrench reference point (object centre of mass), shape (3,) [m].
+        torque_scale: rho [m]; torques are divided by it.
+        mu: Coulomb friction coefficient.
+        cone_edges: Number of friction-cone edges k.
+        source: Provenance of the set (object, sampling seed, ...), JSON-ready.
+    """
+
+    positions: NDArray[np.float64]
+    normals: NDArray[np.float64]
+    com: NDArray[np.float64]
+    torque_scale: float
+    mu: float = DEFAULT_MU
+    cone_edges: int = DEFAULT_CONE_EDGES
+    source: dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        positions = np.asarray(self.positions, dtype=float)
+        normals = np.asarray(self.normals, dtype=float)
+        com = np.asarray(self.com, dtype=float)
+        if positions.ndim != 2 or positions.shape[1] != 3 or len(positions) == 0:
+            raise OgcpError(f"contact positions must have shape (n, 3) with n >= 1, got {positions.shape}")
+        if normals.shape != positions.shape:
+            raise OgcpError(f"contact normals must have shape {positions.shape}, got {normals.shape}")
+        if not np.all(np.isfinite(positions)):
+            raise OgcpError("contact positions contain NaN or infinite values")
+        if not np.all(np.isfinite(normals)):
+            raise OgcpError("contact normals contain NaN or infinite values")
+        lengths = np.linalg.norm(normals, axis=1)
+        if np.any(lengths < TOL.normal_norm):
+            bad = int(np.argmax(lengths < TOL.normal_norm))
+            raise OgcpError(f"contact normal {bad} has zero length")
+        if com.shape != (3,) or not np.all(np.isfinite(com)):
+            raise OgcpError(f"centre of mass must be 3 finite numbers, got {com.tolist()}")
+        if not (math.isfinite(self.torque_scale) and self.torque_scale > 0):
+            raise OgcpError(f"torque scale rho must be a positive number of metres, got {self.torque_scale!r}")
+        if not (math.isfinite(self.mu) and self.mu > 0):
+            raise OgcpError(f"friction coefficient mu must be positive, got {self.mu!r}")
+        if int(self.cone_edges) != self.cone_edges or self.cone_edges < 3:
+            raise OgcpError(f"cone_edges must be an integer >= 3, got {self.cone_edges!r}")
+        object.__setattr__(self, "positions", _readonly(positions))
+        # Rows that are already unit length are kept bit-for-bit, so a JSON round trip
+        # (or re-wrapping a set) reproduces the normals exactly.
+        lengths = np.where(np.abs(lengths - 1.0) <= 1e-12, 1.0, lengths)
+        object.__setattr__(self, "normals", _readonly(normals / lengths[:, None]))
+        object.__setattr__(self, "com", _readonly(com))
+        object.__setattr__(self, "torque_scale", float(self.torque_scale))
+        object.__setattr__(self, "mu", float(self.mu))
+        object.__setattr__(self, "cone_edges", int(self.cone_edges))
+
+    def __len__(self) -> int:
+        return len(self.positions)
+
+    @cached_property
+    def wrenches(self) -> NDArray[np.float64]:
+        """Cone-edge wrenches of every contact, shape (n, k, 6) [N] (torque / rho)."""
+        w = contact_wrenches(self.positions, self.normals, self.com, self.torque_scale, self.mu, self.cone_edges)
+        w.setflags(write=False)
+        return w
+
+    def subset_wrenches(self, indices: NDArray[np.intp]) -> NDArray[np.float64]:
+        """Wrenches of the given contacts stacked, shape (len(indices) * k, 6)."""
+        return self.wrenches[np.asarray(indices, dtype=np.intp)].reshape(-1, 6)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON form (schema ``ogcp.contacts/1``)."""
+        return {
+            "schema": SCHEMA,
+            "positions": self.positions.tolist(),
+            "normals": self.normals.tolist(),
+            "com": self.com.tolist(),
+            "torque_scale": self.torque_scale,
+            "mu": self.mu,
+            "cone_edges": self.cone_edges,
+            "source": self.source,
+        }
+
+    @classmethod
+    def from_dict(cls, data: Any, where: str = "contact data") -> ContactSet:
+        """Build a set from its JSON form, validating every field.
+
+        Args:
+            data: Parsed JSON object.
+            where: Name used in error messages (e.g. the file path).
+
+        Raises:
+            OgcpError: On a wrong schema, a missing key or an invalid value.
+        """
+        if not isinstance(data, dict):
+            raise OgcpError(f"{where}: expected a JSON object with schema {SCHEMA!r}")
+        if data.get("schema") != SCHEMA:
+            raise OgcpError(f"{where}: schema is {data.get('schema')!r}, expected {SCHEMA!r}")
+        missing = [k for k in ("positions", "normals", "com", "torque_scale") if k not in data]
+        if missing:
+            raise OgcpError(f"{where}: missing key(s) {', '.join(missing)}")
+        try:
+            return cls(
+                positions=np.asarray(data["positions"], dtype=float),
+                normals=np.asarray(data["normals"], dtype=float),
+                com=np.asarray(data["com"], dtype=float),
+                torque_scale=float(data["torque_scale"]),
+                mu=float(data.get("mu", DEFAULT_MU)),
+                cone_edges=data.get("cone_edges", DEFAULT_CONE_EDGES),
+                source=dict(data.get("source", {})),
+            )
+        except OgcpError as exc:
+            raise OgcpError(f"{where}: {exc}") from exc
+        except (TypeError, ValueError) as exc:
+            raise OgcpError(f"{where}: malformed contact data ({exc})") from exc
+
+    def save(self, path: str | Path) -> None:
+        """Write the JSON form atomically (a crash never leaves a half-written file)."""
+        path = Path(path)
+        tmp = path.with_name(path.name + ".tmp")
+        tmp.write_text(json.dumps(self.to_dict(), indent=1) + "\n")
+        tmp.replace(path)
+
+    @classmethod
+    def load(cls, path: str | Path) -> ContactSet:
+        """Read a contact JSON file.
+
+        Raises:
+            OgcpError: If the file is missing, not JSON, or invalid.
+        """
+        path = Path(path)
+        if not path.is_file():
+            raise OgcpError(f"contact file not found: {path}")
+        try:
+            data = json.loads(path.read_text())
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+            raise OgcpError(f"{path}: not a readable JSON file ({exc})") from exc
+        return cls.from_dict(data, where=str(path))
+
+
+def mass_properties(mesh: trimesh.Trimesh) -> tuple[NDArray[np.float64], float]:
+    """Centre of mass and torque scale of a mesh.
+
+    The COM is the volume centroid of a watertight mesh. For a mesh that is not
+    watertight the volume is undefined; the area-weighted surface centroid is used
+    instead and a :class:`NonWatertightWarning` is issued.
+
+    Returns:
+        ``(com, rho)``: COM, shape (3,) [m], and rho = max distance COM-vertex [m].
+    """
+    if mesh.is_watertight and mesh.volume > 0:
+        com = np.asarray(mesh.center_mass, dtype=float)
+    else:
+        warnings.warn(
+            "mesh is not watertight: using the area-weighted surface centroid as centre of mass",
+            NonWatertightWarning,
+            stacklevel=2,
+        )
+        com = np.average(mesh.triangles_center, axis=0, weights=mesh.area_faces)
+    rho = float(np.max(np.linalg.norm(mesh.vertices - com, axis=1)))
+    return com, rho
+
+
+def sample_contacts(
+    mesh: trimesh.Trimesh,
+    n: int,
+    seed: int = 0,
+    mu: float = DEFAULT_MU,
+    cone_edges: int = DEFAULT_CONE_EDGES,
+    source: dict[str, Any] | None = None,
+) -> ContactSet:
+    """Sample exactly ``n`` contacts evenly over a mesh surface.
+
+    Even (Poisson-disk-like) sampling may return fewer than ``n`` points; the remainder
+    is filled with area-weighted random samples from a seed derived from ``seed``, so the
+    result is deterministic and always has ``n`` contacts.
+
+    Args:
+        mesh: Object surface.
+        n: Number of contacts.
+        seed: Sampling seed.
+        mu: Friction coefficient.
+        cone_edges: Number of cone edges k.
+        source: Provenance of the mesh, recorded in the set's ``source``.
+
+    Returns:
+        The contact set; normals are the inward face normals at the samples.
+    """
+    if int(n) != n or n < 1:
+        raise OgcpError(f"number of contacts must be a positive integer, got {n!r}")
+    if int(seed) != seed or seed < 0:
+        raise OgcpError(f"seed must be a non-negative integer, got {seed!r}")
+    n, seed = int(n), int(seed)
+    # trimesh logs a warning when even sampling falls short; the shortfall is filled below.
+    trimesh_log = logging.getLogger("trimesh")
+    level = trimesh_log.level
+    trimesh_log.setLevel(logging.ERROR)
+    try:
+        points, faces = trimesh.sample.sample_surface_even(mesh, n, seed=np.random.default_rng([seed, 0]))
+    finally:
+        trimesh_log.setLevel(level)
+    points, faces = np.asarray(points)[:n], np.asarray(faces)[:n]
+    if len(points) < n:
+        extra_p, extra_f = trimesh.sample.sample_surface(mesh, n - len(points), seed=np.random.default_rng([seed, 1]))
+        points = np.vstack([points, extra_p])
+        faces = np.concatenate([faces, extra_f])
+    com, rho = mass_properties(mesh)
+    record = dict(source or {})
+    record.update({"sampling": "even", "n": n, "seed": seed})
+    return ContactSet(points, -mesh.face_normals[faces], com, rho, mu, cone_edges, record)

@@ -1,0 +1,22 @@
+"""What every part of ogcp shares: errors, tolerances, atomic writes, the cache folder, provenance.
+
+The parallel runner (:mod:`planner.infra.parallel`) is imported from its module: it loads joblib.
+"""
+
+from planner.infra.atomic import write_bytes_atomic, write_json_atomic
+from planner.infra.cache import cache_dir
+from planner.infra.errors import OgcpError, SearchTimeout, choice_error
+from planner.infra.provenance import provenance
+from planner.infra.tolerance import TOL, Tolerances
+
+__all__ = [
+    "TOL",
+    "OgcpError",
+    "SearchTimeout",
+    "Tolerances",
+    "cache_dir",
+    "choice_error",
+    "provenance",
+    "write_bytes_atomic",
+    "write_json_atomic",
+]

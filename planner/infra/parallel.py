@@ -1,0 +1,80 @@
+"""The one place where ogcp runs work in parallel: joblib, with Dask as the cluster backend.
+
+Tasks are independent and their results are merged by the caller in a deterministic
+order, so the serial path (``jobs=1``), local processes (``loky``) and a Dask cluster give
+identical answers.
+"""
+
+from __future__ import annotations
+
+import contextlib
+from collections.abc import Callable, Iterable, Iterator
+from typing import Any
+
+import joblib
+
+from planner.infra.errors import OgcpError, choice_error
+
+BACKENDS = ("dask", "loky")
+
+
+def validate_backend(backend: str, address: str | None, jobs: int) -> None:
+    """Check the parallel settings, raising :class:`OgcpError` with the valid choices."""
+    if backend not in BACKENDS:
+        raise choice_error("backend", backend, BACKENDS)
+    if not isinstance(jobs, int) or jobs < 1:
+        raise OgcpError(f"jobs must be an integer >= 1, got {jobs!r}")
+    if backend == "dask" and not address:
+        raise OgcpError("backend 'dask' needs --address HOST:PORT of a running Dask scheduler")
+    if backend == "loky" and address:
+        raise OgcpError("--address applies to backend 'dask' only")
+
+
+@contextlib.contextmanager
+def _backend_context(backend: str, address: str | None) -> Iterator[None]:
+    if backend == "loky":
+        yield
+        return
+    try:
+        from dask.distributed import Client  # lazy: Dask is an optional extra
+    except ImportError as exc:
+        raise OgcpError("backend 'dask' needs the dask extra: pip install 'ogcp[dask]'") from exc
+    try:
+        client = Client(address, timeout="10s")
+    except OSError as exc:
+        raise OgcpError(f"cannot reach the Dask scheduler at {address}: {exc}") from exc
+    try:
+        with joblib.parallel_config(backend="dask"):
+            yield
+    finally:
+        client.close()
+
+
+def run_tasks(
+    function: Callable[..., Any],
+    tasks: Iterable[tuple[Any, ...]],
+    jobs: int = 1,
+    backend: str = "loky",
+    address: str | None = None,
+) -> Iterator[Any]:
+    """Run ``function(*task)`` for every task, yielding results as they finish.
+
+    Args:
+        function: A picklable function.
+        tasks: Argument tuples.
+        jobs: Worker processes (ignored by Dask, whose cluster decides).
+        backend: ``loky`` (local processes) or ``dask``.
+        address: Dask scheduler ``HOST:PORT``.
+
+    Yields:
+        Results in completion order (callers merge them deterministically).
+    """
+    validate_backend(backend, address, jobs)
+    tasks = list(tasks)
+    if backend == "loky" and jobs == 1:
+        for task in tasks:
+            yield function(*task)
+        return
+    with _backend_context(backend, address):
+        parallel = joblib.Parallel(n_jobs=jobs if backend == "loky" else -1, return_as="generator_unordered")
+        yield from parallel(joblib.delayed(function)(*task) for task in tasks)

@@ -1,0 +1,43 @@
+"""One object argument (a built-in name, a fetched name or a mesh path) to a mesh and its source."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import trimesh
+
+from planner.infra.errors import OgcpError
+from planner.objects.builtin import BUILTIN_OBJECTS, DEFAULT_DIAGONAL, builtin_mesh
+from planner.objects.fetch import load_fetched
+from planner.objects.fetchable import FETCHABLE_OBJECTS
+from planner.objects.loading import file_sha256, load_mesh
+
+
+def resolve_object(spec: str, diagonal: float = DEFAULT_DIAGONAL) -> tuple[trimesh.Trimesh, dict[str, object]]:
+    """Turn a user's object argument (a built-in name, a fetched name or a mesh path) into a mesh.
+
+    Fetched objects (``planner.objects.fetchable.FETCHABLE_OBJECTS``) come from the cache only;
+    nothing is downloaded here (``ogcp assets fetch`` does that).
+
+    Args:
+        spec: Built-in object name, fetched object name, or path to a mesh file.
+        diagonal: Bounding-box diagonal for built-in and fetched objects [m].
+
+    Returns:
+        ``(mesh, source)`` where ``source`` describes the object for provenance records.
+
+    Raises:
+        OgcpError: If ``spec`` is none of these, or names a fetched object that is not cached.
+    """
+    if spec in BUILTIN_OBJECTS:
+        return builtin_mesh(spec, diagonal), {"kind": "builtin", "name": spec, "diagonal": diagonal}
+    if spec in FETCHABLE_OBJECTS:
+        return load_fetched(spec, diagonal)
+    path = Path(spec)
+    if path.suffix == "" and not path.exists():
+        # Grouped rather than one sorted list, so that the user sees which names need a fetch first.
+        raise OgcpError(f"unknown object {spec!r}; valid choices: built-in {', '.join(sorted(BUILTIN_OBJECTS))}; "
+                        f"fetched with `ogcp assets fetch` {', '.join(sorted(FETCHABLE_OBJECTS))}; "
+                        "or a path to a mesh file")
+    mesh = load_mesh(path)
+    return mesh, {"kind": "mesh", "path": str(path), "sha256": file_sha256(path)}

@@ -1,0 +1,312 @@
+"""One best-first search run: the open list, lazily exact values, statistics (see :mod:`planner.search.grasp_planner`).
+
+Open-list entries pass through stages, each keyed by a lower bound of the state's f that
+only rises: ``BOUND`` (from the support bound U), ``EXACT_G`` (exact g), ``PARTIAL``
+(branch and bound over the heuristic children under way) and ``EXACT`` (exact f). A
+state is expanded only from ``EXACT``. With WA* (eps > 0) a state's exact key is the
+paper's ``g + (1 + eps) h``; the key of a state not yet scored is ``(1 + eps)`` times its
+lower bound of f. Both are at most ``(1 + eps) f``, which is all the WA* guarantee needs
+(the open state on an optimal path keeps a key <= (1 + eps) C*), and the inflated lower
+bounds spare WA* the exact evaluation of every state with g below the returned cost,
+which unweighted lower bounds would demand.
+
+The incumbent is the best grasp whose exact Q1 the search has computed, as a created
+terminal state or as a terminal heuristic child. When a goal is popped the incumbent is
+returned: the goal itself, or (WA* only; A*'s goal is optimal) a strictly better grasp,
+which keeps the guarantee and costs nothing but the expansion of the state whose branch
+and bound found it, so that the returned grasp is a state of the tree.
+"""
+
+from __future__ import annotations
+
+import heapq
+import itertools
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from planner.grasp.support_bound import Vector
+from planner.grasp.constraints import Constraint
+from planner.grasp.contact_set import ContactSet
+from planner.infra.errors import OgcpError, SearchTimeout
+from planner.grasp.subset_quality import PackedMask
+from planner.search.result import SearchResult, SearchStats, SearchTree, effective_branching_factor
+from planner.search.search_space import SearchSpace, State
+
+BOUND, EXACT_G, PARTIAL, EXACT = 0, 1, 2, 3
+#: (key, -depth, tie, state, lower bound of the unweighted f, stage, g or NaN, state id)
+Entry = tuple[float, int, int, State, float, int, float, int]
+#: Heuristic children ranked by decreasing U: (U, masks, support vectors, state or None).
+Ranked = list[tuple[float, list[PackedMask], list[Vector], State | None]]
+
+
+@dataclass(frozen=True)
+class Incumbent:
+    """The best grasp evaluated so far.
+
+    Attributes:
+        q: Its exact Q1 [N].
+        state: Its terminal state (sorted node tuple).
+        parent: The unexpanded state whose branch and bound found it; None once the
+            grasp is a created state.
+        ident: Id of the created state, or of the parent.
+    """
+
+    q: float
+    state: State
+    parent: State | None
+    ident: int
+
+
+class Search(SearchSpace):
+    """One search run: the open list, the incumbent, the statistics and the tree record.
+
+    Args:
+        contacts: The contact set C.
+        m: Number of fingers.
+        config: Resolved configuration (:meth:`planner.search.grasp_planner.GraspPlanner.resolved_config`).
+        constraints: Grasp constraints, distinct contacts included.
+        record_tree: Keep every created state for :attr:`SearchResult.tree`.
+        time_limit: Wall-clock budget [s]; None: unlimited.
+    """
+
+    def __init__(
+        self, contacts: ContactSet, m: int, config: dict[str, Any], constraints: list[Constraint],
+        record_tree: bool = False, time_limit: float | None = None,
+    ) -> None:
+        super().__init__(contacts, m, config, constraints)
+        self.eps = config["eps"]
+        self.time_limit = time_limit
+        self._pending: dict[State, tuple[Ranked, int, float]] = {}
+        # Heuristic children are successors only on the expansion tree and without the
+        # symmetry filter; otherwise only created terminal states become incumbents.
+        self.children_can_win = self.heuristic_shares_tree and self.symmetry is None
+        self.incumbent: Incumbent | None = None
+        self.on_expand: Callable[[float], object] = lambda f: None
+        self.record_tree = record_tree
+        self._parent: list[int] = [-1]
+        self._level: list[int] = [0]
+        self._visited: list[bool] = [False]
+        self._f: list[float] = [0.0]
+        self._ids = itertools.count(1)
+        self._tie = itertools.count()
+        self.q0 = math.nan
+        self.created: dict[int, int] = {0: 1}
+        self.visited: dict[int, int] = {}
+        self.trace: list[tuple[int, float]] = []
+
+    def push(self, open_list: list[Entry], lower: float, depth: int, state: State, stage: int, g: float,
+             ident: int, key: float | None = None) -> None:
+        """Enter a state; the key defaults to (1 + eps) times its lower bound of f."""
+        if self.record_tree:
+            self._f[ident] = lower
+        key = (1.0 + self.eps) * lower if key is None else key
+        heapq.heappush(open_list, (key, -depth, next(self._tie), state, lower, stage, g, ident))
+
+    def offer(self, q: float, state: State, parent: State | None, ident: int) -> None:
+        """A terminal state's exact Q1: keep it if it beats the incumbent (ties: the first)."""
+        if self.incumbent is None or q > self.incumbent.q:
+            self.incumbent = Incumbent(q, state, parent, ident)
+
+    def run(self) -> SearchResult:
+        wall0, cpu0 = time.perf_counter(), time.process_time()
+        root: State = (0,) * self.m
+        q0 = self.q0 = self.exact(root)
+        open_list: list[Entry] = []
+        self.push(open_list, 0.0, 0, root, EXACT_G, 0.0, 0)
+        deadline = math.inf if self.time_limit is None else wall0 + self.time_limit
+        while open_list:
+            entry = heapq.heappop(open_list)
+            key, neg_depth, _, state, lower, stage, g, ident = entry
+            depth = -neg_depth
+            if time.perf_counter() > deadline:
+                self.stop_at_deadline(lower, open_list)
+            if stage == BOUND:
+                q = self.exact(state)
+                g = q0 - q
+                if self.is_terminal(state):
+                    self.offer(q, state, None, ident)
+                if self.is_terminal(state) or self.heuristic_kind == "none":
+                    self.push(open_list, max(lower, g), depth, state, EXACT, g, ident, key=g)
+                else:
+                    self.push(open_list, max(lower, g), depth, state, EXACT_G, g, ident)
+                continue
+            if stage != EXACT:
+                self.refine(open_list, state, depth, lower, g, ident)
+                continue
+            if self.is_terminal(state):
+                # The goal test of A* / WA*: return this grasp unless one strictly better
+                # has been evaluated (never for A*: this one is optimal).
+                q = self.exact(state)
+                if self.incumbent is None or not self.incumbent.q > q:
+                    self.incumbent = Incumbent(q, state, None, ident)
+                open_list.append(entry)  # still open unless returned: the certificate counts it
+                return self.finish(open_list, wall0, cpu0)
+            self.expand(open_list, state, depth, key, lower, g, ident)
+        raise OgcpError("no grasp satisfies the constraints")
+
+    def stop_at_deadline(self, lower: float, open_list: list[Entry]) -> None:
+        """Raise :class:`SearchTimeout` with the best grasp so far and the certified bound."""
+        # Every unexplored grasp lies below an open state whose stored lower bound of f
+        # bounds its cost (the popped state included), so q0 - min bounds the optimum.
+        lowest = min([lower] + [entry[4] for entry in open_list])
+        best = None if self.incumbent is None else self.incumbent.q
+        upper = max(self.q0 - lowest, best if best is not None else 0.0)
+        raise SearchTimeout(self.config["method"], float(self.time_limit), sum(self.visited.values()), best, upper)
+
+    def expand(
+        self, open_list: list[Entry], state: State, depth: int, key: float, lower: float, g: float, ident: int
+    ) -> dict[State, int]:
+        """Count the expansion and create the successors; returns their ids."""
+        self.visited[depth] = self.visited.get(depth, 0) + 1
+        self.trace.append((len(self.trace), key))
+        self.on_expand(key)
+        if self.record_tree:
+            self._visited[ident] = True
+        ids: dict[State, int] = {}
+        if self.is_terminal(state):
+            return ids
+        # Every child's f is at least the parent's g (Q1 is monotone), and at least its
+        # f when the heuristic uses the expansion tree (consistency, Thm. III.2b).
+        inherited = lower if self.heuristic_shares_tree else g
+        q0 = self.q0
+        for child in self.successors(state):
+            child_depth = self.depth(child)
+            self.created[child_depth] = self.created.get(child_depth, 0) + 1
+            child_id = ids[child] = next(self._ids)
+            if self.record_tree:
+                self._parent.append(ident)
+                self._level.append(child_depth)
+                self._visited.append(False)
+                self._f.append(0.0)
+            # U may be negative (then q = 0): clip so the bound never exceeds the true f.
+            bound = q0 - min(q0, max(0.0, self.upper(self.node_vectors(child))))
+            self.push(open_list, max(bound, inherited), child_depth, child, BOUND, math.nan, child_id)
+        inc = self.incumbent
+        if inc is not None and inc.parent == state:
+            # The incumbent is a created state now (first ordering of its contacts).
+            child_id = next(i for c, i in ids.items() if tuple(sorted(c)) == inc.state)
+            self.incumbent = Incumbent(inc.q, inc.state, None, child_id)
+        return ids
+
+    def refine(self, open_list: list[Entry], state: State, depth: int, lower: float, g: float, ident: int) -> None:
+        """Branch and bound over the heuristic children, one exact value at a time.
+
+        Children are evaluated in order of decreasing U; after each, f >= q0 - max(best,
+        U of the next) is a valid lower bound. Evaluation goes on while the state would
+        still be the first on the open list, and the state returns to the list with its
+        bound otherwise, so a state whose f turns out above the final frontier stops
+        costing evaluations as soon as its bound says so. A finished branch and bound
+        gives the exact f; a state with no valid child below it is dropped.
+        """
+        q0 = self.q0
+        if self.is_terminal(state) or self.heuristic_kind == "none":
+            self.push(open_list, max(lower, g), depth, state, EXACT, g, ident, key=g)
+            return
+        pending = self._pending.pop(state, None)
+        if pending is None:
+            children = self.heuristic_children(state)
+            ranked = sorted(((self.upper(v), m, v, c) for m, v, c in children), key=lambda c: -c[0])
+            pos, best = 0, -math.inf
+        else:
+            ranked, pos, best = pending
+        while pos < len(ranked) and ranked[pos][0] > best:
+            # Children's q lie in [0, q0]: clip U like the successor bounds.
+            lower = max(lower, q0 - max(best, min(q0, max(0.0, ranked[pos][0]))))
+            if open_list and (1.0 + self.eps) * lower > open_list[0][0]:
+                self._pending[state] = (ranked, pos, best)
+                self.push(open_list, lower, depth, state, PARTIAL, g, ident)
+                return
+            _, masks, vectors, child = ranked[pos]
+            q = self.oracle.of_masks(masks, vectors)
+            if child is not None and self.children_can_win and self.is_terminal(child):
+                self.offer(q, child, state, ident)
+            best = max(best, q)
+            pos += 1
+        if best == -math.inf:
+            return  # no valid grasp below this state
+        f = q0 - best
+        # With eps = 0 the key is f itself, not g + (f - g), which can round below f.
+        key = f if self.eps == 0 else g + (1.0 + self.eps) * (f - g)
+        self.push(open_list, f, depth, state, EXACT, g, ident, key=key)
+
+    def finish(self, open_list: list[Entry], wall0: float, cpu0: float) -> SearchResult:
+        """Return the incumbent, expanding the state that found it if it is not created yet."""
+        inc = self.incumbent
+        assert inc is not None
+        if inc.parent is not None:
+            # The parent is still on the open list (not expanded, never dropped).
+            entry = min(e for e in open_list if e[7] == inc.ident)
+            key, neg_depth, _, state, lower, _, g, ident = entry
+            self.expand(open_list, state, -neg_depth, key, lower, g, ident)
+            inc = self.incumbent
+        goal_depth = self.depth(inc.state)
+        g = self.q0 - inc.q
+        self.visited[goal_depth] = self.visited.get(goal_depth, 0) + 1
+        self.trace.append((len(self.trace), g))
+        self.on_expand(g)
+        if self.record_tree:
+            self._visited[inc.ident] = True
+            self._f[inc.ident] = g
+        return self.result(inc, g, open_list, wall0, cpu0)
+
+    def result(self, inc: Incumbent, g: float, open_list: list[Entry], wall0: float, cpu0: float) -> SearchResult:
+        q0, q, state = self.q0, inc.q, inc.state
+        # Every unexplored grasp lies below an open state, whose stored value bounds its cost.
+        lowest_f = min([g] + [entry[4] for entry in open_list])
+        # Nothing open below the returned cost: the grasp is optimal (q0 - (q0 - q) may
+        # round above q, so do not recompute it).
+        bound = q if lowest_f >= g else max(q, q0 - lowest_f)
+        eps_bound = q0 - (q0 - q) / (1.0 + self.eps)
+        grasp = tuple(sorted(int(self.tree.members[node][0]) for node in state))
+        created, visited = self.created, self.visited
+        levels = max(max(created), max(visited)) + 1
+        solution_depth = self.depth(state)
+        stats = SearchStats(
+            created=sum(created.values()),
+            visited=sum(visited.values()),
+            created_per_level=tuple(created.get(i, 0) for i in range(levels)),
+            visited_per_level=tuple(visited.get(i, 0) for i in range(levels)),
+            q1_evaluations=self.oracle.evaluations,
+            q1_cache_hits=self.oracle.cache_hits,
+            bound_evaluations=self.bound_evaluations,
+            bound_rejections=self.oracle.bound_rejections,
+            hull_calls=self.oracle.hull_calls,
+            pruned=self.pruned,
+            symmetric_removed=self.symmetry.removed if self.symmetry else 0,
+            effective_branching_factor=effective_branching_factor(sum(created.values()) - 1, solution_depth),
+            solution_depth=solution_depth,
+            trace=tuple(self.trace),
+            wall_seconds=time.perf_counter() - wall0,
+            cpu_seconds=time.process_time() - cpu0,
+        )
+        idx = np.array(grasp, dtype=np.intp)
+        return SearchResult(
+            method=self.config["method"],
+            grasp=grasp,
+            positions=self.contacts.positions[idx].copy(),
+            normals=self.contacts.normals[idx].copy(),
+            q1=q,
+            q_ows=q0,
+            bound=bound,
+            eps=self.eps,
+            eps_bound=eps_bound,
+            stats=stats,
+            config=self.config,
+            contact_source=self.contacts.source,
+            tree=self.search_tree(inc.ident) if self.record_tree else None,
+        )
+
+    def search_tree(self, goal: int) -> SearchTree:
+        """The recorded tree, with the path from the root to ``goal``."""
+        path = [goal]
+        while self._parent[path[-1]] >= 0:
+            path.append(self._parent[path[-1]])
+        return SearchTree(
+            parent=tuple(self._parent), level=tuple(self._level), visited=tuple(self._visited),
+            f=tuple(self._f), path=tuple(reversed(path)),
+        )

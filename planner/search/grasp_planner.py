@@ -1,0 +1,189 @@
+"""Best-first search over super-contact grasps: A*, weighted A* and Dijkstra (paper Sec. III-IV).
+
+A state is a tuple of m super-contacts, each a node of the :class:`PartitionTree` that the
+expansion successor function Γ induces on C. With q(s) = Q1 of the union of the
+super-contacts (Eq. 9) and arc cost d(s, s') = q(s) - q(s') (Eq. 10), the path cost is
+g(s) = q(s0) - q(s) whatever the path, and the heuristic of Eq. 11 gives
+f(s) = g(s) + (1 + eps) h(s) with h(s) = q(s) - max_{s' in Γh(s)} q(s').
+
+Design points:
+
+* Finger order is irrelevant to Q1 and to every constraint, so states are kept as
+  sorted tuples (exact; disable with ``ordered=True`` to reproduce the paper's raw tree).
+  Every sorted state then has exactly one parent, so no closed list is needed.
+* Exact values are computed lazily (:mod:`planner.search.best_first`). A successor enters the
+  open list keyed by a lower bound of its f: q(s0) - U(s'), where U is a cheap
+  support-function upper bound of q (:mod:`planner.grasp.support_bound`), raised to its parent's f
+  when Γh = Γ (the heuristic is then consistent, Thm. III.2b). Each time a state
+  reaches the front its bound is tightened one step: its exact g (one Q1 evaluation),
+  then branch and bound over Γh(s'), children in order of decreasing U, one exact value
+  at a time, the state going back to the list whenever its bound
+  q(s0) - max(best so far, next U) is no longer the smallest. A finished branch and
+  bound gives the exact f, and only then is the state expanded. Terminal states are
+  always evaluated exactly before they can be returned, so A* stays optimal.
+* WA* orders exactly scored states by the paper's g + (1 + eps) h and the others by
+  (1 + eps) times their lower bound of f. Both are at most (1 + eps) f, so the open
+  state on an optimal path never has a key above (1 + eps) C* and the returned cost is
+  within (1 + eps) of optimal; states whose bound already exceeds the returned cost
+  divided by 1 + eps are never evaluated. At the goal test WA* returns the best grasp
+  it has evaluated exactly (often a terminal child met in a branch and bound), which
+  only improves on the popped goal; A*'s popped goal is already optimal.
+* The open list also yields the certificate: when the search stops, every unexplored
+  grasp lies below an open state, so q(s0) minus the smallest unweighted f on the list is
+  an upper bound on the optimum.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+from tqdm import tqdm
+
+from planner.grasp.constraints import Constraint, DistinctContacts
+from planner.grasp.contact_set import ContactSet
+from planner.infra.errors import OgcpError, choice_error
+from planner.infra.provenance import provenance
+from planner.search.result import SearchResult
+from planner.search.best_first import Search
+from planner.search.partitions import SUCCESSORS
+
+METHODS = ("astar", "dijkstra", "wastar")
+HEURISTICS = (*SUCCESSORS, "none")
+DEFAULT_WASTAR_EPS = 0.4
+
+
+class GraspPlanner:
+    """Optimal and bounded-suboptimal m-contact grasp planner.
+
+    The constructor only stores parameters; :meth:`plan` validates them and searches.
+
+    Args:
+        method: ``astar`` (optimal), ``wastar`` (cost within 1 + eps of optimal) or
+            ``dijkstra`` (uniform cost, h = 0).
+        eps: WA* inflation; default 0.4 for ``wastar`` and 0 otherwise.
+        branching: Branching factor b of the expansion successor function.
+        successor: Expansion successor function Γ: ``fc`` (k-means) or ``ru`` (random).
+        heuristic: Γh for the heuristic: ``fc``, ``ru`` or ``none``; default ``fc``
+            (``none`` for Dijkstra).
+        heuristic_branching: b of Γh; default ``branching``.
+        symmetry: Approximate geometric symmetry removal (Sec. IV-D); may lose optimality.
+        ordered: Keep finger order (the paper's raw tree) instead of sorted states.
+        seed: Seed of every random choice (k-means init, random splits).
+        kmeans_iterations: t for Γ^fc.
+        position_weight: Weight of positions against normals in Γ^fc features.
+        constraints: Extra grasp constraints; distinct contacts is always enforced.
+        record_tree: Keep the search tree (every created state's parent, level, f and
+            whether it was expanded, and the solution path) in ``SearchResult.tree``,
+            e.g. for the paper's circular plot (Fig. 5).
+        time_limit: Wall-clock budget of :meth:`plan` [s]; past it the search raises
+            :class:`~planner.infra.errors.SearchTimeout` with the best grasp found and a certified
+            upper bound on the optimum. None: unlimited.
+    """
+
+    def __init__(
+        self,
+        method: str = "astar",
+        eps: float | None = None,
+        branching: int = 2,
+        successor: str = "fc",
+        heuristic: str | None = None,
+        heuristic_branching: int | None = None,
+        symmetry: bool = False,
+        ordered: bool = False,
+        seed: int = 0,
+        kmeans_iterations: int = 10,
+        position_weight: float = 1.0,
+        constraints: Sequence[Constraint] = (),
+        record_tree: bool = False,
+        time_limit: float | None = None,
+    ) -> None:
+        self.method = method
+        self.eps = eps
+        self.branching = branching
+        self.successor = successor
+        self.heuristic = heuristic
+        self.heuristic_branching = heuristic_branching
+        self.symmetry = symmetry
+        self.ordered = ordered
+        self.seed = seed
+        self.kmeans_iterations = kmeans_iterations
+        self.position_weight = position_weight
+        self.constraints = constraints
+        self.record_tree = record_tree
+        self.time_limit = time_limit
+
+    def resolved_config(self) -> dict[str, Any]:
+        """Validate the parameters and fill in method-dependent defaults.
+
+        Raises:
+            OgcpError: For any invalid parameter, naming the valid values.
+        """
+        if self.method not in METHODS:
+            raise choice_error("method", self.method, METHODS)
+        eps = self.eps
+        if eps is None:
+            eps = DEFAULT_WASTAR_EPS if self.method == "wastar" else 0.0
+        if not (isinstance(eps, (int, float)) and math.isfinite(eps) and eps >= 0):
+            raise OgcpError(f"eps must be a number >= 0, got {eps!r}")
+        if self.method != "wastar" and eps != 0:
+            raise OgcpError(f"eps applies to method 'wastar' only (method {self.method!r} got eps={eps})")
+        heuristic = self.heuristic or ("none" if self.method == "dijkstra" else "fc")
+        if heuristic not in HEURISTICS:
+            raise choice_error("heuristic", heuristic, HEURISTICS)
+        if self.method == "dijkstra" and heuristic != "none":
+            raise OgcpError(f"method 'dijkstra' uses no heuristic (got heuristic {heuristic!r})")
+        if self.successor not in SUCCESSORS:
+            raise choice_error("successor function", self.successor, SUCCESSORS)
+        for name, value in (("branching", self.branching), ("heuristic_branching", self.heuristic_branching)):
+            if value is not None and (not isinstance(value, (int, np.integer)) or value < 2):
+                raise OgcpError(f"{name} b must be an integer >= 2, got {value!r}")
+        if not isinstance(self.seed, (int, np.integer)) or self.seed < 0:
+            raise OgcpError(f"seed must be a non-negative integer, got {self.seed!r}")
+        return {
+            "method": self.method,
+            "eps": float(eps),
+            "branching": int(self.branching),
+            "successor": self.successor,
+            "heuristic": heuristic,
+            "heuristic_branching": int(self.heuristic_branching or self.branching),
+            "symmetry": bool(self.symmetry),
+            "ordered": bool(self.ordered),
+            "seed": int(self.seed),
+            "kmeans_iterations": int(self.kmeans_iterations),
+            "position_weight": float(self.position_weight),
+            "constraints": [c.describe() for c in self.constraints],
+        }
+
+    def plan(self, contacts: ContactSet, m: int, progress: bool = False) -> SearchResult:
+        """Find the best m-contact grasp (or one within the WA* bound).
+
+        Args:
+            contacts: The contact set C.
+            m: Number of contacts (fingers), 2 <= m <= |C|.
+            progress: Show expansions and the current f on stderr (tqdm).
+
+        Returns:
+            The :class:`SearchResult`.
+
+        Raises:
+            OgcpError: For invalid parameters, or when no grasp satisfies the constraints.
+            SearchTimeout: When ``time_limit`` runs out first (a subclass of OgcpError).
+        """
+        provenance()  # recorded now: the commit and versions of the code that runs
+        config = self.resolved_config()
+        if not isinstance(m, (int, np.integer)) or m < 2:
+            raise OgcpError(f"number of contacts m must be an integer >= 2, got {m!r}")
+        if m > len(contacts):
+            raise OgcpError(f"m = {m} exceeds the number of contacts |C| = {len(contacts)}")
+        config["m"] = int(m)
+        limit = self.time_limit
+        if limit is not None and not (isinstance(limit, (int, float)) and math.isfinite(limit) and limit > 0):
+            raise OgcpError(f"time_limit must be a number of seconds > 0 or None, got {limit!r}")
+        search = Search(contacts, int(m), config, [DistinctContacts(), *self.constraints], self.record_tree,
+                        None if limit is None else float(limit))
+        with tqdm(desc=config["method"], unit=" expansions", disable=not progress, leave=False) as bar:
+            search.on_expand = lambda f: (bar.update(), bar.set_postfix(f=f"{f:.6f}", refresh=False))
+            return search.run()

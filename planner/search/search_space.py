@@ -1,0 +1,131 @@
+"""The search space of one run: super-contact states, their validity, bounds and heuristic children.
+
+See :mod:`planner.search.grasp_planner` for the design; :mod:`planner.search.best_first` runs the search on it.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Sequence
+from typing import Any
+
+from planner.grasp.support_bound import Vector
+from planner.grasp.constraints import Constraint
+from planner.grasp.contact_set import ContactSet
+from planner.grasp.subset_quality import GraspQuality, PackedMask
+from planner.search.partitions import Indices, PartitionTree, make_partitioner
+from planner.search.symmetry import SymmetryFilter
+
+State = tuple[int, ...]
+
+
+class SearchSpace:
+    """States (tuples of partition-tree nodes), successors, exact Q1 and support bounds.
+
+    Args:
+        contacts: The contact set C.
+        m: Number of fingers.
+        config: Resolved configuration (:meth:`planner.search.grasp_planner.GraspPlanner.resolved_config`).
+        constraints: Grasp constraints, distinct contacts included.
+    """
+
+    def __init__(self, contacts: ContactSet, m: int, config: dict[str, Any], constraints: list[Constraint]) -> None:
+        self.contacts = contacts
+        self.m = m
+        self.config = config
+        self.constraints = constraints
+        self.oracle = GraspQuality(contacts, config["seed"])
+
+        def partitioner(kind: str, branching: int) -> Any:
+            return make_partitioner(
+                kind, contacts, branching, config["seed"], config["kmeans_iterations"], config["position_weight"]
+            )
+
+        self.tree = PartitionTree(len(contacts), partitioner(config["successor"], config["branching"]))
+        self.heuristic_kind = config["heuristic"]
+        self.heuristic_shares_tree = (
+            self.heuristic_kind == config["successor"] and config["heuristic_branching"] == config["branching"]
+        )
+        self.heuristic_partitioner = (
+            None
+            if self.heuristic_kind == "none" or self.heuristic_shares_tree
+            else partitioner(self.heuristic_kind, config["heuristic_branching"])
+        )
+        self._heuristic_parts: dict[int, list[tuple[Indices, PackedMask]]] = {}
+        self._vectors: dict[Any, Vector] = {}
+        self.symmetry = SymmetryFilter(contacts) if config["symmetry"] else None
+        self.pruned = 0
+        self.bound_evaluations = 0
+
+    # -- states -----------------------------------------------------------------------
+
+    def members(self, state: State) -> list[Indices]:
+        return [self.tree.members[node] for node in state]
+
+    def depth(self, state: State) -> int:
+        return max(self.tree.depth[node] for node in state)
+
+    def is_terminal(self, state: State) -> bool:
+        return all(self.tree.size(node) == 1 for node in state)
+
+    def valid(self, parts: Sequence[Indices], terminal: bool) -> bool:
+        if terminal:
+            grasp = [int(p[0]) for p in parts]
+            return all(c.accepts(grasp, self.contacts) for c in self.constraints)
+        return all(c.admits(parts, self.contacts) for c in self.constraints)
+
+    def successors(self, state: State) -> list[State]:
+        """Γ restricted to valid states (Eq. 15), sorted unless finger order is kept."""
+        combos = itertools.product(*(self.tree.children(node) for node in state))
+        unique = dict.fromkeys(combos if self.config["ordered"] else (tuple(sorted(c)) for c in combos))
+        result = []
+        for child in unique:
+            if not self.valid(self.members(child), self.is_terminal(child)):
+                self.pruned += 1
+                continue
+            if self.symmetry is not None and not self.symmetry.is_new(self.depth(child), self.members(child)):
+                continue
+            result.append(child)
+        return result
+
+    # -- quality: exact values and cheap upper bounds ---------------------------------
+
+    def vector(self, key: Any, members: Indices) -> Vector:
+        vec = self.oracle.bounds.vector(members, self._vectors.get(key))
+        self._vectors[key] = vec
+        return vec
+
+    def node_vectors(self, state: State) -> list[Vector]:
+        return [self.vector(node, self.tree.members[node]) for node in state]
+
+    def upper(self, vectors: Sequence[Vector]) -> float:
+        self.bound_evaluations += 1
+        return self.oracle.bounds.bound(vectors)
+
+    def exact(self, state: State) -> float:
+        return self.oracle.of_masks([self.tree.masks[node] for node in state], self.node_vectors(state))
+
+    def heuristic_children(self, state: State) -> list[tuple[list[PackedMask], list[Vector], State | None]]:
+        """Valid Γh children as (masks, support vectors, state); never symmetry-filtered
+        (admissibility). The state (sorted node tuple) is None when Γh is not the expansion tree."""
+        children: list[tuple[list[PackedMask], list[Vector], State | None]] = []
+        if self.heuristic_shares_tree:
+            combos = dict.fromkeys(tuple(sorted(c)) for c in itertools.product(*(self.tree.children(n) for n in state)))
+            for child in combos:
+                if self.valid(self.members(child), self.is_terminal(child)):
+                    children.append(([self.tree.masks[n] for n in child], self.node_vectors(child), child))
+            return children
+        options = []
+        for node in state:
+            parts = self._heuristic_parts.get(node)
+            if parts is None:
+                assert self.heuristic_partitioner is not None
+                split = self.heuristic_partitioner.split(self.tree.members[node])
+                parts = [(p, self.oracle.mask_of(p)) for p in split]
+                self._heuristic_parts[node] = parts
+            options.append([(p, mask, ("h", node, i)) for i, (p, mask) in enumerate(parts)])
+        for combo in itertools.product(*options):
+            parts = [p for p, _, _ in combo]
+            if self.valid(parts, all(len(p) == 1 for p in parts)):
+                children.append(([mask for _, mask, _ in combo], [self.vector(key, p) for p, _, key in combo], None))
+        return children

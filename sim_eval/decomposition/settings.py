@@ -1,0 +1,111 @@
+"""Settings of a convex decomposition: CoACD's parameters, validated, plus method and timeout."""
+
+from __future__ import annotations
+
+import math
+import numbers
+from dataclasses import asdict, dataclass, fields
+from typing import Any
+
+import numpy as np
+
+from planner.infra.errors import OgcpError, choice_error
+
+__all__ = ["METHODS", "PREPROCESS_MODES", "DecompositionSettings"]
+
+METHODS = ("coacd", "convex_hull")
+PREPROCESS_MODES = ("auto", "on", "off")
+
+#: Integer settings and their ranges (None: unbounded above); CoACD rejects a preprocess
+#: resolution outside 5-1000 and takes an unsigned 32-bit seed.
+_INT_RANGES = {"preprocess_resolution": (5, 1000), "resolution": (1, None), "mcts_nodes": (1, None),
+               "mcts_iterations": (1, None), "mcts_max_depth": (1, None), "max_ch_vertex": (4, None),
+               "seed": (0, 2**32 - 1)}
+
+
+def _number(value: object, integral: bool) -> bool:
+    kind = numbers.Integral if integral else numbers.Real
+    return isinstance(value, kind) and not isinstance(value, bool)
+
+
+@dataclass(frozen=True)
+class DecompositionSettings:
+    """How to split a mesh into convex parts (CoACD's parameters plus method and timeout).
+
+    Attributes:
+        method: ``"coacd"`` (approximate convex decomposition) or ``"convex_hull"`` (one part,
+            the hull of the mesh: exact for convex objects, fast for tests).
+        threshold: CoACD concavity threshold, 0.01-1 (smaller: more, tighter parts).
+        max_convex_hull: Most parts CoACD may return; -1 = no limit.
+        preprocess_mode: ``"auto"`` (remesh only meshes failing CoACD's manifold check),
+            ``"on"`` (always remesh) or ``"off"`` (never; the mesh must be closed).
+        preprocess_resolution: Voxel resolution of the remeshing, 5-1000.
+        resolution: Surface samples per part for CoACD's concavity metric.
+        mcts_nodes: Children per node of CoACD's cutting-plane tree search.
+        mcts_iterations: Iterations of the tree search.
+        mcts_max_depth: Depth of the tree search.
+        merge: Merge parts afterwards when the merge keeps concavity below threshold.
+        decimate: Limit the vertices of every part to ``max_ch_vertex``.
+        max_ch_vertex: Vertex limit per part when ``decimate`` is on.
+        seed: CoACD's random seed (fixed, so results repeat).
+        timeout_s: Wall-clock limit of one CoACD run [s]; not part of the cache key.
+    """
+
+    method: str = "coacd"
+    threshold: float = 0.05
+    max_convex_hull: int = -1
+    preprocess_mode: str = "auto"
+    preprocess_resolution: int = 50
+    resolution: int = 2000
+    mcts_nodes: int = 20
+    mcts_iterations: int = 150
+    mcts_max_depth: int = 3
+    merge: bool = True
+    decimate: bool = False
+    max_ch_vertex: int = 256
+    seed: int = 0
+    timeout_s: float = 300.0
+
+    def __post_init__(self) -> None:
+        if self.method not in METHODS:
+            raise choice_error("decomposition method", self.method, METHODS)
+        if self.preprocess_mode not in PREPROCESS_MODES:
+            raise choice_error("CoACD preprocess mode", self.preprocess_mode, PREPROCESS_MODES)
+        if not (_number(self.threshold, False) and 0.01 <= self.threshold <= 1.0):
+            raise OgcpError(f"CoACD threshold must be a number from 0.01 to 1, got {self.threshold!r}")
+        if not (_number(self.timeout_s, False) and 0 < self.timeout_s < math.inf):
+            raise OgcpError(f"decomposition timeout must be a positive number of seconds, got {self.timeout_s!r}")
+        if not (_number(self.max_convex_hull, True) and (self.max_convex_hull == -1 or self.max_convex_hull >= 1)):
+            raise OgcpError(f"max_convex_hull must be -1 (no limit) or an integer >= 1, got {self.max_convex_hull!r}")
+        for name, (low, high) in _INT_RANGES.items():
+            value = getattr(self, name)
+            if not (_number(value, True) and low <= value and (high is None or value <= high)):
+                bounds = f"from {low} to {high}" if high is not None else f">= {low}"
+                raise OgcpError(f"decomposition {name} must be an integer {bounds}, got {value!r}")
+            object.__setattr__(self, name, int(value))  # plain ints keep to_dict() JSON-ready
+        for name in ("merge", "decimate"):
+            if not isinstance(getattr(self, name), bool | np.bool_):
+                raise OgcpError(f"decomposition {name} must be true or false, got {getattr(self, name)!r}")
+            object.__setattr__(self, name, bool(getattr(self, name)))
+        object.__setattr__(self, "max_convex_hull", int(self.max_convex_hull))
+        object.__setattr__(self, "threshold", float(self.threshold))
+        object.__setattr__(self, "timeout_s", float(self.timeout_s))
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> DecompositionSettings:
+        """Settings from a mapping of field names (e.g. :meth:`to_dict` output or user JSON)."""
+        known = {f.name for f in fields(cls)}
+        for name in data:
+            if name not in known:
+                raise choice_error("decomposition setting", name, known)
+        return cls(**data)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON form: every field."""
+        return asdict(self)
+
+    def key_dict(self) -> dict[str, Any]:
+        """The fields that determine the parts: the hull ignores CoACD's; the timeout never counts."""
+        if self.method == "convex_hull":
+            return {"method": self.method}
+        return {k: v for k, v in self.to_dict().items() if k != "timeout_s"}
