@@ -27,8 +27,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from benchmarks.suite.store import ResultStore
 from benchmarks.suite.params import EXHAUSTIVE_METHODS, OPTIMAL_METHODS
+from benchmarks.suite.store import ResultStore
 from planner.infra.errors import OgcpError, choice_error
 
 TIME_KEYS = ("cpu", "plan", "wall")
@@ -195,18 +195,33 @@ class Comparison:
             found.append(_finding("q1", new, cell, f"Q1 {q_new:.9g} < baseline {q_base:.9g} (tolerance {t.q1:g})"))
         for label, (after, before) in resistance_changes(new, base).items():
             if after < before * (1 - t.resistance):
-                found.append(_finding("resistance", new, cell, f"grasp {label}: minimum measured resistance "
-                                      f"{after:.6g} < baseline {before:.6g} by more than {100 * t.resistance:g} %"))
+                found.append(
+                    _finding(
+                        "resistance",
+                        new,
+                        cell,
+                        f"grasp {label}: minimum measured resistance "
+                        f"{after:.6g} < baseline {before:.6g} by more than {100 * t.resistance:g} %",
+                    )
+                )
         newly = sorted(invalid_grasps(new) - invalid_grasps(base))
         if newly:
-            found.append(_finding("gates", new, cell, f"simulated grasps now failing the validity gates: "
-                                  f"{', '.join(newly)}"))
+            found.append(
+                _finding("gates", new, cell, f"simulated grasps now failing the validity gates: {', '.join(newly)}")
+            )
         s_new, s_base = _time(new, t.time_key), _time(base, t.time_key)
         if s_new is not None and s_base is not None:
             ratio = max(s_new, t.min_time) / max(s_base, t.min_time)
             if ratio > t.time_ratio:
-                found.append(_finding("time", new, cell, f"{t.time_key} time {s_new:.3g} s vs baseline {s_base:.3g} s "
-                                      f"(x{ratio:.2f} > x{t.time_ratio:g})"))
+                found.append(
+                    _finding(
+                        "time",
+                        new,
+                        cell,
+                        f"{t.time_key} time {s_new:.3g} s vs baseline {s_base:.3g} s "
+                        f"(x{ratio:.2f} > x{t.time_ratio:g})",
+                    )
+                )
         return found
 
     def _optimality(self) -> list[Finding]:
@@ -223,14 +238,23 @@ class Comparison:
             symmetry = params.get("variant", {}).get("symmetry", False)
             if params["method"] in OPTIMAL_METHODS and not symmetry:
                 if abs(value - reference) > self.tolerances.optimality:
-                    found.append(_finding("optimality", record, cell, f"Q1 {value:.12g} differs from the exhaustive "
-                                          f"optimum {reference:.12g}"))
+                    found.append(
+                        _finding(
+                            "optimality",
+                            record,
+                            cell,
+                            f"Q1 {value:.12g} differs from the exhaustive optimum {reference:.12g}",
+                        )
+                    )
             elif params["method"] == "wastar" and not symmetry:
                 q_ows, eps = record["plan"]["q_ows"], params["variant"]["eps"]
                 guarantee = q_ows - (1 + eps) * (q_ows - reference)
                 if value < guarantee - self.tolerances.optimality:
-                    found.append(_finding("bound", record, cell, f"Q1 {value:.9g} below the eps={eps:g} guarantee "
-                                          f"{guarantee:.9g}"))
+                    found.append(
+                        _finding(
+                            "bound", record, cell, f"Q1 {value:.9g} below the eps={eps:g} guarantee {guarantee:.9g}"
+                        )
+                    )
         return found
 
     def table(self) -> str:
@@ -242,18 +266,27 @@ class Comparison:
             rows.setdefault(_row(new or base), []).append((new, base))
         flagged = {(f.object, f.label) for f in self.failures()}
         width = max([len(label) for _, label in rows] + [6])
-        header = (f"{'object':<12} {'method':<{width}} {'cells':>7} {'dQ1 min':>11} {'time x':>7} "
-                  f"{'invalid':>7} {'resist':>8}  verdict")
+        header = (
+            f"{'object':<12} {'method':<{width}} {'cells':>7} {'dQ1 min':>11} {'time x':>7} "
+            f"{'invalid':>7} {'resist':>8}  verdict"
+        )
         lines = [header]
         for key in sorted(rows):
             pairs = rows[key]
             matched = [(n, b) for n, b in pairs if n is not None]
             deltas = [_q1(n) - _q1(b) for n, b in matched if _q1(n) is not None and _q1(b) is not None]
-            ratios = [max(_time(n, t.time_key), t.min_time) / max(_time(b, t.time_key), t.min_time)
-                      for n, b in matched if _time(n, t.time_key) is not None and _time(b, t.time_key) is not None]
+            ratios = [
+                max(_time(n, t.time_key), t.min_time) / max(_time(b, t.time_key), t.min_time)
+                for n, b in matched
+                if _time(n, t.time_key) is not None and _time(b, t.time_key) is not None
+            ]
             gates = (sum(len(invalid_grasps(n)) for n, _ in matched), sum(len(invalid_grasps(b)) for _, b in pairs))
-            resist = [after / before - 1 for n, b in matched
-                      for after, before in resistance_changes(n, b).values() if before > 0]
+            resist = [
+                after / before - 1
+                for n, b in matched
+                for after, before in resistance_changes(n, b).values()
+                if before > 0
+            ]
             lines.append(
                 f"{key[0]:<12} {key[1]:<{width}} {f'{len(matched)}/{len(pairs)}':>7} "
                 f"{f'{min(deltas):+.2e}' if deltas else '-':>11} {f'{max(ratios):.2f}' if ratios else '-':>7} "

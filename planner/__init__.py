@@ -11,12 +11,12 @@ Typical use::
 
 from planner.grasp.constraints import DistinctContacts, MaxFingerSpread
 from planner.grasp.contact_set import ContactSet, sample_contacts
-from planner.infra.errors import OgcpError, SearchTimeout
-from planner.objects import BUILTIN_OBJECTS, builtin_mesh, load_mesh, resolve_object
 from planner.grasp.quality import Q1Certificate, q1, q1_certificate
-from planner.search.result import SearchResult, SearchStats
-from planner.search.grasp_planner import GraspPlanner
+from planner.infra.errors import OgcpError, SearchTimeout
 from planner.infra.tolerance import TOL
+from planner.objects import BUILTIN_OBJECTS, builtin_mesh, load_mesh, resolve_object
+from planner.search.grasp_planner import GraspPlanner
+from planner.search.result import SearchResult, SearchStats
 
 __version__ = "0.1.0"
 

@@ -87,12 +87,16 @@ def object_inertia(mesh: trimesh.Trimesh, mass: float = 0.1) -> tuple[NDArray[np
         raise OgcpError(f"object mass must be a positive number of kilograms, got {mass!r}")
     if mesh.is_watertight:
         if not mesh.is_winding_consistent:
-            raise OgcpError("the object mesh is closed but its faces are not consistently oriented; "
-                            "its volume is undefined (repair it with trimesh.repair.fix_normals)")
+            raise OgcpError(
+                "the object mesh is closed but its faces are not consistently oriented; "
+                "its volume is undefined (repair it with trimesh.repair.fix_normals)"
+            )
         volume = float(mesh.volume)
         if not volume > 0:
-            raise OgcpError(f"the object mesh encloses a volume of {volume:.3g} m^3, which is not positive; "
-                            "its faces point inward (flip them with mesh.invert())")
+            raise OgcpError(
+                f"the object mesh encloses a volume of {volume:.3g} m^3, which is not positive; "
+                "its faces point inward (flip them with mesh.invert())"
+            )
         com = np.array(mesh.center_mass, dtype=float)
         inertia = np.array(mesh.moment_inertia, dtype=float) * (mass / volume)
     else:
@@ -102,8 +106,12 @@ def object_inertia(mesh: trimesh.Trimesh, mass: float = 0.1) -> tuple[NDArray[np
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", NonWatertightWarning)
             com, _ = mass_properties(mesh)
-        warnings.warn("mesh is not watertight: centre of mass = area-weighted surface centroid (as planned), "
-                      "inertia from the convex hull", NonWatertightWarning, stacklevel=2)
+        warnings.warn(
+            "mesh is not watertight: centre of mass = area-weighted surface centroid (as planned), "
+            "inertia from the convex hull",
+            NonWatertightWarning,
+            stacklevel=2,
+        )
         inertia = np.array(hull.moment_inertia, dtype=float) * (mass / float(hull.volume))
     return np.asarray(com, dtype=float), 0.5 * (inertia + inertia.T)
 

@@ -25,9 +25,9 @@ from numpy.typing import NDArray
 from tqdm.auto import tqdm
 
 from planner.grasp.contact_set import ContactSet
+from planner.grasp.quality import q1_certificate
 from planner.infra.errors import OgcpError
 from planner.infra.provenance import provenance
-from planner.grasp.quality import q1_certificate
 from sim_eval.body import object_inertia, surface_distance
 from sim_eval.decomposition.decompose import Decomposition, DecompositionSettings, decompose
 from sim_eval.directions import direction_set
@@ -62,15 +62,26 @@ class GraspEvaluator:
         progress: Show progress bars on stderr.
     """
 
-    def __init__(self, settings: SimSettings | None = None, decomposition: DecompositionSettings | None = None,
-                 cache: str | None = None, progress: bool = False) -> None:
+    def __init__(
+        self,
+        settings: SimSettings | None = None,
+        decomposition: DecompositionSettings | None = None,
+        cache: str | None = None,
+        progress: bool = False,
+    ) -> None:
         self.settings = settings
         self.decomposition = decomposition
         self.cache = cache
         self.progress = progress
 
-    def evaluate(self, mesh: trimesh.Trimesh, contacts: ContactSet, grasps: Sequence[Sequence[int]],
-                 labels: Sequence[str] | None = None, parts: Decomposition | None = None) -> SimResult:
+    def evaluate(
+        self,
+        mesh: trimesh.Trimesh,
+        contacts: ContactSet,
+        grasps: Sequence[Sequence[int]],
+        labels: Sequence[str] | None = None,
+        parts: Decomposition | None = None,
+    ) -> SimResult:
         """Simulate every grasp.
 
         Args:
@@ -102,29 +113,50 @@ class GraspEvaluator:
             try:
                 results.append(self._grasp(mesh, contacts, grasp, label, parts, com, inertia, settings))
             except Exception as exc:  # noqa: BLE001 - one bad grasp must not sink the batch
-                results.append(_failed(contacts, grasp, label, f"{type(exc).__name__}: {exc}",
-                                       traceback.format_exc(limit=3)))
+                results.append(
+                    _failed(contacts, grasp, label, f"{type(exc).__name__}: {exc}", traceback.format_exc(limit=3))
+                )
             bar.update()
         bar.close()
         return SimResult(
-            object=dict(contacts.source), grasps=tuple(results), set_metrics=_set_level(results, settings),
+            object=dict(contacts.source),
+            grasps=tuple(results),
+            set_metrics=_set_level(results, settings),
             settings={**settings.to_dict(), "decomposition": (self.decomposition or DecompositionSettings()).to_dict()},
-            decomposition=dict(parts.meta), wall_seconds=time.perf_counter() - start, provenance=provenance(),
+            decomposition=dict(parts.meta),
+            wall_seconds=time.perf_counter() - start,
+            provenance=provenance(),
         )
 
-    def _grasp(self, mesh: trimesh.Trimesh, contacts: ContactSet, grasp: tuple[int, ...], label: str,
-               parts: Decomposition, com: NDArray[np.float64], inertia: NDArray[np.float64],
-               settings: SimSettings) -> GraspSimResult:
+    def _grasp(
+        self,
+        mesh: trimesh.Trimesh,
+        contacts: ContactSet,
+        grasp: tuple[int, ...],
+        label: str,
+        parts: Decomposition,
+        com: NDArray[np.float64],
+        inertia: NDArray[np.float64],
+        settings: SimSettings,
+    ) -> GraspSimResult:
         idx = np.asarray(grasp, dtype=np.intp)
         positions, normals = contacts.positions[idx], contacts.normals[idx]
         compat = settings.protocol == "dexgraspbench"
         mu = settings.mu if settings.mu is not None else (DEXGRASPBENCH["mu"] if compat else contacts.mu)
         cert = q1_certificate(contacts.subset_wrenches(idx))
-        dirs = direction_set(settings.directions, settings.direction_seed,
-                             cert.direction if cert.force_closure else None)
-        predicted = predicted_resistance(positions, normals, contacts.com, contacts.torque_scale, mu,
-                                         settings.prediction_cone_edges, settings.max_normal_force,
-                                         dirs.vectors).resistance
+        dirs = direction_set(
+            settings.directions, settings.direction_seed, cert.direction if cert.force_closure else None
+        )
+        predicted = predicted_resistance(
+            positions,
+            normals,
+            contacts.com,
+            contacts.torque_scale,
+            mu,
+            settings.prediction_cone_edges,
+            settings.max_normal_force,
+            dirs.vectors,
+        ).resistance
         radius = settings.tip_radius or settings.tip_radius_ratio * float(np.linalg.norm(np.ptp(mesh.vertices, axis=0)))
         scene = build_scene(parts.parts, com, inertia, positions, normals, settings, mu, radius)
         settled = settle(scene, settings)
@@ -136,73 +168,148 @@ class GraspEvaluator:
             if compat:
                 holds["dexgraspbench"] = self._dexgraspbench(scene, settled, settings)
             else:
-                measured, censored = self._ramp(scene, settled, dirs.vectors, predicted, contacts.torque_scale,
-                                                settings)
+                measured, censored = self._ramp(
+                    scene, settled, dirs.vectors, predicted, contacts.torque_scale, settings
+                )
                 fid = fidelity(measured, predicted, FIDELITY_FLOOR * settings.max_normal_force)
                 fid[censored] = math.nan
             if settings.weight_test:
                 holds["weight"] = self._weight(parts, com, inertia, positions, normals, settings, mu, radius)
-        return GraspSimResult(grasp, label, cert.q1, dirs.vectors, tuple(dirs.labels), predicted, measured, censored,
-                              fid, dict(settled.gates), settled.normal_forces, distance, holds)
+        return GraspSimResult(
+            grasp,
+            label,
+            cert.q1,
+            dirs.vectors,
+            tuple(dirs.labels),
+            predicted,
+            measured,
+            censored,
+            fid,
+            dict(settled.gates),
+            settled.normal_forces,
+            distance,
+            holds,
+        )
 
     @staticmethod
-    def _ramp(scene: GraspScene, settled: Any, directions: NDArray[np.float64], predicted: NDArray[np.float64],
-              torque_scale: float, settings: SimSettings) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+    def _ramp(
+        scene: GraspScene,
+        settled: Any,
+        directions: NDArray[np.float64],
+        predicted: NDArray[np.float64],
+        torque_scale: float,
+        settings: SimSettings,
+    ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
         """Each direction's ramp reaches its prediction after ``ramp_time`` (a floor keeps ~0 ones moving)."""
         finite = np.where(np.isfinite(predicted), predicted, 0.0)
         floor = settings.min_ramp_fraction * max(float(finite.max()), settings.holding_load)
         targets = np.maximum(finite, floor)
-        trials = ramp_trials(scene, settled, directions, targets / settings.ramp_time,
-                             settings.ramp_extent * settings.ramp_time, torque_scale, settings)
+        trials = ramp_trials(
+            scene,
+            settled,
+            directions,
+            targets / settings.ramp_time,
+            settings.ramp_extent * settings.ramp_time,
+            torque_scale,
+            settings,
+        )
         measured = np.where(trials.diverged, math.nan, trials.failure_load)
         return measured, ~trials.failed
 
     @staticmethod
     def _dexgraspbench(scene: GraspScene, settled: Any, settings: SimSettings) -> dict[str, Any]:
         loads, labels = _axis_loads(DEXGRASPBENCH["load_per_kg"] * settings.object_mass)
-        passed = hold_trials(scene, settled, loads, DEXGRASPBENCH["duration"], DEXGRASPBENCH["move_limit"],
-                             DEXGRASPBENCH["rotation_limit"], settings)
-        return {"axes": labels, "passed": passed.tolist(), "success": bool(passed.all()),
-                "load": DEXGRASPBENCH["load_per_kg"] * settings.object_mass, **DEXGRASPBENCH}
+        passed = hold_trials(
+            scene,
+            settled,
+            loads,
+            DEXGRASPBENCH["duration"],
+            DEXGRASPBENCH["move_limit"],
+            DEXGRASPBENCH["rotation_limit"],
+            settings,
+        )
+        return {
+            "axes": labels,
+            "passed": passed.tolist(),
+            "success": bool(passed.all()),
+            "load": DEXGRASPBENCH["load_per_kg"] * settings.object_mass,
+            **DEXGRASPBENCH,
+        }
 
     @staticmethod
-    def _weight(parts: Decomposition, com: NDArray[np.float64], inertia: NDArray[np.float64],
-                positions: NDArray[np.float64], normals: NDArray[np.float64], settings: SimSettings, mu: float,
-                radius: float) -> dict[str, Any]:
+    def _weight(
+        parts: Decomposition,
+        com: NDArray[np.float64],
+        inertia: NDArray[np.float64],
+        positions: NDArray[np.float64],
+        normals: NDArray[np.float64],
+        settings: SimSettings,
+        mu: float,
+        radius: float,
+    ) -> dict[str, Any]:
         """Weight m g along the six force axes: gravity off, the weight applied as an external force."""
         scene = build_scene(parts.parts, com, inertia, positions, normals, settings, mu, radius, gravity=False)
         settled = settle(scene, settings)
         loads, labels = _axis_loads(settings.object_mass * GRAVITY)
-        passed = hold_trials(scene, settled, loads, WEIGHT_TEST_DURATION, settings.move_threshold,
-                             settings.rotation_threshold, settings)
-        return {"axes": labels, "passed": passed.tolist(), "success": bool(passed.all()),
-                "load": settings.object_mass * GRAVITY}
+        passed = hold_trials(
+            scene, settled, loads, WEIGHT_TEST_DURATION, settings.move_threshold, settings.rotation_threshold, settings
+        )
+        return {
+            "axes": labels,
+            "passed": passed.tolist(),
+            "success": bool(passed.all()),
+            "load": settings.object_mass * GRAVITY,
+        }
 
 
 def _failed(contacts: ContactSet, grasp: tuple[int, ...], label: str, error: str, trace: str) -> GraspSimResult:
     empty = np.zeros(0)
     q1 = q1_certificate(contacts.subset_wrenches(np.asarray(grasp, dtype=np.intp))).q1
-    return GraspSimResult(grasp, label, q1, np.zeros((0, 6)), (), empty, empty, np.zeros(0, dtype=bool), empty,
-                          {"valid": False, "traceback": trace}, empty, empty, {}, error)
+    return GraspSimResult(
+        grasp,
+        label,
+        q1,
+        np.zeros((0, 6)),
+        (),
+        empty,
+        empty,
+        np.zeros(0, dtype=bool),
+        empty,
+        {"valid": False, "traceback": trace},
+        empty,
+        empty,
+        {},
+        error,
+    )
 
 
 def _set_level(results: Sequence[GraspSimResult], settings: SimSettings) -> dict[str, Any]:
     valid = [r for r in results if r.valid and np.all(np.isfinite(r.measured)) and len(r.measured)]
     fidelities = [r.median_fidelity for r in valid if math.isfinite(r.median_fidelity)]
-    metrics: dict[str, Any] = {"n_simulated": len(results), "n_valid": len(valid),
-                               "n_errors": sum(r.error is not None for r in results),
-                               "holding_load": settings.holding_load}
+    metrics: dict[str, Any] = {
+        "n_simulated": len(results),
+        "n_valid": len(valid),
+        "n_errors": sum(r.error is not None for r in results),
+        "holding_load": settings.holding_load,
+    }
     if valid:
         measured = np.array([r.measured_min for r in valid])
-        metrics.update(set_metrics([r.q1 for r in valid], [r.predicted_min for r in valid], measured,
-                                   measured >= settings.holding_load))
+        metrics.update(
+            set_metrics(
+                [r.q1 for r in valid], [r.predicted_min for r in valid], measured, measured >= settings.holding_load
+            )
+        )
     metrics["median_fidelity"] = float(np.median(fidelities)) if fidelities else None
     return metrics
 
 
-def evaluate_plan(record: dict[str, Any], settings: SimSettings | dict[str, Any] | None = None,
-                  decomposition: DecompositionSettings | dict[str, Any] | None = None, progress: bool = False,
-                  max_grasps: int | None = None) -> SimResult:
+def evaluate_plan(
+    record: dict[str, Any],
+    settings: SimSettings | dict[str, Any] | None = None,
+    decomposition: DecompositionSettings | dict[str, Any] | None = None,
+    progress: bool = False,
+    max_grasps: int | None = None,
+) -> SimResult:
     """Simulate the grasps of an ``ogcp.plan/1`` record (best grasp, ES top grasps, HFTS runs).
 
     Args:

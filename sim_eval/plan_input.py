@@ -72,14 +72,18 @@ def _mesh(source: dict[str, Any]) -> trimesh.Trimesh:
             raise OgcpError(f"the plan's mesh {path} has changed since planning (sha256 differs)")
         mesh, _ = resolve_object(str(path))
         return mesh
-    raise OgcpError(f"cannot tell which object the plan was made on (contact-set source kind {kind!r}); "
-                    "plan from a built-in name or a mesh path")
+    raise OgcpError(
+        f"cannot tell which object the plan was made on (contact-set source kind {kind!r}); "
+        "plan from a built-in name or a mesh path"
+    )
 
 
 def _grasps(record: dict[str, Any], n: int) -> tuple[tuple[tuple[int, ...], ...], tuple[str, ...]]:
     found: dict[tuple[int, ...], str] = {}
     candidates = [("best", record.get("grasp"))]
-    candidates += [(f"top-{i}", t.get("grasp") if isinstance(t, dict) else t) for i, t in enumerate(record.get("top") or [])]
+    candidates += [
+        (f"top-{i}", t.get("grasp") if isinstance(t, dict) else t) for i, t in enumerate(record.get("top") or [])
+    ]
     candidates += [(f"hfts-run-{i}", r.get("grasp")) for i, r in enumerate(record.get("runs") or [])]
     for label, grasp in candidates:
         if not isinstance(grasp, list) or not all(isinstance(i, int) for i in grasp):
@@ -102,14 +106,20 @@ def plan_input(record: dict[str, Any]) -> PlanInput:
     if source.get("sampling") != "even" or "n" not in source or "seed" not in source:
         raise OgcpError("the plan does not record how its contacts were sampled (object, n, seed): cannot rebuild them")
     mesh = _mesh(source)
-    contacts = sample_contacts(mesh, int(source["n"]), int(source["seed"]), float(cs.get("mu", 0.5)),
-                               int(cs.get("cone_edges", 8)), {k: v for k, v in source.items()
-                                                               if k not in ("sampling", "n", "seed")})
+    contacts = sample_contacts(
+        mesh,
+        int(source["n"]),
+        int(source["seed"]),
+        float(cs.get("mu", 0.5)),
+        int(cs.get("cone_edges", 8)),
+        {k: v for k, v in source.items() if k not in ("sampling", "n", "seed")},
+    )
     grasps, labels = _grasps(record, len(contacts))
     recorded = np.asarray(record.get("contacts", {}).get("positions", []), dtype=float)
     best = np.asarray(grasps[0], dtype=np.intp)
-    if recorded.shape != (len(best), 3) or not np.allclose(contacts.positions[best], recorded,
-                                                            atol=POSITION_TOLERANCE, rtol=0.0):
+    if recorded.shape != (len(best), 3) or not np.allclose(
+        contacts.positions[best], recorded, atol=POSITION_TOLERANCE, rtol=0.0
+    ):
         raise OgcpError("the plan's contacts are not on the object as re-sampled (different mesh or ogcp version?)")
     if "com" in cs and not np.allclose(contacts.com, cs["com"], atol=POSITION_TOLERANCE, rtol=0.0):
         raise OgcpError("the plan's centre of mass differs from the object's: refusing to mix them")

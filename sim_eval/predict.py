@@ -26,8 +26,8 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.optimize import linprog
 
-from planner.infra.errors import OgcpError
 from planner.grasp.wrench import contact_wrenches
+from planner.infra.errors import OgcpError
 
 DIM = 6
 #: Allowed deviation of a normal or direction norm from 1.

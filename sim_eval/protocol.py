@@ -137,8 +137,12 @@ def settle(scene: GraspScene, settings: SimSettings) -> Settled:
         "creep": float(shift),
         "diverged": diverged,
     }
-    gates["valid"] = bool(not diverged and penetration <= settings.penetration_tolerance
-                          and touching == scene.fingers and float(shift) <= settings.creep_tolerance)
+    gates["valid"] = bool(
+        not diverged
+        and penetration <= settings.penetration_tolerance
+        and touching == scene.fingers
+        and float(shift) <= settings.creep_tolerance
+    )
     state = np.empty(mujoco.mj_stateSize(model, FULL_STATE))
     mujoco.mj_getState(model, data, state, FULL_STATE)
     return Settled(state, pose, gates, forces)
@@ -162,8 +166,9 @@ def _controls(scene: GraspScene, loads: NDArray[np.float64], rows: NDArray[np.fl
     return controls
 
 
-def _first_failure(poses: NDArray[np.float64], reference: NDArray[np.float64],
-                   settings: SimSettings) -> tuple[NDArray[np.intp], NDArray[np.bool_], NDArray[np.bool_]]:
+def _first_failure(
+    poses: NDArray[np.float64], reference: NDArray[np.float64], settings: SimSettings
+) -> tuple[NDArray[np.intp], NDArray[np.bool_], NDArray[np.bool_]]:
     shift, angle = _displacement(poses, reference)
     finite = np.all(np.isfinite(poses), axis=-1)
     moved = (shift > settings.move_threshold) | (angle > settings.rotation_threshold) | ~finite
@@ -172,8 +177,15 @@ def _first_failure(poses: NDArray[np.float64], reference: NDArray[np.float64],
     return first, failed, ~finite.all(axis=1)
 
 
-def ramp_trials(scene: GraspScene, settled: Settled, directions: NDArray[np.float64], rates: NDArray[np.float64],
-                duration: float, torque_scale: float, settings: SimSettings) -> TrialResult:
+def ramp_trials(
+    scene: GraspScene,
+    settled: Settled,
+    directions: NDArray[np.float64],
+    rates: NDArray[np.float64],
+    duration: float,
+    torque_scale: float,
+    settings: SimSettings,
+) -> TrialResult:
     """Ramp a load along each direction from the settled state (batched rollout over threads).
 
     Args:
@@ -211,8 +223,15 @@ def ramp_trials(scene: GraspScene, settled: Settled, directions: NDArray[np.floa
     return TrialResult(failure, failed, diverged, nstep)
 
 
-def serial_trials(scene: GraspScene, settled: Settled, directions: NDArray[np.float64], rates: NDArray[np.float64],
-                  duration: float, torque_scale: float, settings: SimSettings) -> TrialResult:
+def serial_trials(
+    scene: GraspScene,
+    settled: Settled,
+    directions: NDArray[np.float64],
+    rates: NDArray[np.float64],
+    duration: float,
+    torque_scale: float,
+    settings: SimSettings,
+) -> TrialResult:
     """The same trials as :func:`ramp_trials` with a plain serial ``mj_step`` loop (reference)."""
     model = scene.model
     data = mujoco.MjData(model)
@@ -241,8 +260,15 @@ def serial_trials(scene: GraspScene, settled: Settled, directions: NDArray[np.fl
     return TrialResult(failure, failed, diverged, nstep)
 
 
-def hold_trials(scene: GraspScene, settled: Settled, loads: NDArray[np.float64], duration: float,
-                move_limit: float, rotation_limit: float, settings: SimSettings) -> NDArray[np.bool_]:
+def hold_trials(
+    scene: GraspScene,
+    settled: Settled,
+    loads: NDArray[np.float64],
+    duration: float,
+    move_limit: float,
+    rotation_limit: float,
+    settings: SimSettings,
+) -> NDArray[np.bool_]:
     """Constant-load trials (weight test, DexGraspBench compatibility): does the grasp hold?
 
     Args:
@@ -264,7 +290,7 @@ def hold_trials(scene: GraspScene, settled: Settled, loads: NDArray[np.float64],
     controls = _controls(scene, np.ones((len(loads), nstep)), np.asarray(loads, dtype=float))
     initial = np.tile(settled.state, (len(loads), 1))
     state, _ = rollout.rollout(model, datas, initial, controls, control_spec=CONTROL_SPEC)
-    poses = state[:, :, QPOS_OFFSET + scene.object_qpos: QPOS_OFFSET + scene.object_qpos + 7]
+    poses = state[:, :, QPOS_OFFSET + scene.object_qpos : QPOS_OFFSET + scene.object_qpos + 7]
     shift, angle = _displacement(poses, settled.pose)
     finite = np.all(np.isfinite(poses), axis=(1, 2))
     return finite & (np.nanmax(shift, axis=1) < move_limit) & (np.nanmax(angle, axis=1) < rotation_limit)

@@ -14,8 +14,14 @@ from sim_eval.scene import GraspScene, build_scene
 from sim_eval.settings import SimSettings
 
 
-def render_grasp(scene: GraspScene, settled: Settled, width: int = 640, height: int = 480,
-                 azimuth: float = 135.0, elevation: float = -25.0) -> NDArray[np.uint8]:
+def render_grasp(
+    scene: GraspScene,
+    settled: Settled,
+    width: int = 640,
+    height: int = 480,
+    azimuth: float = 135.0,
+    elevation: float = -25.0,
+) -> NDArray[np.uint8]:
     """Render the settled grasp from a free camera looking at the object.
 
     Args:
@@ -40,9 +46,10 @@ def render_grasp(scene: GraspScene, settled: Settled, width: int = 640, height: 
     try:
         renderer = mujoco.Renderer(model, height, width)
     except Exception as exc:
-        raise OgcpError("offscreen rendering is not available here: set MUJOCO_GL=egl or MUJOCO_GL=osmesa "
-                        f"with the matching library installed (e.g. Debian's libosmesa6) ({type(exc).__name__})"
-                        ) from exc
+        raise OgcpError(
+            "offscreen rendering is not available here: set MUJOCO_GL=egl or MUJOCO_GL=osmesa "
+            f"with the matching library installed (e.g. Debian's libosmesa6) ({type(exc).__name__})"
+        ) from exc
     data = mujoco.MjData(model)
     mujoco.mj_setState(model, data, settled.state, FULL_STATE)
     mujoco.mj_forward(model, data)
@@ -57,8 +64,14 @@ def render_grasp(scene: GraspScene, settled: Settled, width: int = 640, height: 
         renderer.close()
 
 
-def render_plan(record: dict, settings: SimSettings | None = None, decomposition: DecompositionSettings | None = None,
-                grasp_index: int = 0, width: int = 640, height: int = 480) -> NDArray[np.uint8]:
+def render_plan(
+    record: dict,
+    settings: SimSettings | None = None,
+    decomposition: DecompositionSettings | None = None,
+    grasp_index: int = 0,
+    width: int = 640,
+    height: int = 480,
+) -> NDArray[np.uint8]:
     """Picture of one grasp of an ``ogcp.plan/1`` record after settling (default: the best grasp)."""
     from sim_eval.plan_input import plan_input
 
@@ -70,7 +83,10 @@ def render_plan(record: dict, settings: SimSettings | None = None, decomposition
     parts = decompose(plan.mesh, decomposition)
     com, inertia = object_inertia(plan.mesh, settings.object_mass)
     mu = settings.mu if settings.mu is not None else plan.contacts.mu
-    radius = settings.tip_radius or settings.tip_radius_ratio * float(np.linalg.norm(np.ptp(plan.mesh.vertices, axis=0)))
-    scene = build_scene(parts.parts, com, inertia, plan.contacts.positions[idx], plan.contacts.normals[idx],
-                        settings, mu, radius)
+    radius = settings.tip_radius or settings.tip_radius_ratio * float(
+        np.linalg.norm(np.ptp(plan.mesh.vertices, axis=0))
+    )
+    scene = build_scene(
+        parts.parts, com, inertia, plan.contacts.positions[idx], plan.contacts.normals[idx], settings, mu, radius
+    )
     return render_grasp(scene, settle(scene, settings), width, height)

@@ -92,26 +92,28 @@ class GraspSimResult:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready form."""
-        return _json({
-            "grasp": list(self.grasp),
-            "label": self.label,
-            "q1": self.q1,
-            "valid": self.valid,
-            "error": self.error,
-            "gates": self.gates,
-            "normal_forces": self.normal_forces,
-            "surface_distance": self.surface_distance,
-            "directions": self.direction_labels,
-            "direction_vectors": self.directions,
-            "predicted": self.predicted,
-            "measured": self.measured,
-            "censored": self.censored,
-            "fidelity": self.fidelity,
-            "predicted_min": self.predicted_min,
-            "measured_min": self.measured_min,
-            "median_fidelity": self.median_fidelity,
-            "hold_tests": self.hold_tests,
-        })
+        return _json(
+            {
+                "grasp": list(self.grasp),
+                "label": self.label,
+                "q1": self.q1,
+                "valid": self.valid,
+                "error": self.error,
+                "gates": self.gates,
+                "normal_forces": self.normal_forces,
+                "surface_distance": self.surface_distance,
+                "directions": self.direction_labels,
+                "direction_vectors": self.directions,
+                "predicted": self.predicted,
+                "measured": self.measured,
+                "censored": self.censored,
+                "fidelity": self.fidelity,
+                "predicted_min": self.predicted_min,
+                "measured_min": self.measured_min,
+                "median_fidelity": self.median_fidelity,
+                "hold_tests": self.hold_tests,
+            }
+        )
 
 
 @dataclass(frozen=True, eq=False)
@@ -138,14 +140,16 @@ class SimResult:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON form, schema ``ogcp.sim/1``."""
-        return _json({
-            "schema": SIM_SCHEMA,
-            "object": self.object,
-            "grasps": [g.to_dict() for g in self.grasps],
-            "set_metrics": self.set_metrics,
-            "median_fidelity": self.set_metrics.get("median_fidelity"),
-            "settings": self.settings,
-            "decomposition": self.decomposition,
-            "wall_seconds": self.wall_seconds,
-            "provenance": self.provenance,
-        })
+        return _json(
+            {
+                "schema": SIM_SCHEMA,
+                "object": self.object,
+                "grasps": [g.to_dict() for g in self.grasps],
+                "set_metrics": self.set_metrics,
+                "median_fidelity": self.set_metrics.get("median_fidelity"),
+                "settings": self.settings,
+                "decomposition": self.decomposition,
+                "wall_seconds": self.wall_seconds,
+                "provenance": self.provenance,
+            }
+        )

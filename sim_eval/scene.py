@@ -25,8 +25,7 @@ _INTEGRATORS = {
     "rk4": mujoco.mjtIntegrator.mjINT_RK4,
 }
 _CONES = {"elliptic": mujoco.mjtCone.mjCONE_ELLIPTIC, "pyramidal": mujoco.mjtCone.mjCONE_PYRAMIDAL}
-_SOLVERS = {"Newton": mujoco.mjtSolver.mjSOL_NEWTON, "CG": mujoco.mjtSolver.mjSOL_CG,
-            "PGS": mujoco.mjtSolver.mjSOL_PGS}
+_SOLVERS = {"Newton": mujoco.mjtSolver.mjSOL_NEWTON, "CG": mujoco.mjtSolver.mjSOL_CG, "PGS": mujoco.mjtSolver.mjSOL_PGS}
 GRAVITY = 9.81
 
 
@@ -74,9 +73,15 @@ def _options(spec: mujoco.MjSpec, settings: SimSettings, gravity: bool) -> None:
     opt.gravity = [0.0, 0.0, -GRAVITY if gravity else 0.0]
 
 
-def _add_object(spec: mujoco.MjSpec, parts: Sequence[tuple[NDArray[np.float64], NDArray[np.int64]]],
-                com: NDArray[np.float64], inertia: NDArray[np.float64], mass: float,
-                settings: SimSettings, mu: float) -> None:
+def _add_object(
+    spec: mujoco.MjSpec,
+    parts: Sequence[tuple[NDArray[np.float64], NDArray[np.int64]]],
+    com: NDArray[np.float64],
+    inertia: NDArray[np.float64],
+    mass: float,
+    settings: SimSettings,
+    mu: float,
+) -> None:
     body = spec.worldbody.add_body(name="object")
     body.add_freejoint(name="object_free")
     # Mass and inertia come from the watertight mesh: the parts overlap, so summing them would double-count.
@@ -86,30 +91,63 @@ def _add_object(spec: mujoco.MjSpec, parts: Sequence[tuple[NDArray[np.float64], 
     i = np.asarray(inertia, dtype=float)
     body.fullinertia = [i[0, 0], i[1, 1], i[2, 2], i[0, 1], i[0, 2], i[1, 2]]
     for k, (vertices, faces) in enumerate(parts):
-        spec.add_mesh(name=f"part{k}", uservert=np.asarray(vertices, dtype=float).ravel().tolist(),
-                      userface=np.asarray(faces, dtype=np.int64).ravel().tolist())
-        body.add_geom(name=f"part{k}", type=mujoco.mjtGeom.mjGEOM_MESH, meshname=f"part{k}",
-                      contype=1, conaffinity=0, condim=3, friction=[mu, 0.0, 0.0], density=0.0,
-                      solref=list(settings.contact_solref), solimp=[*settings.contact_solimp, 0.5, 2.0],
-                      rgba=[0.75, 0.72, 0.65, 1.0])
+        spec.add_mesh(
+            name=f"part{k}",
+            uservert=np.asarray(vertices, dtype=float).ravel().tolist(),
+            userface=np.asarray(faces, dtype=np.int64).ravel().tolist(),
+        )
+        body.add_geom(
+            name=f"part{k}",
+            type=mujoco.mjtGeom.mjGEOM_MESH,
+            meshname=f"part{k}",
+            contype=1,
+            conaffinity=0,
+            condim=3,
+            friction=[mu, 0.0, 0.0],
+            density=0.0,
+            solref=list(settings.contact_solref),
+            solimp=[*settings.contact_solimp, 0.5, 2.0],
+            rgba=[0.75, 0.72, 0.65, 1.0],
+        )
 
 
-def _add_tip(spec: mujoco.MjSpec, i: int, centre: NDArray[np.float64], axes: NDArray[np.float64],
-             radius: float, settings: SimSettings, mu: float) -> None:
+def _add_tip(
+    spec: mujoco.MjSpec,
+    i: int,
+    centre: NDArray[np.float64],
+    axes: NDArray[np.float64],
+    radius: float,
+    settings: SimSettings,
+    mu: float,
+) -> None:
     body = spec.worldbody.add_body(name=f"tip{i}", pos=centre.tolist())
     for name, axis in zip(("n", "a", "b"), axes, strict=True):
-        body.add_joint(name=f"tip{i}_{name}", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=axis.tolist(),
-                       armature=settings.slide_armature)
-    body.add_geom(name=f"tip{i}", type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[radius, 0.0, 0.0], mass=settings.tip_mass,
-                  contype=0, conaffinity=1, condim=3, friction=[mu, 0.0, 0.0],
-                  solref=list(settings.contact_solref), solimp=[*settings.contact_solimp, 0.5, 2.0],
-                  rgba=[0.2, 0.45, 0.8, 1.0])
+        body.add_joint(
+            name=f"tip{i}_{name}",
+            type=mujoco.mjtJoint.mjJNT_SLIDE,
+            axis=axis.tolist(),
+            armature=settings.slide_armature,
+        )
+    body.add_geom(
+        name=f"tip{i}",
+        type=mujoco.mjtGeom.mjGEOM_SPHERE,
+        size=[radius, 0.0, 0.0],
+        mass=settings.tip_mass,
+        contype=0,
+        conaffinity=1,
+        condim=3,
+        friction=[mu, 0.0, 0.0],
+        solref=list(settings.contact_solref),
+        solimp=[*settings.contact_solimp, 0.5, 2.0],
+        rgba=[0.2, 0.45, 0.8, 1.0],
+    )
     armature_mass = settings.tip_mass + settings.slide_armature
-    for name, stiffness, limit in (("n", settings.servo_stiffness, settings.max_normal_force),
-                                   ("a", settings.tangential_stiffness, None),
-                                   ("b", settings.tangential_stiffness, None)):
-        act = spec.add_actuator(name=f"tip{i}_{name}", target=f"tip{i}_{name}",
-                                trntype=mujoco.mjtTrn.mjTRN_JOINT)
+    for name, stiffness, limit in (
+        ("n", settings.servo_stiffness, settings.max_normal_force),
+        ("a", settings.tangential_stiffness, None),
+        ("b", settings.tangential_stiffness, None),
+    ):
+        act = spec.add_actuator(name=f"tip{i}_{name}", target=f"tip{i}_{name}", trntype=mujoco.mjtTrn.mjTRN_JOINT)
         # Critical damping of the slide's mass keeps the servos from ringing under a ramp.
         act.set_to_position(kp=stiffness, kv=2.0 * np.sqrt(stiffness * armature_mass))
         if limit is not None:
@@ -157,13 +195,26 @@ def build_scene(
     model = spec.compile()
     object_body = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "object")
     joint = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, "object_free")
-    object_geoms = np.array([mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, f"part{k}")
-                             for k in range(len(parts))], dtype=np.intp)
-    tip_geoms = np.array([mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, f"tip{i}")
-                          for i in range(len(positions))], dtype=np.intp)
-    normal_acts = np.array([mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_ACTUATOR, f"tip{i}_n")
-                            for i in range(len(positions))], dtype=np.intp)
+    object_geoms = np.array(
+        [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, f"part{k}") for k in range(len(parts))], dtype=np.intp
+    )
+    tip_geoms = np.array(
+        [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, f"tip{i}") for i in range(len(positions))], dtype=np.intp
+    )
+    normal_acts = np.array(
+        [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_ACTUATOR, f"tip{i}_n") for i in range(len(positions))],
+        dtype=np.intp,
+    )
     ctrl = np.zeros(model.nu)
     ctrl[normal_acts] = settings.target_factor * settings.servo_compliance
-    return GraspScene(model, object_body, int(model.jnt_qposadr[joint]), object_geoms, tip_geoms, normal_acts,
-                      ctrl, float(tip_radius), float(mu))
+    return GraspScene(
+        model,
+        object_body,
+        int(model.jnt_qposadr[joint]),
+        object_geoms,
+        tip_geoms,
+        normal_acts,
+        ctrl,
+        float(tip_radius),
+        float(mu),
+    )

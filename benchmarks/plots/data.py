@@ -169,8 +169,14 @@ def problem_names(problems: Iterable[Problem]) -> dict[Problem, str]:
     """Short names: ``box``, or ``box |C|=100 m=4`` where one object has several problems."""
     unique = list(dict.fromkeys(problems))
     names = {}
-    short = {"contacts": "|C|={}", "contact_seed": "seed {}", "m": "m={}", "mu": "mu={}", "cone_edges": "k={}",
-             "diagonal": "d={}"}
+    short = {
+        "contacts": "|C|={}",
+        "contact_seed": "seed {}",
+        "m": "m={}",
+        "mu": "mu={}",
+        "cone_edges": "k={}",
+        "diagonal": "d={}",
+    }
     for problem in unique:
         siblings = [p for p in unique if p[0] == problem[0]]
         parts = [str(problem[0])]
@@ -207,8 +213,9 @@ def load_run(directory: str | Path) -> RunData:
             unusable.append(record["id"])
         else:
             simulation = record.get("simulation")
-            cells.append(CellData(record["id"], params, plan, simulation if isinstance(simulation, dict) else None,
-                                  record))
+            cells.append(
+                CellData(record["id"], params, plan, simulation if isinstance(simulation, dict) else None, record)
+            )
     if errors:
         notes.append(f"{len(errors)} cell(s) with status error skipped: {_list(_describe(r) for r in errors)}")
     if unusable:

@@ -89,8 +89,16 @@ def fig4_q1_histograms(run: RunData, notes: list[str] | None = None) -> Figure:
 def _histogram_panel(ax: Axes, es: CellData, others: list[CellData], title: str) -> None:
     edges, counts, hist = _histogram(es)  # type: ignore[misc]
     wastar = _wastar_by_eps(others)
-    ax.bar(edges[:-1], counts, width=np.diff(edges), align="edge", linewidth=0, alpha=0.8,
-           color=method_colour("es", constraint=es.constraint), label="ES: grasps per Q1 bin")
+    ax.bar(
+        edges[:-1],
+        counts,
+        width=np.diff(edges),
+        align="edge",
+        linewidth=0,
+        alpha=0.8,
+        color=method_colour("es", constraint=es.constraint),
+        label="ES: grasps per Q1 bin",
+    )
     positive = counts[counts > 0]
     # The bars keep to the lower part of the panel; the markers above them have the rest.
     if len(positive) and positive.max() / positive.min() > LOG_RATIO:
@@ -99,8 +107,10 @@ def _histogram_panel(ax: Axes, es: CellData, others: list[CellData], title: str)
     elif len(positive):
         ax.set_ylim(0, positive.max() / BAR_SHARE)
     fraction, zero = number(hist.get("force_closure_fraction")), hist.get("zero")
-    summary = [f"FC {100 * fraction:.2f} %" if fraction is not None else None,
-               f"Q1 = 0: {zero:,}" if isinstance(zero, int) else None]
+    summary = [
+        f"FC {100 * fraction:.2f} %" if fraction is not None else None,
+        f"Q1 = 0: {zero:,}" if isinstance(zero, int) else None,
+    ]
     ax.set_title("\n".join([title, ", ".join(s for s in summary if s)]))
     ax.set_xlabel("$Q_1$")
     ax.set_ylabel("grasps")
@@ -115,17 +125,28 @@ def _histogram_panel(ax: Axes, es: CellData, others: list[CellData], title: str)
     optimal = [c for c in others if c.method in ("astar", "dijkstra") and not c.variant.get("symmetry")]
     best = next((c for c in optimal if c.method == "astar" and c.plain), None) or next(iter(optimal), None)
     if best is not None and best.q1 is not None:
-        ax.axvline(best.q1, color=method_colour(best.method, constraint=best.constraint), linewidth=1.3,
-                   label=f"{METHOD_TITLES[best.method]} (optimum)")
+        ax.axvline(
+            best.q1,
+            color=method_colour(best.method, constraint=best.constraint),
+            linewidth=1.3,
+            label=f"{METHOD_TITLES[best.method]} (optimum)",
+        )
     elif es.q1 is not None:
-        ax.axvline(es.q1, color=method_colour("es", constraint=es.constraint), linestyle=":", linewidth=1.3,
-                   label="ES optimum")
+        ax.axvline(
+            es.q1, color=method_colour("es", constraint=es.constraint), linestyle=":", linewidth=1.3, label="ES optimum"
+        )
     hfts = [r.get("q1") for c in others if c.method == "hfts" for r in c.plan.get("runs") or [] if isinstance(r, dict)]
     values = np.array([v for v in (number(x) for x in hfts) if v is not None])
     if len(values):
         colour = method_colour("hfts", constraint=es.constraint)
-        ax.plot([values.min(), values.max()], [0.95, 0.95], transform=across, color=colour, linewidth=1.3,
-                label="HFTS runs: min-max, mean")
+        ax.plot(
+            [values.min(), values.max()],
+            [0.95, 0.95],
+            transform=across,
+            color=colour,
+            linewidth=1.3,
+            label="HFTS runs: min-max, mean",
+        )
         ax.plot(values, np.full(len(values), 0.95), "|", transform=across, color=colour, markersize=5)
         ax.plot([values.mean()], [0.95], "D", transform=across, color=colour, markersize=3)
     step = min(0.08, (0.95 - BAR_SHARE) / max(len(wastar), 1))
@@ -134,8 +155,14 @@ def _histogram_panel(ax: Axes, es: CellData, others: list[CellData], title: str)
         bound = bound if bound is not None else number(cell.plan.get("eps_bound"))
         y, colour = 0.95 - step * (i + 1), method_colour("wastar", cell.eps, cell.constraint)
         ends = [cell.q1, bound if bound is not None else cell.q1]
-        ax.plot(ends, [y, y], transform=across, color=colour, linewidth=1.3,
-                label=f"WA* eps={cell.eps:g}: Q1 (o) to bound (|)")
+        ax.plot(
+            ends,
+            [y, y],
+            transform=across,
+            color=colour,
+            linewidth=1.3,
+            label=f"WA* eps={cell.eps:g}: Q1 (o) to bound (|)",
+        )
         ax.plot(ends[:1], [y], "o", transform=across, color=colour, markersize=3)
         ax.plot(ends[1:], [y], "|", transform=across, color=colour, markersize=6)
 
@@ -143,8 +170,9 @@ def _histogram_panel(ax: Axes, es: CellData, others: list[CellData], title: str)
 def _wastar_by_eps(cells: list[CellData]) -> list[CellData]:
     """One WA* cell per eps (plain variants first), by increasing eps."""
     chosen: dict[float, CellData] = {}
-    for cell in sorted((c for c in cells if c.method == "wastar" and c.q1 is not None and c.eps is not None),
-                       key=lambda c: not c.plain):
+    for cell in sorted(
+        (c for c in cells if c.method == "wastar" and c.q1 is not None and c.eps is not None), key=lambda c: not c.plain
+    ):
         chosen.setdefault(cell.eps, cell)  # type: ignore[arg-type]
     return [chosen[eps] for eps in sorted(chosen)]
 
@@ -183,8 +211,15 @@ def fig6_states_per_level(run: RunData, notes: list[str] | None = None) -> Figur
             for kind, style, marker, fill in (("created", "--", "o", "none"), ("visited", "-", "s", colour)):
                 counts = np.asarray(cell.stats.get(f"{kind}_per_level") or [], dtype=float)
                 label = f"{kind}, {which} symmetry removal" + (f" ({b_text})" if kind == "created" else "")
-                ax.plot(np.arange(len(counts)), counts, linestyle=style, marker=marker, color=colour,
-                        markerfacecolor=fill, label=label)
+                ax.plot(
+                    np.arange(len(counts)),
+                    counts,
+                    linestyle=style,
+                    marker=marker,
+                    color=colour,
+                    markerfacecolor=fill,
+                    label=label,
+                )
         ax.set_yscale("log")
         ax.set_xlabel("search level")
         ax.set_ylabel("states")
@@ -217,8 +252,12 @@ def fig7_iterations_f(run: RunData, notes: list[str] | None = None) -> Figure:
     for problem, cells in run.by_problem().items():
         groups: dict[tuple[Any, ...], list[CellData]] = {}
         for cell in cells:
-            if (cell.method in ("astar", "dijkstra") and not cell.constraint and not cell.variant.get("symmetry")
-                    and _trace(cell) is not None):
+            if (
+                cell.method in ("astar", "dijkstra")
+                and not cell.constraint
+                and not cell.variant.get("symmetry")
+                and _trace(cell) is not None
+            ):
                 key = (cell.method, *(repr(cell.variant.get(k)) for k in VARIANT_KEYS))
                 groups.setdefault(key, []).append(cell)
         if len(groups) >= 2:
@@ -242,7 +281,9 @@ def fig7_iterations_f(run: RunData, notes: list[str] | None = None) -> Figure:
             branching = [number(c.stats.get("effective_branching_factor")) for c in members]
             b = [v for v in branching if v is not None]
             label = Counter(c.label for c in members).most_common(1)[0][0]
-            extra = [f"b*={np.median(b):.2f}" if b else "b*=n/a"] + ([f"{len(members)} runs"] if len(members) > 1 else [])
+            extra = [f"b*={np.median(b):.2f}" if b else "b*=n/a"] + (
+                [f"{len(members)} runs"] if len(members) > 1 else []
+            )
             trace = traces[median]
             ax.plot(trace[:, 0], trace[:, 1], linestyle=style, color=colour, label=f"{label} ({', '.join(extra)})")
             longest = max(longest, *(len(t) for t in traces))  # type: ignore[arg-type]
@@ -273,11 +314,23 @@ def fig8_wastar_tradeoff(run: RunData, notes: list[str] | None = None) -> Figure
             if cell.method == "wastar" and cell.eps is not None and cell.q1 is not None:
                 groups.setdefault((cell.constraint, frozen(cell.variant, ("eps", *NOT_A_SERIES))), []).append(cell)
         for (constraint, key), members in groups.items():
-            members = members + [c for c in cells if c.method == "astar" and c.constraint == constraint
-                                 and frozen(c.variant, NOT_A_SERIES) == key and c.q1 is not None]
+            members = members + [
+                c
+                for c in cells
+                if c.method == "astar"
+                and c.constraint == constraint
+                and frozen(c.variant, NOT_A_SERIES) == key
+                and c.q1 is not None
+            ]
             if len({0.0 if c.method == "astar" else c.eps for c in members}) >= 2:
-                optimal = [c.q1 for c in cells if c.method in OPTIMAL and c.constraint == constraint
-                           and not c.variant.get("symmetry") and c.q1 is not None]
+                optimal = [
+                    c.q1
+                    for c in cells
+                    if c.method in OPTIMAL
+                    and c.constraint == constraint
+                    and not c.variant.get("symmetry")
+                    and c.q1 is not None
+                ]
                 series.append((problem, constraint, key, members, max(optimal) if optimal else None))
     if not series:
         raise SkipFigure("needs WA* cells of one problem at two or more eps (or one eps and the matching A*)")
@@ -301,8 +354,9 @@ def fig8_wastar_tradeoff(run: RunData, notes: list[str] | None = None) -> Figure
         q_ows = number(by_eps[eps[-1]][0].plan.get("q_ows"))
         if q_ows is not None and optimum > 0:
             guarantee = np.clip((q_ows - (1 + eps) * (q_ows - optimum)) / optimum, 0, None)
-            axes[2].plot(eps, guarantee, ":", color=colour, linewidth=0.8,
-                         label="(1+eps) guarantee" if i == 0 else None)
+            axes[2].plot(
+                eps, guarantee, ":", color=colour, linewidth=0.8, label="(1+eps) guarantee" if i == 0 else None
+            )
     axes[0].set_ylabel("search time [s]")
     axes[1].set_ylabel("visited states")
     axes[1].set_yscale("log")

@@ -49,8 +49,14 @@ class PlotReport:
     notes: tuple[str, ...]
 
 
-def plot_run(run: str | Path | RunData, out: str | Path, only: Sequence[str] | None = None,
-             formats: Sequence[str] = FORMATS, dpi: int = DEFAULT_DPI, unit: str | None = None) -> PlotReport:
+def plot_run(
+    run: str | Path | RunData,
+    out: str | Path,
+    only: Sequence[str] | None = None,
+    formats: Sequence[str] = FORMATS,
+    dpi: int = DEFAULT_DPI,
+    unit: str | None = None,
+) -> PlotReport:
     """Draw every figure the run has data for and write the time table.
 
     Args:

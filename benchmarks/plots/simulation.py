@@ -78,8 +78,18 @@ def valid_grasps(cell: CellData) -> list[SimGrasp]:
         at_min = bool(len(measured) and np.isfinite(measured).all() and censored[int(np.argmin(measured))])
         indices = g.get("grasp")
         grasp = tuple(sorted(int(i) for i in indices)) if isinstance(indices, list) else (id(g),)
-        out.append(SimGrasp(grasp, number(g.get("q1")), low, at_min, predicted, measured, censored,
-                            fidelity if len(fidelity) == len(measured) else np.full(len(measured), np.nan)))
+        out.append(
+            SimGrasp(
+                grasp,
+                number(g.get("q1")),
+                low,
+                at_min,
+                predicted,
+                measured,
+                censored,
+                fidelity if len(fidelity) == len(measured) else np.full(len(measured), np.nan),
+            )
+        )
     return out
 
 
@@ -135,8 +145,16 @@ def sim_q1_vs_resistance(run: RunData, notes: list[str] | None = None) -> Figure
             ax.scatter(q1[~cut], low[~cut], s=9, color=colour, label=cell.label, linewidths=0)
             if cut.any():
                 lower_bounds = True
-                ax.scatter(q1[cut], low[cut], s=12, marker="^", facecolors="none", edgecolors=colour,
-                           linewidths=0.6, label=None)
+                ax.scatter(
+                    q1[cut],
+                    low[cut],
+                    s=12,
+                    marker="^",
+                    facecolors="none",
+                    edgecolors=colour,
+                    linewidths=0.6,
+                    label=None,
+                )
         xs, ys = [q for q, _ in unique.values()], [low for _, low in unique.values()]
         ax.set_title(f"{names[problem]}\n{_rank_correlations(xs, ys)}")
         ax.set_xlabel("$Q_1$")
@@ -149,8 +167,16 @@ def sim_q1_vs_resistance(run: RunData, notes: list[str] | None = None) -> Figure
 
 
 def _censored_entry(ax: Axes) -> None:
-    ax.scatter([], [], s=12, marker="^", facecolors="none", edgecolors="#555555", linewidths=0.6,
-               label="held to the end (lower bound)")
+    ax.scatter(
+        [],
+        [],
+        s=12,
+        marker="^",
+        facecolors="none",
+        edgecolors="#555555",
+        linewidths=0.6,
+        label="held to the end (lower bound)",
+    )
 
 
 @styled
@@ -173,8 +199,16 @@ def sim_fidelity(run: RunData, notes: list[str] | None = None) -> Figure:
             ax.scatter(predicted[held], measured[held], s=6, color=colour, alpha=0.6, linewidths=0, label=cell.label)
             if (keep & censored).any():
                 lower_bounds = True
-                ax.scatter(predicted[keep & censored], measured[keep & censored], s=10, marker="^",
-                           facecolors="none", edgecolors=colour, linewidths=0.5, label=None)
+                ax.scatter(
+                    predicted[keep & censored],
+                    measured[keep & censored],
+                    s=10,
+                    marker="^",
+                    facecolors="none",
+                    edgecolors=colour,
+                    linewidths=0.5,
+                    label=None,
+                )
             values += list(predicted[keep]) + list(measured[keep])
         positive = np.array([v for v in values if v > 0])
         # Log axes drop the few directions predicted to resist nothing; worth it when the rest span decades.

@@ -67,11 +67,26 @@ METHOD_COLOURS: dict[str, str] = {
     "hfts": "#E69F00",
 }
 METHOD_TITLES: dict[str, str] = {
-    "astar": "A*", "wastar": "WA*", "dijkstra": "Dijkstra", "es": "ES", "es-pruned": "ES (pruned)", "hfts": "HFTS",
+    "astar": "A*",
+    "wastar": "WA*",
+    "dijkstra": "Dijkstra",
+    "es": "ES",
+    "es-pruned": "ES (pruned)",
+    "hfts": "HFTS",
 }
 #: Qualitative colours for series that are not methods (objects, successor variants).
-SERIES_COLOURS = ("#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "#000000", "#F0E442",
-                  "#7F7F7F", "#8C510A")
+SERIES_COLOURS = (
+    "#0072B2",
+    "#D55E00",
+    "#009E73",
+    "#CC79A7",
+    "#E69F00",
+    "#56B4E9",
+    "#000000",
+    "#F0E442",
+    "#7F7F7F",
+    "#8C510A",
+)
 #: Largest eps of the WA* shading: eps above it get the darkest shade.
 EPS_SHADE_MAX = 1.5
 
@@ -146,8 +161,9 @@ def styled(function: Callable[P, R]) -> Callable[P, R]:
     return wrapper
 
 
-def new_figure(panels: int, width: float | None = None, panel_height: float = 1.9,
-               max_columns: int = 3, polar: bool = False) -> tuple[Figure, list[Axes]]:
+def new_figure(
+    panels: int, width: float | None = None, panel_height: float = 1.9, max_columns: int = 3, polar: bool = False
+) -> tuple[Figure, list[Axes]]:
     """A figure with ``panels`` axes in a grid at a paper column width.
 
     Args:
@@ -166,8 +182,7 @@ def new_figure(panels: int, width: float | None = None, panel_height: float = 1.
     rows = math.ceil(panels / columns)
     width = width or (SINGLE_COLUMN if panels == 1 else DOUBLE_COLUMN)
     figure = Figure(figsize=(width, panel_height * rows), layout="constrained")
-    grid = figure.subplots(rows, columns, squeeze=False,
-                           subplot_kw={"projection": "polar"} if polar else None)
+    grid = figure.subplots(rows, columns, squeeze=False, subplot_kw={"projection": "polar"} if polar else None)
     axes = [ax for row in grid for ax in row]
     for ax in axes[panels:]:
         ax.remove()
@@ -201,8 +216,9 @@ def legend_columns(figure: Figure, labels: Sequence[str], most: int) -> int:
     return max(1, min(most, len(labels), fit))
 
 
-def save_figure(figure: Figure, out: str | Path, name: str, formats: Sequence[str] = FORMATS,
-                dpi: int = DEFAULT_DPI) -> list[Path]:
+def save_figure(
+    figure: Figure, out: str | Path, name: str, formats: Sequence[str] = FORMATS, dpi: int = DEFAULT_DPI
+) -> list[Path]:
     """Write ``figure`` as ``out/name.<format>`` for each format.
 
     Raises:

@@ -22,8 +22,18 @@ from .style import METHOD_TITLES
 
 COLUMN_ORDER = ("astar", "wastar", "dijkstra", "es", "es-pruned", "hfts")
 MINUTES_FROM = 600.0
-LATEX_SPECIAL = {"\\": r"\textbackslash{}", "&": r"\&", "%": r"\%", "$": r"\$", "#": r"\#", "_": r"\_",
-                 "{": r"\{", "}": r"\}", "~": r"\textasciitilde{}", "^": r"\textasciicircum{}"}
+LATEX_SPECIAL = {
+    "\\": r"\textbackslash{}",
+    "&": r"\&",
+    "%": r"\%",
+    "$": r"\$",
+    "#": r"\#",
+    "_": r"\_",
+    "{": r"\{",
+    "}": r"\}",
+    "~": r"\textasciitilde{}",
+    "^": r"\textasciicircum{}",
+}
 
 
 @dataclass(frozen=True)
@@ -67,8 +77,12 @@ class TimeTable:
     def latex(self) -> str:
         """A booktabs ``tabular`` (needs ``\\usepackage{booktabs}``)."""
         header = [f"Object (CPU {self.unit})", *(_latex_title(c) for c in self.columns)]
-        lines = [r"\begin{tabular}{l" + "r" * len(self.columns) + "}", r"\toprule",
-                 " & ".join(header) + r" \\", r"\midrule"]
+        lines = [
+            r"\begin{tabular}{l" + "r" * len(self.columns) + "}",
+            r"\toprule",
+            " & ".join(header) + r" \\",
+            r"\midrule",
+        ]
         for name, row in zip(self.rows, self.values):
             lines.append(" & ".join([_latex_escape(name), *(self._text(v, "--") for v in row)]) + r" \\")
         lines += [r"\bottomrule", r"\end{tabular}"]
@@ -144,6 +158,5 @@ def time_table(run: RunData, unit: str | None = None) -> TimeTable:
     if unit is None:
         unit = "min" if max(median.values()) >= MINUTES_FROM else "s"
     scale = 60.0 if unit == "min" else 1.0
-    values = tuple(tuple(None if (row, c) not in median else median[(row, c)] / scale for c in columns)
-                   for row in rows)
+    values = tuple(tuple(None if (row, c) not in median else median[(row, c)] / scale for c in columns) for row in rows)
     return TimeTable(rows, tuple(c[2] for c in columns), values, unit)

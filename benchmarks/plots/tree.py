@@ -135,15 +135,33 @@ def _draw_tree(ax: Axes, cell: CellData, tree: TreeLayout, name: str) -> None:
 
     radius = tree.level + 1.0  # the root sits on a ring, not on the pole, so its sector shows
     visited = tree.visited
-    ax.bar(tree.angle[visited], 0.9, width=tree.width[visited] * 0.96, bottom=radius[visited] - 0.45,
-           color=VISITED_COLOUR, edgecolor="white", linewidth=0.2, label=f"visited ({int(visited.sum())})")
+    ax.bar(
+        tree.angle[visited],
+        0.9,
+        width=tree.width[visited] * 0.96,
+        bottom=radius[visited] - 0.45,
+        color=VISITED_COLOUR,
+        edgecolor="white",
+        linewidth=0.2,
+        label=f"visited ({int(visited.sum())})",
+    )
     stems = [[(a, r - 0.45), (a, r + 0.35)] for a, r in zip(tree.angle[~visited], radius[~visited])]
-    ax.add_collection(LineCollection(stems, colors=STEM_COLOUR, linewidths=0.4,
-                                     label=f"created, not visited ({int((~visited).sum())})"))
+    ax.add_collection(
+        LineCollection(
+            stems, colors=STEM_COLOUR, linewidths=0.4, label=f"created, not visited ({int((~visited).sum())})"
+        )
+    )
     if tree.path:
         index = list(tree.path)
-        ax.plot(tree.angle[index], radius[index], color=PATH_COLOUR, linewidth=2.0, marker="o", markersize=2.5,
-                label="solution path")
+        ax.plot(
+            tree.angle[index],
+            radius[index],
+            color=PATH_COLOUR,
+            linewidth=2.0,
+            marker="o",
+            markersize=2.5,
+            label="solution path",
+        )
     top = int(tree.level.max()) + 2
     ax.set_ylim(0, top)
     ax.set_yticks(np.arange(1, top), labels=[])

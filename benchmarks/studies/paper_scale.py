@@ -76,10 +76,24 @@ def main(argv: list[str] | None = None) -> int:
         else:
             r = GraspPlanner(method=method, eps=eps if method == "wastar" else None, seed=args.seed).plan(contacts, m)
             s = r.stats
-            row = {"created": s.created, "visited": s.visited, "b_star": round(s.effective_branching_factor, 3),
-                   "wall_s": s.wall_seconds, "cpu_s": s.cpu_seconds}
-        row.update({"object": name, "n": args.n, "m": m, "method": method, "eps": eps, "q1": r.q1,
-                    "grasp": " ".join(map(str, r.grasp))})
+            row = {
+                "created": s.created,
+                "visited": s.visited,
+                "b_star": round(s.effective_branching_factor, 3),
+                "wall_s": s.wall_seconds,
+                "cpu_s": s.cpu_seconds,
+            }
+        row.update(
+            {
+                "object": name,
+                "n": args.n,
+                "m": m,
+                "method": method,
+                "eps": eps,
+                "q1": r.q1,
+                "grasp": " ".join(map(str, r.grasp)),
+            }
+        )
         _append(log, row)
     write_tables(_read_rows(log), args.out, args.n)
     print((args.out / "table.md").read_text())
@@ -97,8 +111,12 @@ def write_tables(rows: list[dict[str, str]], out: Path, n: int) -> None:
         name = {"astar": "A*", "wastar": f"WA* ({eps:g})", "es": "ES"}[method]
         return name if m == 3 else f"{name}, m = {m}"
 
-    lines = [f"CPU minutes, |C| = {n} (created/visited states, b*; A* = ES marks an optimum equal to ES)", "",
-             "| method | " + " | ".join(objects) + " |", "|---" * (len(objects) + 1) + "|"]
+    lines = [
+        f"CPU minutes, |C| = {n} (created/visited states, b*; A* = ES marks an optimum equal to ES)",
+        "",
+        "| method | " + " | ".join(objects) + " |",
+        "|---" * (len(objects) + 1) + "|",
+    ]
     with open(out / "table.csv", "w", newline="") as handle:
         writer = csv.writer(handle)
         writer.writerow(["method", *objects])

@@ -47,8 +47,12 @@ def main() -> None:
     parser.add_argument("--grasps", type=int, default=300)
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--objects", default="box,sphere,donut,amphora")
-    parser.add_argument("--es-chunks", type=int, default=0,
-                        help="also time this many ES chunks spread over all C(1000, 3) grasps, per object")
+    parser.add_argument(
+        "--es-chunks",
+        type=int,
+        default=0,
+        help="also time this many ES chunks spread over all C(1000, 3) grasps, per object",
+    )
     parser.add_argument("--es-chunk-size", type=int, default=20_000)
     args = parser.parse_args()
     if args.es_chunks:
@@ -96,8 +100,10 @@ def batch_throughput(name: str, contacts: ContactSet, small: list[np.ndarray], c
     es_path = median_seconds(lambda _: [exact_q1_batch(wrenches, grasps, table) for _ in range(inner)], [None], repeats)
     es_path /= inner * count
     ref = median_seconds(scipy_q1, small, repeats)
-    return (f"| {name} | {np.mean(values > 0):.0%} | {int(np.sum(status == FALLBACK))} | {es_path * 1e6:.1f} us | "
-            f"{ref * 1e6:.0f} us | {ref / es_path:.0f}x |")
+    return (
+        f"| {name} | {np.mean(values > 0):.0%} | {int(np.sum(status == FALLBACK))} | {es_path * 1e6:.1f} us | "
+        f"{ref * 1e6:.0f} us | {ref / es_path:.0f}x |"
+    )
 
 
 def es_extrapolation(name: str, chunks: int, size: int) -> str:
@@ -113,8 +119,10 @@ def es_extrapolation(name: str, chunks: int, size: int) -> str:
         cpu += result.cpu_seconds
         evaluated += result.evaluated
     per = cpu / evaluated
-    return (f"| {name} | {chunks} x {size} | {int(evaluated)} | {cpu:.1f} | {per * 1e6:.2f} | "
-            f"{per * total / 60:.1f} min | {per * total / 120:.1f} min |")
+    return (
+        f"| {name} | {chunks} x {size} | {int(evaluated)} | {cpu:.1f} | {per * 1e6:.2f} | "
+        f"{per * total / 60:.1f} min | {per * total / 120:.1f} min |"
+    )
 
 
 if __name__ == "__main__":

@@ -14,17 +14,17 @@ import traceback
 from functools import lru_cache
 from typing import Any
 
-from planner.records.plan import contact_set_record, hand_record
-from benchmarks.suite.store import jsonable
 from benchmarks.suite.config import Cell
 from benchmarks.suite.params import EXHAUSTIVE_METHODS, SEARCH_METHODS
+from benchmarks.suite.store import jsonable
 from planner.baselines.es import DEFAULT_BINS, ExhaustiveSearch
 from planner.baselines.hfts import HFTS
 from planner.grasp.constraints import Constraint, MaxFingerSpread
 from planner.grasp.contact_set import ContactSet, sample_contacts
-from planner.infra.errors import OgcpError
 from planner.hands.reachability import SDHReachability
+from planner.infra.errors import OgcpError
 from planner.objects import resolve_object
+from planner.records.plan import contact_set_record, hand_record
 from planner.search.grasp_planner import GraspPlanner
 
 CELL_SCHEMA = "ogcp.cell/1"
@@ -48,8 +48,15 @@ def run_cell(cell: Cell, simulation: dict[str, Any] | None = None, time_limit: f
     """
     wall0, cpu0 = time.perf_counter(), time.process_time()
     record: dict[str, Any] = {
-        "schema": CELL_SCHEMA, "id": cell.id, "params": cell.params(), "groups": list(cell.groups),
-        "status": "ok", "error": None, "plan": None, "simulation": None, "simulation_seconds": None,
+        "schema": CELL_SCHEMA,
+        "id": cell.id,
+        "params": cell.params(),
+        "groups": list(cell.groups),
+        "status": "ok",
+        "error": None,
+        "plan": None,
+        "simulation": None,
+        "simulation_seconds": None,
     }
     try:
         record["plan"] = plan_record(cell, contact_set(cell), time_limit)
@@ -61,8 +68,11 @@ def run_cell(cell: Cell, simulation: dict[str, Any] | None = None, time_limit: f
         lines = traceback.format_exc().rstrip().splitlines()
         message = (str(exc).strip().splitlines() or [""])[0]
         record["status"] = "error"
-        record["error"] = {"type": type(exc).__name__, "message": message,
-                           "traceback": "\n".join(lines[-TRACEBACK_LINES:])}
+        record["error"] = {
+            "type": type(exc).__name__,
+            "message": message,
+            "traceback": "\n".join(lines[-TRACEBACK_LINES:]),
+        }
     record["wall_seconds"] = time.perf_counter() - wall0
     record["cpu_seconds"] = time.process_time() - cpu0
     record["finished_at"] = datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")
@@ -71,8 +81,9 @@ def run_cell(cell: Cell, simulation: dict[str, Any] | None = None, time_limit: f
 
 def contact_set(cell: Cell) -> ContactSet:
     """The cell's contact set (cached per process)."""
-    return _contacts(cell.object.path or cell.object.spec, cell.diagonal, cell.contacts, cell.contact_seed,
-                     cell.mu, cell.cone_edges)
+    return _contacts(
+        cell.object.path or cell.object.spec, cell.diagonal, cell.contacts, cell.contact_seed, cell.mu, cell.cone_edges
+    )
 
 
 @lru_cache(maxsize=8)
@@ -108,26 +119,54 @@ def plan_record(cell: Cell, contacts: ContactSet, time_limit: float | None = Non
     if cell.method in SEARCH_METHODS:
         record = _search(cell, params, constraints, contacts, described, time_limit)
     elif cell.method in EXHAUSTIVE_METHODS:
-        search = ExhaustiveSearch(pruned=cell.method == "es-pruned", chunk=params["chunk"],
-                                  bins=params.get("bins", DEFAULT_BINS), constraints=constraints)
+        search = ExhaustiveSearch(
+            pruned=cell.method == "es-pruned",
+            chunk=params["chunk"],
+            bins=params.get("bins", DEFAULT_BINS),
+            constraints=constraints,
+        )
         record = search.run(contacts, cell.m).to_dict(described)
     else:
-        search = HFTS(runs=params["runs"], seed=params["seed"], iterations=params["iterations"],
-                      position_weight=params["position_weight"], hand=hand)
+        search = HFTS(
+            runs=params["runs"],
+            seed=params["seed"],
+            iterations=params["iterations"],
+            position_weight=params["position_weight"],
+            hand=hand,
+        )
         record = search.run(contacts, cell.m).to_dict(described)
     if hand is not None:
         record["hand"] = hand_record(hand, record["grasp"], contacts)
     return record
 
 
-def _search(cell: Cell, params: dict[str, Any], constraints: list[Constraint], contacts: ContactSet,
-            described: dict[str, Any], time_limit: float | None) -> dict[str, Any]:
-    options = {key: params[key] for key in ("branching", "successor", "heuristic", "heuristic_branching",
-                                            "symmetry", "ordered", "seed", "kmeans_iterations", "position_weight")}
+def _search(
+    cell: Cell,
+    params: dict[str, Any],
+    constraints: list[Constraint],
+    contacts: ContactSet,
+    described: dict[str, Any],
+    time_limit: float | None,
+) -> dict[str, Any]:
+    options = {
+        key: params[key]
+        for key in (
+            "branching",
+            "successor",
+            "heuristic",
+            "heuristic_branching",
+            "symmetry",
+            "ordered",
+            "seed",
+            "kmeans_iterations",
+            "position_weight",
+        )
+    }
     if cell.method == "wastar":
         options["eps"] = params["eps"]
-    result = GraspPlanner(method=cell.method, constraints=constraints, record_tree=params["record_tree"],
-                          time_limit=time_limit, **options).plan(contacts, cell.m)
+    result = GraspPlanner(
+        method=cell.method, constraints=constraints, record_tree=params["record_tree"], time_limit=time_limit, **options
+    ).plan(contacts, cell.m)
     return result.to_dict(described)
 
 
@@ -145,8 +184,10 @@ def simulate(plan: dict[str, Any], settings: dict[str, Any]) -> dict[str, Any]:
     try:
         from sim_eval import evaluate_plan  # lazy: MuJoCo loads only when a suite simulates
     except ImportError as exc:
-        raise OgcpError(f"simulation is enabled but sim_eval.evaluate_plan is not available ({exc}); "
-                        "set [simulation] enabled = false or pass --no-simulation") from exc
+        raise OgcpError(
+            f"simulation is enabled but sim_eval.evaluate_plan is not available ({exc}); "
+            "set [simulation] enabled = false or pass --no-simulation"
+        ) from exc
     options = dict(settings)
     extra = {key: options.pop(key) for key in SIMULATION_ARGUMENTS if key in options}
     result = evaluate_plan(plan, options, **extra)

@@ -19,17 +19,27 @@ import tomllib
 from pathlib import Path
 from typing import Any
 
-from planner.objects.fetchable import FETCHABLE_OBJECTS
+from benchmarks.suite.params import METHOD_PARAMS, Param, complete, default_label, seed_values, values_of
 from planner.grasp.contact_set import DEFAULT_CONE_EDGES, DEFAULT_MU
 from planner.infra.errors import OgcpError, choice_error
 from planner.objects import BUILTIN_OBJECTS, DEFAULT_DIAGONAL, MESH_SUFFIXES, file_sha256
-
-from benchmarks.suite.params import METHOD_PARAMS, Param, complete, default_label, seed_values, values_of
+from planner.objects.fetchable import FETCHABLE_OBJECTS
 
 SCHEMA_VERSION = 1
 SUITES_DIR = Path(__file__).resolve().parents[1] / "suites"
-GROUP_KEYS = ("contact_seeds", "contacts", "cone_edges", "description", "diagonal", "methods", "m", "mu",
-              "name", "objects", "simulate")
+GROUP_KEYS = (
+    "contact_seeds",
+    "contacts",
+    "cone_edges",
+    "description",
+    "diagonal",
+    "methods",
+    "m",
+    "mu",
+    "name",
+    "objects",
+    "simulate",
+)
 TOP_KEYS = (*GROUP_KEYS, "group", "schema_version", "simulation")
 #: Version of the canonical cell form; part of every id so a change of form never matches old ids.
 CELL_FORM = 1
@@ -91,9 +101,16 @@ class Cell:
     def canonical(self) -> dict[str, Any]:
         """The parameters that define the cell's result (hashed into the id)."""
         return {
-            "form": CELL_FORM, "object": self.object.key, "contacts": self.contacts, "contact_seed": self.contact_seed,
-            "m": self.m, "mu": self.mu, "cone_edges": self.cone_edges, "diagonal": self.diagonal,
-            "method": self.method, "variant": dict(self.variant),
+            "form": CELL_FORM,
+            "object": self.object.key,
+            "contacts": self.contacts,
+            "contact_seed": self.contact_seed,
+            "m": self.m,
+            "mu": self.mu,
+            "cone_edges": self.cone_edges,
+            "diagonal": self.diagonal,
+            "method": self.method,
+            "variant": dict(self.variant),
         }
 
     @property
@@ -105,9 +122,16 @@ class Cell:
     def params(self) -> dict[str, Any]:
         """The ``params`` block of the cell's result record."""
         return {
-            "object": self.object.spec, "contacts": self.contacts, "contact_seed": self.contact_seed, "m": self.m,
-            "mu": self.mu, "cone_edges": self.cone_edges, "diagonal": self.diagonal, "method": self.method,
-            "variant": dict(self.variant), "label": self.label,
+            "object": self.object.spec,
+            "contacts": self.contacts,
+            "contact_seed": self.contact_seed,
+            "m": self.m,
+            "mu": self.mu,
+            "cone_edges": self.cone_edges,
+            "diagonal": self.diagonal,
+            "method": self.method,
+            "variant": dict(self.variant),
+            "label": self.label,
         }
 
 
@@ -252,17 +276,33 @@ class _Parser:
         edges = Param("int", 8, minimum=3).check(f"{where}.cone_edges", table.get("cone_edges", DEFAULT_CONE_EDGES))
         simulate = Param("bool", True).check(f"{where}.simulate", table.get("simulate", True))
         diagonal = Param("float", DEFAULT_DIAGONAL, minimum=0, exclusive=True).check(
-            f"{where}.diagonal", table.get("diagonal", DEFAULT_DIAGONAL))
+            f"{where}.diagonal", table.get("diagonal", DEFAULT_DIAGONAL)
+        )
         variants = self.methods(f"{where}.methods", table["methods"])
         if max(ms) > min(contacts):
             raise OgcpError(f"{where}.m: m = {max(ms)} exceeds the contact count {min(contacts)}")
         cells = []
-        for obj, n, seed, m, (method, params, label, vwhere) in itertools.product(objects, contacts, seeds, ms,
-                                                                                   variants):
+        for obj, n, seed, m, (method, params, label, vwhere) in itertools.product(
+            objects, contacts, seeds, ms, variants
+        ):
             if params.get("hand") is not None and m != 3:
                 raise OgcpError(f"{vwhere}.hand: the {params['hand']} hand has 3 fingers; {where}.m includes {m}")
-            cells.append(Cell(obj, n, seed, m, mu, edges, None if obj.path else diagonal, method,
-                              tuple(sorted(params.items())), label, (group,), simulate))
+            cells.append(
+                Cell(
+                    obj,
+                    n,
+                    seed,
+                    m,
+                    mu,
+                    edges,
+                    None if obj.path else diagonal,
+                    method,
+                    tuple(sorted(params.items())),
+                    label,
+                    (group,),
+                    simulate,
+                )
+            )
         return cells
 
     def objects(self, where: str, value: Any) -> list[ObjectSpec]:
@@ -279,12 +319,14 @@ class _Parser:
                 if not path.is_file():
                     raise OgcpError(f"{where}[{i}]: mesh file not found: {path}")
                 if path.suffix.lower() not in MESH_SUFFIXES:
-                    raise OgcpError(f"{where}[{i}]: unsupported mesh format {path.suffix!r}; "
-                                    f"valid: {', '.join(MESH_SUFFIXES)}")
+                    raise OgcpError(
+                        f"{where}[{i}]: unsupported mesh format {path.suffix!r}; valid: {', '.join(MESH_SUFFIXES)}"
+                    )
                 specs.append(ObjectSpec(spec, str(path), file_sha256(path)))
             elif spec not in BUILTIN_OBJECTS and spec not in FETCHABLE_OBJECTS:
-                raise choice_error(f"{where}[{i}] object", spec,
-                                   [*BUILTIN_OBJECTS, *FETCHABLE_OBJECTS, "<path to a mesh file>"])
+                raise choice_error(
+                    f"{where}[{i}] object", spec, [*BUILTIN_OBJECTS, *FETCHABLE_OBJECTS, "<path to a mesh file>"]
+                )
             else:
                 specs.append(ObjectSpec(spec))
         if len({s.key for s in specs}) != len(specs):
@@ -339,8 +381,9 @@ def _check_simulation_settings(table: dict[str, Any]) -> None:
     decomposition = table.get("decomposition", {})
     if not isinstance(decomposition, dict):
         raise OgcpError("simulation.decomposition: expected a [simulation.decomposition] table")
-    _no_unknown_keys("simulation.decomposition", decomposition,
-                     tuple(f.name for f in dataclasses.fields(DecompositionSettings)))
+    _no_unknown_keys(
+        "simulation.decomposition", decomposition, tuple(f.name for f in dataclasses.fields(DecompositionSettings))
+    )
     try:
         SimSettings.from_dict(settings)
         DecompositionSettings(**decomposition)
@@ -356,8 +399,9 @@ def _format_label(where: str, label: str | None, method: str, params: dict[str, 
     try:
         return label.format(**params)
     except (KeyError, IndexError, ValueError) as exc:
-        raise OgcpError(f"{where}.label: cannot fill {label!r} ({exc}); placeholders: "
-                        f"{', '.join('{' + k + '}' for k in params)}") from exc
+        raise OgcpError(
+            f"{where}.label: cannot fill {label!r} ({exc}); placeholders: {', '.join('{' + k + '}' for k in params)}"
+        ) from exc
 
 
 def _merge(cells: dict[str, Cell], cell: Cell) -> None:
@@ -367,8 +411,10 @@ def _merge(cells: dict[str, Cell], cell: Cell) -> None:
         cells[cell.id] = cell
         return
     if known.label != cell.label:
-        raise OgcpError(f"the same run ({cell.object.spec}, n={cell.contacts}, m={cell.m}, {cell.method}) is "
-                        f"labelled both {known.label!r} and {cell.label!r}; give it one label")
+        raise OgcpError(
+            f"the same run ({cell.object.spec}, n={cell.contacts}, m={cell.m}, {cell.method}) is "
+            f"labelled both {known.label!r} and {cell.label!r}; give it one label"
+        )
     groups = known.groups + tuple(g for g in cell.groups if g not in known.groups)
     cells[cell.id] = dataclasses.replace(known, groups=groups, simulate=known.simulate or cell.simulate)
 

@@ -79,8 +79,11 @@ def _search_params(method: str) -> dict[str, Param]:
     params = {
         "branching": Param("int", 2, minimum=2),
         "successor": Param("choice", "fc", choices=SUCCESSORS),
-        "heuristic": Param("choice", "none" if method == "dijkstra" else "fc",
-                           choices=("none",) if method == "dijkstra" else HEURISTICS),
+        "heuristic": Param(
+            "choice",
+            "none" if method == "dijkstra" else "fc",
+            choices=("none",) if method == "dijkstra" else HEURISTICS,
+        ),
         "heuristic_branching": Param("int", None, minimum=2),
         "symmetry": Param("bool", False),
         "ordered": Param("bool", False),
@@ -131,8 +134,14 @@ SEARCH_METHODS = ("astar", "wastar", "dijkstra")
 #: Methods whose answer is the optimum (unless approximate symmetry removal is on).
 OPTIMAL_METHODS = ("astar", "dijkstra", "es", "es-pruned")
 EXHAUSTIVE_METHODS = ("es", "es-pruned")
-TITLES = {"astar": "A*", "wastar": "WA*", "dijkstra": "Dijkstra", "es": "ES", "es-pruned": "ES (pruned)",
-          "hfts": "HFTS"}
+TITLES = {
+    "astar": "A*",
+    "wastar": "WA*",
+    "dijkstra": "Dijkstra",
+    "es": "ES",
+    "es-pruned": "ES (pruned)",
+    "hfts": "HFTS",
+}
 #: Parameters left out of default labels: they vary within one plotted series.
 UNLABELLED = ("seed", "record_tree")
 
@@ -145,7 +154,9 @@ def seed_values(where: str, value: Any) -> list[int]:
     """
     if isinstance(value, dict):
         if set(value) != {"start", "count"}:
-            raise OgcpError(f"{where}: a seed range needs exactly the keys count, start; got {', '.join(sorted(value))}")
+            raise OgcpError(
+                f"{where}: a seed range needs exactly the keys count, start; got {', '.join(sorted(value))}"
+            )
         start = Param("int", 0, minimum=0).check(f"{where}.start", value["start"])
         count = Param("int", 1, minimum=1).check(f"{where}.count", value["count"])
         return list(range(start, start + count))
@@ -198,7 +209,9 @@ def default_label(method: str, params: dict[str, Any]) -> str:
     parts = [
         f"{key}={_short(value)}"
         for key, value in params.items()
-        if key not in UNLABELLED and (key == "eps" or value != defaults.get(key)) and value is not None
+        if key not in UNLABELLED
+        and (key == "eps" or value != defaults.get(key))
+        and value is not None
         and not (key == "hand_threshold" and value == DEFAULT_HAND_THRESHOLD)
     ]
     return " ".join([TITLES[method], *parts])

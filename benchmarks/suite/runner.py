@@ -21,9 +21,9 @@ from typing import Any
 from tqdm import tqdm
 
 from benchmarks.suite.cells import run_cell
-from benchmarks.suite.store import LOCK, ResultStore
 from benchmarks.suite.config import Suite
 from benchmarks.suite.select import Selection, is_selected, parse_selection
+from benchmarks.suite.store import LOCK, ResultStore
 from planner.infra.errors import OgcpError
 from planner.infra.parallel import run_tasks, validate_backend
 from planner.infra.provenance import provenance
@@ -115,14 +115,16 @@ class SuiteRunner:
             raise OgcpError(f"max_cells must be an integer >= 1, got {self.max_cells!r}")
         selection = parse_selection(self.only, self.suite.cells)
         limit = self.time_limit
-        if limit is not None and (isinstance(limit, bool) or not isinstance(limit, (int, float)) or not limit > 0
-                                  or limit == float("inf")):
+        if limit is not None and (
+            isinstance(limit, bool) or not isinstance(limit, (int, float)) or not limit > 0 or limit == float("inf")
+        ):
             raise OgcpError(f"time_limit must be a number of seconds > 0, got {limit!r}")
         store = ResultStore(self.out)
         fresh = _is_fresh(self.out)
         if not fresh and not self.resume:
-            raise OgcpError(f"{self.out} is not empty; pass --resume to continue the run recorded there, "
-                            "or choose another --out")
+            raise OgcpError(
+                f"{self.out} is not empty; pass --resume to continue the run recorded there, or choose another --out"
+            )
         if not fresh and not store.manifest_path.exists():
             raise OgcpError(f"{self.out} holds no manifest.json: not an ogcp suite folder; choose another --out")
         with store.lock():
@@ -146,12 +148,12 @@ class SuiteRunner:
                 held = f"{self.out} holds suite {manifest.get('suite', {}).get('name')!r} with hash {recorded}"
                 if recorded == self.suite.without_simulation().hash:
                     raise OgcpError(f"{held}, run with --no-simulation; resume with --no-simulation too")
-                raise OgcpError(f"{held}; this suite's hash is {self.suite.hash}: the suite changed, "
-                                "use another --out")
+                raise OgcpError(f"{held}; this suite's hash is {self.suite.hash}: the suite changed, use another --out")
             first = manifest.get("sessions", [{}])[0].get("git_commit")
             if first != session["git_commit"]:
-                self.log(f"ogcp: warning: resuming with git commit {session['git_commit']}; "
-                         f"the run started with {first}")
+                self.log(
+                    f"ogcp: warning: resuming with git commit {session['git_commit']}; the run started with {first}"
+                )
             manifest["sessions"] = [*manifest.get("sessions", []), session]
         store.write_manifest(manifest)
         return manifest
@@ -159,9 +161,16 @@ class SuiteRunner:
     def _session(self) -> dict[str, Any]:
         info = provenance()
         return {
-            "started_at": _now(), "git_commit": info["git_commit"], "versions": info["versions"],
-            "jobs": self.jobs, "backend": self.backend, "address": self.address, "resume": self.resume,
-            "retry_errors": self.retry_errors, "max_cells": self.max_cells, "only": list(self.only),
+            "started_at": _now(),
+            "git_commit": info["git_commit"],
+            "versions": info["versions"],
+            "jobs": self.jobs,
+            "backend": self.backend,
+            "address": self.address,
+            "resume": self.resume,
+            "retry_errors": self.retry_errors,
+            "max_cells": self.max_cells,
+            "only": list(self.only),
             "time_limit": self.time_limit,
         }
 
@@ -170,8 +179,14 @@ class SuiteRunner:
         suite = self.suite
         return {
             "schema": MANIFEST_SCHEMA,
-            "suite": {"name": suite.name, "source": suite.source, "hash": suite.hash, "cells": len(suite.cells),
-                      "simulation_enabled": suite.simulate, "content": suite.text},
+            "suite": {
+                "name": suite.name,
+                "source": suite.source,
+                "hash": suite.hash,
+                "cells": len(suite.cells),
+                "simulation_enabled": suite.simulate,
+                "content": suite.text,
+            },
             "seeds": suite.seeds(),
             "started_at": session["started_at"],
             "versions": info["versions"],
@@ -181,28 +196,34 @@ class SuiteRunner:
             "sessions": [session],
         }
 
-    def _run_cells(self, store: ResultStore, manifest: dict[str, Any], done: dict[str, dict[str, Any]],
-                   selection: Selection) -> RunSummary:
+    def _run_cells(
+        self, store: ResultStore, manifest: dict[str, Any], done: dict[str, dict[str, Any]], selection: Selection
+    ) -> RunSummary:
         ids = {c.id for c in self.suite.cells}
         stray = set(done) - ids
         if stray:
             self.log(f"ogcp: warning: {len(stray)} records in {store.results_path} are not cells of this suite")
         done = {k: v for k, v in done.items() if k in ids}
-        todo = [c for c in self.suite.cells
-                if c.id not in done or (self.retry_errors and done[c.id].get("status") == "error")]
+        todo = [
+            c
+            for c in self.suite.cells
+            if c.id not in done or (self.retry_errors and done[c.id].get("status") == "error")
+        ]
         skipped = len(self.suite.cells) - len(todo)
         todo = [c for c in todo if is_selected(c, selection)]
         if self.max_cells is not None:
             todo = todo[: self.max_cells]
         missing = [n for n in self.suite.unfetched_objects() if any(c.object.spec == n for c in todo)]
         if missing:
-            self.log(f"ogcp: warning: objects not fetched yet: {', '.join(missing)}; their cells will be recorded "
-                     f"as errors (run `ogcp assets fetch {' '.join(missing)}`, then --resume --retry-errors)")
-        settings = ({k: v for k, v in self.suite.simulation.items() if k != "enabled"}
-                    if self.suite.simulate else None)
+            self.log(
+                f"ogcp: warning: objects not fetched yet: {', '.join(missing)}; their cells will be recorded "
+                f"as errors (run `ogcp assets fetch {' '.join(missing)}`, then --resume --retry-errors)"
+            )
+        settings = {k: v for k, v in self.suite.simulation.items() if k != "enabled"} if self.suite.simulate else None
         records = dict(done)
-        bar = tqdm(total=len(self.suite.cells), initial=skipped, unit="cell", desc=self.suite.name,
-                   disable=not self.progress)
+        bar = tqdm(
+            total=len(self.suite.cells), initial=skipped, unit="cell", desc=self.suite.name, disable=not self.progress
+        )
         try:
             tasks = [(cell, settings if cell.simulate else None, self.time_limit) for cell in todo]
             finished = run_tasks(run_cell, tasks, self.jobs, self.backend, self.address) if tasks else iter(())
@@ -212,13 +233,16 @@ class SuiteRunner:
                 bar.update()
                 if record["status"] == "error":
                     error = record["error"]
-                    tqdm.write(f"ogcp: cell {record['id']} ({_describe(record)}) failed: "
-                               f"{error['type']}: {error['message']}", file=sys.stderr)
+                    tqdm.write(
+                        f"ogcp: cell {record['id']} ({_describe(record)}) failed: {error['type']}: {error['message']}",
+                        file=sys.stderr,
+                    )
         finally:
             bar.close()
         errors = sum(1 for r in records.values() if r.get("status") == "error")
-        return RunSummary(len(self.suite.cells), skipped, len(todo), errors,
-                          len(self.suite.cells) - len(records), records)
+        return RunSummary(
+            len(self.suite.cells), skipped, len(todo), errors, len(self.suite.cells) - len(records), records
+        )
 
 
 def summary_table(suite: Suite, records: dict[str, dict[str, Any]]) -> str:
@@ -236,8 +260,9 @@ def summary_table(suite: Suite, records: dict[str, dict[str, Any]]) -> str:
         best = f"{max(values):10.6f}" if values else f"{'-':>10}"
         errors = sum(1 for r in found if r.get("status") == "error")
         wall = sum(r.get("wall_seconds") or 0.0 for r in found)
-        lines.append(f"{obj:<12} {label:<{width}} {f'{len(found)}/{totals[(obj, label)]}':>9} {errors:>6} "
-                     f"{best} {wall:9.2f}")
+        lines.append(
+            f"{obj:<12} {label:<{width}} {f'{len(found)}/{totals[(obj, label)]}':>9} {errors:>6} {best} {wall:9.2f}"
+        )
     return "\n".join(lines)
 
 

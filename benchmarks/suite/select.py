@@ -50,8 +50,10 @@ def parse_selection(items: Sequence[str], cells: Iterable[Cell]) -> Selection:
         known = sorted({value for cell in cells for value in SELECTORS[key](cell)})
         for value in (v.strip() for v in values.split(",")):
             if value not in known:
-                raise OgcpError(f"--only {key}={value}: no cell of this suite has it; the suite has "
-                                f"{key} = {', '.join(known) or '(none)'}")
+                raise OgcpError(
+                    f"--only {key}={value}: no cell of this suite has it; the suite has "
+                    f"{key} = {', '.join(known) or '(none)'}"
+                )
             selection.setdefault(key, set()).add(value)
     return {key: frozenset(values) for key, values in selection.items()}
 

@@ -29,12 +29,12 @@ from tqdm import tqdm
 
 from planner.grasp.constraints import Constraint, accepts_many
 from planner.grasp.contact_set import ContactSet
-from planner.infra.errors import OgcpError
 from planner.grasp.kernel import FALLBACK, OK, default_directions, support_table
 from planner.grasp.kernel.geometry import CUT_MARGIN
+from planner.grasp.quality import exact_q1_batch, q1_certificate
+from planner.infra.errors import OgcpError
 from planner.infra.parallel import run_tasks, validate_backend
 from planner.infra.provenance import provenance
-from planner.grasp.quality import exact_q1_batch, q1_certificate
 from planner.records.plan import plan_record
 
 from . import combinations
@@ -136,8 +136,18 @@ class ESResult:
             "wall_seconds": self.wall_seconds,
         }
         return plan_record(
-            self.method, self.grasp, self.q1, self.q_ows, self.q1, self.positions, self.normals,
-            stats=stats, config=self.config, contact_set=contact_set, eps=0.0, histogram=histogram,
+            self.method,
+            self.grasp,
+            self.q1,
+            self.q_ows,
+            self.q1,
+            self.positions,
+            self.normals,
+            stats=stats,
+            config=self.config,
+            contact_set=contact_set,
+            eps=0.0,
+            histogram=histogram,
         )
 
 
@@ -195,9 +205,7 @@ def _chunk_task(
         # No grasp of the chunk is in force closure: all tie at 0, and the chunk's grasps
         # are in lexicographic order.
         best_g = tuple(int(c) for c in grasps[0])
-    return ChunkResult(
-        index, best_q, best_g, counts.tolist(), zero, excluded, total, exact, time.process_time() - cpu0
-    )
+    return ChunkResult(index, best_q, best_g, counts.tolist(), zero, excluded, total, exact, time.process_time() - cpu0)
 
 
 def _better(
@@ -280,7 +288,10 @@ class ExhaustiveSearch:
             "contact_set_digest": _digest(contacts),
             "constraints": [c.describe() for c in self.constraints],
         }
-        store = _ChunkStore(self.checkpoint, {k: config[k] for k in ("method", "m", "chunk", "bins", "contact_set_digest", "constraints")})
+        store = _ChunkStore(
+            self.checkpoint,
+            {k: config[k] for k in ("method", "m", "chunk", "bins", "contact_set_digest", "constraints")},
+        )
         done = store.load()
         todo = [i for i in range(n_chunks) if i not in done]
         args = [(contacts, int(m), i, self.chunk, edges, self.pruned, tuple(self.constraints)) for i in todo]
@@ -373,7 +384,9 @@ class _ChunkStore:
         for path in sorted(self.directory.glob("chunk_*.json")):
             try:
                 data = json.loads(path.read_text())
-                result = ChunkResult(**{**data, "best_grasp": tuple(data["best_grasp"]) if data["best_grasp"] else None})
+                result = ChunkResult(
+                    **{**data, "best_grasp": tuple(data["best_grasp"]) if data["best_grasp"] else None}
+                )
             except (json.JSONDecodeError, TypeError, KeyError):
                 continue  # unreadable chunk: recomputed
             done[result.index] = result

@@ -31,13 +31,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from planner.grasp.contact_set import ContactSet
+from planner.grasp.quality import q1, q1_certificate, signed_q1
+from planner.grasp.wrench import contact_wrenches
 from planner.infra.errors import OgcpError
 from planner.infra.parallel import run_tasks, validate_backend
 from planner.infra.provenance import provenance
-from planner.grasp.quality import q1, q1_certificate, signed_q1
 from planner.records.plan import plan_record
 from planner.search.partitions import KMeansPartitioner
-from planner.grasp.wrench import contact_wrenches
 
 TOP_CLUSTERS = 12
 CHILD_CLUSTERS = 4
@@ -97,8 +97,16 @@ class HFTSResult:
     def to_dict(self, contact_set: dict[str, Any] | None = None) -> dict[str, Any]:
         """JSON form, schema ``ogcp.plan/1``, with ``runs`` listing every run."""
         return plan_record(
-            "hfts", self.grasp, self.q1, self.q_ows, self.q1, self.positions, self.normals,
-            stats=self.summary(), config=self.config, contact_set=contact_set,
+            "hfts",
+            self.grasp,
+            self.q1,
+            self.q_ows,
+            self.q1,
+            self.positions,
+            self.normals,
+            stats=self.summary(),
+            config=self.config,
+            contact_set=contact_set,
             runs=[r.to_dict() for r in self.runs],
         )
 
@@ -205,8 +213,15 @@ def _one_run(
     if hand is not None:
         residual = float(hand.residuals(contacts.positions[None, list(grasp)], contacts.normals[None, list(grasp)])[0])
     return HFTSRun(
-        seed, grasp, final, tuple(start_per_level), tuple(per_level), tuple(accepted_per_level), evaluations,
-        time.process_time() - cpu0, residual,
+        seed,
+        grasp,
+        final,
+        tuple(start_per_level),
+        tuple(per_level),
+        tuple(accepted_per_level),
+        evaluations,
+        time.process_time() - cpu0,
+        residual,
     )
 
 
@@ -265,19 +280,34 @@ class HFTS:
         tree = Hierarchy(contacts, self.position_weight, self.hierarchy_seed)
         if self.hand is not None and m != 3:
             raise OgcpError(f"the {self.hand.name} hand has 3 fingers; got m = {m}")
-        tasks = [(contacts, tree, int(m), self.seed + r, self.iterations, self.hand, self.residual_weight)
-                 for r in range(self.runs)]
+        tasks = [
+            (contacts, tree, int(m), self.seed + r, self.iterations, self.hand, self.residual_weight)
+            for r in range(self.runs)
+        ]
         runs = sorted(run_tasks(_one_run, tasks, self.jobs, self.backend, self.address), key=lambda r: r.seed)
         best = max(runs, key=lambda r: (r.q1, [-i for i in r.grasp]))
         idx = np.array(best.grasp, dtype=np.intp)
         config = {
-            "method": "hfts", "m": int(m), "runs": self.runs, "seed": self.seed, "iterations": self.iterations,
-            "position_weight": self.position_weight, "hierarchy_seed": self.hierarchy_seed,
-            "top_clusters": TOP_CLUSTERS, "child_clusters": CHILD_CLUSTERS, "levels": tree.depth,
-            "hand": None if self.hand is None else self.hand.describe(), "residual_weight": self.residual_weight,
+            "method": "hfts",
+            "m": int(m),
+            "runs": self.runs,
+            "seed": self.seed,
+            "iterations": self.iterations,
+            "position_weight": self.position_weight,
+            "hierarchy_seed": self.hierarchy_seed,
+            "top_clusters": TOP_CLUSTERS,
+            "child_clusters": CHILD_CLUSTERS,
+            "levels": tree.depth,
+            "hand": None if self.hand is None else self.hand.describe(),
+            "residual_weight": self.residual_weight,
         }
         return HFTSResult(
-            grasp=best.grasp, q1=best.q1, q_ows=q1_certificate(contacts.wrenches.reshape(-1, 6)).q1,
-            positions=contacts.positions[idx].copy(), normals=contacts.normals[idx].copy(), runs=tuple(runs),
-            wall_seconds=time.perf_counter() - wall0, config=config,
+            grasp=best.grasp,
+            q1=best.q1,
+            q_ows=q1_certificate(contacts.wrenches.reshape(-1, 6)).q1,
+            positions=contacts.positions[idx].copy(),
+            normals=contacts.normals[idx].copy(),
+            runs=tuple(runs),
+            wall_seconds=time.perf_counter() - wall0,
+            config=config,
         )

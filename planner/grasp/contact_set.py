@@ -21,9 +21,9 @@ import numpy as np
 import trimesh
 from numpy.typing import NDArray
 
+from planner.grasp.wrench import contact_wrenches
 from planner.infra.errors import OgcpError
 from planner.infra.tolerance import TOL
-from planner.grasp.wrench import contact_wrenches
 
 SCHEMA = "ogcp.contacts/1"
 DEFAULT_MU = 0.5

@@ -13,9 +13,9 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from planner.grasp.support_bound import SupportBound, Vector
 from planner.grasp.contact_set import ContactSet
 from planner.grasp.quality import KERNEL_MAX, q1_certificate
+from planner.grasp.support_bound import SupportBound, Vector
 from planner.infra.tolerance import TOL
 
 PackedMask = NDArray[np.uint8]

@@ -29,9 +29,7 @@ from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 from scipy.spatial.distance import cdist
 
-from planner.infra.cache import cache_dir as default_cache_dir
 from planner.grasp.contact_set import ContactSet
-from planner.infra.errors import OgcpError
 from planner.hands.sdh import (
     BASE_ROTATION_SIGN,
     DISTAL_LENGTH,
@@ -41,6 +39,8 @@ from planner.hands.sdh import (
     PROXIMAL_OFFSET,
     random_configurations,
 )
+from planner.infra.cache import cache_dir as default_cache_dir
+from planner.infra.errors import OgcpError
 
 MODEL_VERSION = 1
 PAIRS = ((0, 1), (0, 2), (1, 2))
@@ -79,8 +79,12 @@ def self_collision_free(q: NDArray[np.float64]) -> NDArray[np.bool_]:
     chain = finger_chain(q)
     t = np.linspace(0.0, 1.0, POINTS_PER_LINK)[:, None]
     points = np.concatenate(
-        [chain[:, :, 0:1] + t * (chain[:, :, 1:2] - chain[:, :, 0:1]),
-         chain[:, :, 1:2] + t * (chain[:, :, 2:3] - chain[:, :, 1:2])], axis=2)  # (N, 3, 2P, 3)
+        [
+            chain[:, :, 0:1] + t * (chain[:, :, 1:2] - chain[:, :, 0:1]),
+            chain[:, :, 1:2] + t * (chain[:, :, 2:3] - chain[:, :, 1:2]),
+        ],
+        axis=2,
+    )  # (N, 3, 2P, 3)
     ok = np.ones(len(points), dtype=bool)
     for i, j in PAIRS:
         gap = np.linalg.norm(points[:, i, :, None, :] - points[:, j, None, :, :], axis=-1).min(axis=(1, 2))
@@ -121,8 +125,9 @@ class SDHReachability:
 
     name = "sdh"
 
-    def __init__(self, samples: int = 10_000, seed: int = 0, threshold: float = 0.3,
-                 cache_dir: str | Path | None = None) -> None:
+    def __init__(
+        self, samples: int = 10_000, seed: int = 0, threshold: float = 0.3, cache_dir: str | Path | None = None
+    ) -> None:
         if not isinstance(samples, int) or samples < 1:
             raise OgcpError(f"hand samples must be an integer >= 1, got {samples!r}")
         if not (np.isfinite(threshold) and threshold > 0):
@@ -209,5 +214,10 @@ class SDHReachability:
 
     def describe(self) -> dict[str, object]:
         """JSON-ready description."""
-        return {"name": self.name, "samples": self.samples, "kept": len(self.q), "seed": self.seed,
-                "threshold": self.threshold}
+        return {
+            "name": self.name,
+            "samples": self.samples,
+            "kept": len(self.q),
+            "seed": self.seed,
+            "threshold": self.threshold,
+        }

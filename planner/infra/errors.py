@@ -25,8 +25,10 @@ class SearchTimeout(OgcpError):
 
     def __init__(self, method: str, seconds: float, visited: int, best_q1: float | None, upper_bound: float) -> None:
         best = "no grasp evaluated yet" if best_q1 is None else f"best Q1 found {best_q1:.6f}"
-        super().__init__(f"{method} stopped at its time limit of {seconds:g} s after {visited} expansions "
-                         f"({best}; the optimum is at most {upper_bound:.6f})")
+        super().__init__(
+            f"{method} stopped at its time limit of {seconds:g} s after {visited} expansions "
+            f"({best}; the optimum is at most {upper_bound:.6f})"
+        )
         self.seconds = seconds
         self.visited = visited
         self.best_q1 = best_q1

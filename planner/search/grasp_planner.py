@@ -46,9 +46,9 @@ from planner.grasp.constraints import Constraint, DistinctContacts
 from planner.grasp.contact_set import ContactSet
 from planner.infra.errors import OgcpError, choice_error
 from planner.infra.provenance import provenance
-from planner.search.result import SearchResult
 from planner.search.best_first import Search
 from planner.search.partitions import SUCCESSORS
+from planner.search.result import SearchResult
 
 METHODS = ("astar", "dijkstra", "wastar")
 HEURISTICS = (*SUCCESSORS, "none")
@@ -182,8 +182,14 @@ class GraspPlanner:
         limit = self.time_limit
         if limit is not None and not (isinstance(limit, (int, float)) and math.isfinite(limit) and limit > 0):
             raise OgcpError(f"time_limit must be a number of seconds > 0 or None, got {limit!r}")
-        search = Search(contacts, int(m), config, [DistinctContacts(), *self.constraints], self.record_tree,
-                        None if limit is None else float(limit))
+        search = Search(
+            contacts,
+            int(m),
+            config,
+            [DistinctContacts(), *self.constraints],
+            self.record_tree,
+            None if limit is None else float(limit),
+        )
         with tqdm(desc=config["method"], unit=" expansions", disable=not progress, leave=False) as bar:
             search.on_expand = lambda f: (bar.update(), bar.set_postfix(f=f"{f:.6f}", refresh=False))
             return search.run()

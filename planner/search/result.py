@@ -14,6 +14,7 @@ from numpy.typing import NDArray
 
 from planner.records.plan import plan_record
 
+
 @dataclass(frozen=True)
 class SearchStats:
     """Search statistics.
@@ -158,9 +159,19 @@ class SearchResult:
                 plan can be evaluated without re-sampling.
         """
         return plan_record(
-            self.method, self.grasp, self.q1, self.q_ows, self.bound, self.positions, self.normals,
-            stats=self.stats.to_dict(), config=self.config, contact_set=contact_set,
-            eps=self.eps, eps_bound=self.eps_bound, source=self.contact_source,
+            self.method,
+            self.grasp,
+            self.q1,
+            self.q_ows,
+            self.bound,
+            self.positions,
+            self.normals,
+            stats=self.stats.to_dict(),
+            config=self.config,
+            contact_set=contact_set,
+            eps=self.eps,
+            eps_bound=self.eps_bound,
+            source=self.contact_source,
             **({} if self.tree is None else {"tree": self.tree.to_dict()}),
         )
 

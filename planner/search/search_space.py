@@ -9,10 +9,10 @@ import itertools
 from collections.abc import Sequence
 from typing import Any
 
-from planner.grasp.support_bound import Vector
 from planner.grasp.constraints import Constraint
 from planner.grasp.contact_set import ContactSet
 from planner.grasp.subset_quality import GraspQuality, PackedMask
+from planner.grasp.support_bound import Vector
 from planner.search.partitions import Indices, PartitionTree, make_partitioner
 from planner.search.symmetry import SymmetryFilter
 

@@ -35,14 +35,16 @@ def _child_command(workdir: Path) -> list[str]:
 
 def _wait(proc: subprocess.Popen[bytes], timeout: float, name: str, progress: bool) -> None:
     start = time.monotonic()
-    with tqdm(desc=f"CoACD {name}", bar_format="{desc}: {elapsed} elapsed", file=sys.stderr,
-              disable=not progress) as bar:
+    with tqdm(
+        desc=f"CoACD {name}", bar_format="{desc}: {elapsed} elapsed", file=sys.stderr, disable=not progress
+    ) as bar:
         try:
             while True:
                 remaining = timeout - (time.monotonic() - start)
                 if remaining <= 0:
                     raise OgcpError(
-                        f"CoACD did not finish within {timeout:g} s on {name}; raise --timeout or increase threshold")
+                        f"CoACD did not finish within {timeout:g} s on {name}; raise --timeout or increase threshold"
+                    )
                 try:
                     proc.wait(timeout=min(_POLL_S, remaining))
                     return
@@ -54,8 +56,14 @@ def _wait(proc: subprocess.Popen[bytes], timeout: float, name: str, progress: bo
                 proc.wait()
 
 
-def run_coacd_child(vertices: NDArray[np.float64], faces: NDArray[np.int64], kwargs: dict[str, Any],
-                    timeout: float, name: str, progress: bool) -> tuple[list[NDArray[np.float64]], float, str]:
+def run_coacd_child(
+    vertices: NDArray[np.float64],
+    faces: NDArray[np.int64],
+    kwargs: dict[str, Any],
+    timeout: float,
+    name: str,
+    progress: bool,
+) -> tuple[list[NDArray[np.float64]], float, str]:
     """Run ``coacd.run_coacd(mesh, **kwargs)`` in a child process.
 
     Args:
@@ -77,8 +85,9 @@ def run_coacd_child(vertices: NDArray[np.float64], faces: NDArray[np.int64], kwa
         np.savez(workdir / "input.npz", vertices=vertices, faces=faces.astype(np.int32))
         (workdir / "job.json").write_text(json.dumps(kwargs))
         with open(workdir / "coacd.log", "wb") as log:
-            proc = subprocess.Popen(_child_command(workdir), stdout=log, stderr=subprocess.STDOUT,
-                                    stdin=subprocess.DEVNULL)
+            proc = subprocess.Popen(
+                _child_command(workdir), stdout=log, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL
+            )
             _wait(proc, timeout, name, progress)
         text = (workdir / "coacd.log").read_text(errors="replace")
         if proc.returncode != 0:

@@ -148,7 +148,11 @@ def _unpack(path: Path) -> list[tuple[NDArray[np.float64], NDArray[np.int64]]]:
     with np.load(path, allow_pickle=False) as data:
         vertices, faces = data["vertices"], data["faces"]
         vertex_counts, face_counts = data["vertex_counts"], data["face_counts"]
-    if len(vertex_counts) != len(face_counts) or vertex_counts.sum() != len(vertices) or face_counts.sum() != len(faces):
+    if (
+        len(vertex_counts) != len(face_counts)
+        or vertex_counts.sum() != len(vertices)
+        or face_counts.sum() != len(faces)
+    ):
         raise ValueError("part counts do not match the arrays")
     v_split = np.split(np.asarray(vertices, dtype=np.float64).reshape(-1, 3), np.cumsum(vertex_counts)[:-1])
     f_split = np.split(np.asarray(faces, dtype=np.int64).reshape(-1, 3), np.cumsum(face_counts)[:-1])
@@ -201,7 +205,9 @@ def _store(root: Path, key: str, parts: tuple[Part, ...], meta: dict[str, Any], 
         root.mkdir(parents=True, exist_ok=True)
         tmp = Path(tempfile.mkdtemp(dir=root, prefix=f".{key}.", suffix=".tmp"))
     except OSError as exc:
-        warnings.warn(f"cannot write decomposition cache {root}: {exc.strerror or exc}", CacheWriteWarning, stacklevel=3)
+        warnings.warn(
+            f"cannot write decomposition cache {root}: {exc.strerror or exc}", CacheWriteWarning, stacklevel=3
+        )
         return None
     try:
         _write_synced(tmp / "parts.npz", _pack(parts))
@@ -219,7 +225,9 @@ def _store(root: Path, key: str, parts: tuple[Part, ...], meta: dict[str, Any], 
         warnings.warn(f"cannot store decomposition in {final}", CacheWriteWarning, stacklevel=3)
         return None
     except OSError as exc:
-        warnings.warn(f"cannot write decomposition cache {root}: {exc.strerror or exc}", CacheWriteWarning, stacklevel=3)
+        warnings.warn(
+            f"cannot write decomposition cache {root}: {exc.strerror or exc}", CacheWriteWarning, stacklevel=3
+        )
         return None
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
@@ -243,8 +251,9 @@ def _coacd_kwargs(settings: DecompositionSettings) -> dict[str, Any]:
     return kwargs
 
 
-def _run_coacd(vertices: NDArray[np.float64], faces: NDArray[np.int64], settings: DecompositionSettings,
-               name: str, progress: bool) -> tuple[list[NDArray[np.float64]], float, str]:
+def _run_coacd(
+    vertices: NDArray[np.float64], faces: NDArray[np.int64], settings: DecompositionSettings, name: str, progress: bool
+) -> tuple[list[NDArray[np.float64]], float, str]:
     """Run CoACD in a child process; returns part vertex sets, CoACD's wall time [s] and its log."""
     return run_coacd_child(vertices, faces, _coacd_kwargs(settings), settings.timeout_s, name, progress)
 
@@ -258,8 +267,13 @@ def _remeshed(settings: DecompositionSettings, log: str) -> bool | None:
     return None if found is None else found.group(1).lower() in ("false", "0")
 
 
-def decompose(mesh: trimesh.Trimesh, settings: DecompositionSettings | None = None, cache: Path | None = None,
-              progress: bool = False, name: str | None = None) -> Decomposition:
+def decompose(
+    mesh: trimesh.Trimesh,
+    settings: DecompositionSettings | None = None,
+    cache: Path | None = None,
+    progress: bool = False,
+    name: str | None = None,
+) -> Decomposition:
     """Convex parts of a mesh, from the cache or computed (and then cached).
 
     Args:
@@ -289,8 +303,10 @@ def decompose(mesh: trimesh.Trimesh, settings: DecompositionSettings | None = No
     manifold = is_closed_manifold(faces)
     if settings.method == "coacd":
         if settings.preprocess_mode == "off" and not manifold:
-            raise OgcpError(f"{name} is not a closed, consistently oriented mesh; CoACD needs one with preprocess "
-                            "'off': use preprocess 'on' or 'auto' to remesh it")
+            raise OgcpError(
+                f"{name} is not a closed, consistently oriented mesh; CoACD needs one with preprocess "
+                "'off': use preprocess 'on' or 'auto' to remesh it"
+            )
         raw, seconds, log = _run_coacd(vertices, faces, settings, name, progress)
         hulls = [hull_part(v) for v in raw]
     else:

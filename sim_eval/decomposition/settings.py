@@ -18,9 +18,15 @@ PREPROCESS_MODES = ("auto", "on", "off")
 
 #: Integer settings and their ranges (None: unbounded above); CoACD rejects a preprocess
 #: resolution outside 5-1000 and takes an unsigned 32-bit seed.
-_INT_RANGES = {"preprocess_resolution": (5, 1000), "resolution": (1, None), "mcts_nodes": (1, None),
-               "mcts_iterations": (1, None), "mcts_max_depth": (1, None), "max_ch_vertex": (4, None),
-               "seed": (0, 2**32 - 1)}
+_INT_RANGES = {
+    "preprocess_resolution": (5, 1000),
+    "resolution": (1, None),
+    "mcts_nodes": (1, None),
+    "mcts_iterations": (1, None),
+    "mcts_max_depth": (1, None),
+    "max_ch_vertex": (4, None),
+    "seed": (0, 2**32 - 1),
+}
 
 
 def _number(value: object, integral: bool) -> bool:

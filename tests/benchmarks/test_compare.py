@@ -13,8 +13,8 @@ import pytest
 
 from benchmarks import cli
 from benchmarks.compare import Tolerances, compare_dirs
-from benchmarks.suite.runner import SuiteRunner
 from benchmarks.suite.config import parse_suite
+from benchmarks.suite.runner import SuiteRunner
 from planner.infra.errors import OgcpError
 
 SUITE = """
@@ -80,9 +80,12 @@ def _edit(directory: Path, label: str, change: Callable[[dict], dict | None]) ->
 
 def _simulated(valid: bool, resistance: float) -> Callable[[dict], dict]:
     def change(record: dict) -> dict:
-        record["simulation"] = {"schema": "ogcp.sim/1", "grasps": [
-            {"label": "best", "grasp": record["plan"]["grasp"], "valid": valid, "measured_min": resistance}]}
+        record["simulation"] = {
+            "schema": "ogcp.sim/1",
+            "grasps": [{"label": "best", "grasp": record["plan"]["grasp"], "valid": valid, "measured_min": resistance}],
+        }
         return record
+
     return change
 
 
@@ -119,8 +122,13 @@ def test_lowered_optimal_q1_is_an_optimality_and_a_q1_regression(baseline, run, 
     assert {line.split(":")[0] for line in found} == {"optimality", "q1"}
     assert all(line.split(": ")[1].startswith("box / A* [n=16 seed=0 m=3") for line in found)
     assert _verdicts(text) == {"A*": "REGRESSED", "WA*": "ok", "ES": "ok", "HFTS": "ok"}
-    assert _ogcp(["compare", str(run), str(baseline), "--q1-tolerance", "0.01",
-                  "--optimality-tolerance", "0.01"], monkeypatch)[0] == 0
+    assert (
+        _ogcp(
+            ["compare", str(run), str(baseline), "--q1-tolerance", "0.01", "--optimality-tolerance", "0.01"],
+            monkeypatch,
+        )[0]
+        == 0
+    )
 
 
 def test_lowered_hfts_q1_and_broken_wastar_bound(baseline, run):
@@ -169,8 +177,16 @@ def test_failed_gate_and_lower_resistance(baseline, run, tmp_path, monkeypatch):
 
 def test_missing_and_failed_cells(baseline, run, monkeypatch):
     _edit(run, "HFTS", lambda r: None)
-    _edit(run, "ES", lambda r: {**r, "status": "error", "plan": None,
-                                "error": {"type": "OgcpError", "message": "boom", "traceback": ""}})
+    _edit(
+        run,
+        "ES",
+        lambda r: {
+            **r,
+            "status": "error",
+            "plan": None,
+            "error": {"type": "OgcpError", "message": "boom", "traceback": ""},
+        },
+    )
     status, text, _ = _ogcp(["compare", str(run), str(baseline)], monkeypatch)
     assert status == 1
     assert sorted(line.split(" [")[0] for line in _regressions(text)) == ["error: box / ES", "missing: box / HFTS"]
@@ -186,13 +202,19 @@ def test_torn_tail_is_noted_not_fatal(baseline, run):
     assert status == 0 and "note: RUN: results.jsonl: last line is incomplete" in text
 
 
-@pytest.mark.parametrize("argv,message", [
-    (["compare", "{tmp}/nothing", "{base}"], "no such folder"),
-    (["compare", "{tmp}", "{base}"], "no results.jsonl"),
-    (["compare", "{base}", "{base}", "--q1-tolerance", "-1"], "q1 tolerance must be a number >= 0"),
-    (["compare", "{base}", "{base}", "--time-ratio", "0.5"], "time ratio must be a number >= 1"),
-    (["compare", "{base}", "{base}", "--time-key", "gpu"], "unknown time key 'gpu'; valid choices: cpu, plan, wall"),
-])
+@pytest.mark.parametrize(
+    "argv,message",
+    [
+        (["compare", "{tmp}/nothing", "{base}"], "no such folder"),
+        (["compare", "{tmp}", "{base}"], "no results.jsonl"),
+        (["compare", "{base}", "{base}", "--q1-tolerance", "-1"], "q1 tolerance must be a number >= 0"),
+        (["compare", "{base}", "{base}", "--time-ratio", "0.5"], "time ratio must be a number >= 1"),
+        (
+            ["compare", "{base}", "{base}", "--time-key", "gpu"],
+            "unknown time key 'gpu'; valid choices: cpu, plan, wall",
+        ),
+    ],
+)
 def test_bad_input_exits_2(baseline, tmp_path, monkeypatch, argv, message):
     argv = [a.format(tmp=tmp_path, base=baseline) for a in argv]
     status, _, err = _ogcp(argv, monkeypatch)

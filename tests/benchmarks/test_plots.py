@@ -18,14 +18,22 @@ from matplotlib.figure import Figure
 
 from benchmarks import cli, plots
 from benchmarks.plots.data import SkipFigure, load_run
-from benchmarks.suite.runner import SuiteRunner
 from benchmarks.suite.config import parse_suite
+from benchmarks.suite.runner import SuiteRunner
 from planner.infra.errors import OgcpError
 
 matplotlib.use("Agg")
 ROOT = Path(__file__).resolve().parents[2]
-FIGURE_NAMES = ("fig4_q1_histograms", "fig5_search_tree", "fig6_states_per_level", "fig7_iterations_f",
-                "fig8_wastar_tradeoff", "sim_q1_vs_resistance", "sim_fidelity", "sim_survival")
+FIGURE_NAMES = (
+    "fig4_q1_histograms",
+    "fig5_search_tree",
+    "fig6_states_per_level",
+    "fig7_iterations_f",
+    "fig8_wastar_tradeoff",
+    "sim_q1_vs_resistance",
+    "sim_fidelity",
+    "sim_survival",
+)
 TINY_SUITE = """
 schema_version = 1
 name = "tiny-plot"
@@ -77,27 +85,63 @@ label = "HFTS"
 def _stats(created: list[int], visited: list[int], b: float | None, trace_len: int, seconds: float) -> dict:
     f = np.maximum.accumulate(np.linspace(0.0, 0.3, trace_len) + 0.01 * np.sin(np.arange(trace_len)))
     return {
-        "created": sum(created), "visited": sum(visited), "created_per_level": created, "visited_per_level": visited,
-        "q1_evaluations": 10, "q1_cache_hits": 0, "bound_evaluations": 0, "bound_rejections": 0, "hull_calls": 0,
-        "pruned": 0, "symmetric_removed": 0, "effective_branching_factor": b, "solution_depth": len(created) - 1,
-        "trace": [[i, float(v)] for i, v in enumerate(f)], "wall_seconds": seconds, "cpu_seconds": seconds,
+        "created": sum(created),
+        "visited": sum(visited),
+        "created_per_level": created,
+        "visited_per_level": visited,
+        "q1_evaluations": 10,
+        "q1_cache_hits": 0,
+        "bound_evaluations": 0,
+        "bound_rejections": 0,
+        "hull_calls": 0,
+        "pruned": 0,
+        "symmetric_removed": 0,
+        "effective_branching_factor": b,
+        "solution_depth": len(created) - 1,
+        "trace": [[i, float(v)] for i, v in enumerate(f)],
+        "wall_seconds": seconds,
+        "cpu_seconds": seconds,
     }
 
 
 def _plan(method: str, q1: float, **extra) -> dict:
-    plan = {"schema": "ogcp.plan/1", "method": method, "grasp": [1, 5, 9], "q1": q1, "q_ows": 0.5, "bound": q1,
-            "force_closure": q1 > 0, "contacts": {"positions": [[0, 0, 0]] * 3, "normals": [[1, 0, 0]] * 3},
-            "contact_set": {}, "stats": {}, "config": {}, "tolerances": {}, "provenance": {}}
+    plan = {
+        "schema": "ogcp.plan/1",
+        "method": method,
+        "grasp": [1, 5, 9],
+        "q1": q1,
+        "q_ows": 0.5,
+        "bound": q1,
+        "force_closure": q1 > 0,
+        "contacts": {"positions": [[0, 0, 0]] * 3, "normals": [[1, 0, 0]] * 3},
+        "contact_set": {},
+        "stats": {},
+        "config": {},
+        "tolerances": {},
+        "provenance": {},
+    }
     plan.update(extra)
     return plan
 
 
-def _search_plan(method: str, q1: float, eps: float = 0.0, symmetry: bool = False, trace_len: int = 30,
-                 seconds: float = 2.0, tree: dict | None = None) -> dict:
+def _search_plan(
+    method: str,
+    q1: float,
+    eps: float = 0.0,
+    symmetry: bool = False,
+    trace_len: int = 30,
+    seconds: float = 2.0,
+    tree: dict | None = None,
+) -> dict:
     created = [1, 8, 40, 60, 20, 4] if not symmetry else [1, 4, 12, 20, 8, 3]
     visited = [1, 3, 9, 6, 2, 1] if not symmetry else [1, 2, 4, 3, 2, 1]
-    plan = _plan(method, q1, eps=eps, eps_bound=min(0.5, q1 * (1 + eps)),
-                 stats=_stats(created, visited, 1.9 if not symmetry else 1.5, trace_len, seconds))
+    plan = _plan(
+        method,
+        q1,
+        eps=eps,
+        eps_bound=min(0.5, q1 * (1 + eps)),
+        stats=_stats(created, visited, 1.9 if not symmetry else 1.5, trace_len, seconds),
+    )
     plan["bound"] = min(0.5, q1 * (1 + eps / 2))
     if tree is not None:
         plan["tree"] = tree
@@ -108,14 +152,21 @@ def _es_plan(q1: float, seconds: float = 900.0) -> dict:
     edges = np.linspace(0, 0.5, 11)
     counts = [4000, 900, 200, 40, 8, 2, 1, 0, 0, 0]
     hist = {"bin_edges": edges.tolist(), "counts": counts, "zero": 150000, "force_closure_fraction": 0.0333}
-    return _plan("es", q1, eps=0.0, histogram=hist, stats={"grasps": 155151, "cpu_seconds": seconds,
-                                                             "wall_seconds": seconds / 2})
+    return _plan(
+        "es", q1, eps=0.0, histogram=hist, stats={"grasps": 155151, "cpu_seconds": seconds, "wall_seconds": seconds / 2}
+    )
 
 
 def _hfts_plan(values: list[float]) -> dict:
-    runs = [{"seed": i, "grasp": [0, 1, 2], "q1": v, "evaluations": 5, "cpu_seconds": 0.1} for i, v in enumerate(values)]
-    return _plan("hfts", max(values), runs=runs, stats={"runs": len(values), "cpu_seconds": 0.1 * len(values),
-                                                         "wall_seconds": 1.0})
+    runs = [
+        {"seed": i, "grasp": [0, 1, 2], "q1": v, "evaluations": 5, "cpu_seconds": 0.1} for i, v in enumerate(values)
+    ]
+    return _plan(
+        "hfts",
+        max(values),
+        runs=runs,
+        stats={"runs": len(values), "cpu_seconds": 0.1 * len(values), "wall_seconds": 1.0},
+    )
 
 
 def _tree() -> dict:
@@ -136,29 +187,89 @@ def _simulation(q1s: list[float], rng: np.random.Generator, first: int = 0) -> d
         censored = [bool(j == 0 and i == 0) for j in range(13)]
         fidelity = [None if c else float(abs(m / p - 1)) for m, p, c in zip(measured, predicted, censored)]
         k = first + i
-        grasps.append({"grasp": [k, k + 1, k + 2], "label": "best" if i == 0 else f"run-{i}", "q1": q, "valid": i != 3,
-                       "error": None, "gates": {"valid": i != 3}, "predicted": predicted.tolist(),
-                       "measured": measured.tolist(), "censored": censored, "fidelity": fidelity,
-                       "predicted_min": float(predicted.min()), "measured_min": float(measured.min()),
-                       "median_fidelity": 0.1})
-    return {"schema": "ogcp.sim/1", "grasps": grasps, "median_fidelity": 0.1,
-            "set_metrics": {"n_valid": len(q1s) - 1, "holding_load": 5.0,
-                            "q1_vs_measured": {"spearman": 0.5, "kendall": 0.4}, "auc_q1_holds": 0.7,
-                            "median_fidelity": 0.1}}
+        grasps.append(
+            {
+                "grasp": [k, k + 1, k + 2],
+                "label": "best" if i == 0 else f"run-{i}",
+                "q1": q,
+                "valid": i != 3,
+                "error": None,
+                "gates": {"valid": i != 3},
+                "predicted": predicted.tolist(),
+                "measured": measured.tolist(),
+                "censored": censored,
+                "fidelity": fidelity,
+                "predicted_min": float(predicted.min()),
+                "measured_min": float(measured.min()),
+                "median_fidelity": 0.1,
+            }
+        )
+    return {
+        "schema": "ogcp.sim/1",
+        "grasps": grasps,
+        "median_fidelity": 0.1,
+        "set_metrics": {
+            "n_valid": len(q1s) - 1,
+            "holding_load": 5.0,
+            "q1_vs_measured": {"spearman": 0.5, "kendall": 0.4},
+            "auc_q1_holds": 0.7,
+            "median_fidelity": 0.1,
+        },
+    }
 
 
-def _record(index: int, obj: str, method: str, plan: dict | None, variant: dict | None = None, label: str = "",
-            simulation: dict | None = None, status: str = "ok", contacts: int = 100) -> dict:
-    params = {"object": obj, "contacts": contacts, "contact_seed": 0, "m": 3, "mu": 0.5, "cone_edges": 8,
-              "diagonal": 0.2, "method": method, "variant": variant or {}, "label": label or method}
+def _record(
+    index: int,
+    obj: str,
+    method: str,
+    plan: dict | None,
+    variant: dict | None = None,
+    label: str = "",
+    simulation: dict | None = None,
+    status: str = "ok",
+    contacts: int = 100,
+) -> dict:
+    params = {
+        "object": obj,
+        "contacts": contacts,
+        "contact_seed": 0,
+        "m": 3,
+        "mu": 0.5,
+        "cone_edges": 8,
+        "diagonal": 0.2,
+        "method": method,
+        "variant": variant or {},
+        "label": label or method,
+    }
     error = None if status == "ok" else {"type": "OgcpError", "message": "boom", "traceback": "..."}
-    return {"schema": "ogcp.cell/1", "id": f"{index:016x}", "params": params, "groups": [], "status": status,
-            "error": error, "plan": plan if status == "ok" else None, "simulation": simulation,
-            "simulation_seconds": None, "wall_seconds": 1.0, "cpu_seconds": 1.0, "finished_at": "2025-01-01T00:00:00"}
+    return {
+        "schema": "ogcp.cell/1",
+        "id": f"{index:016x}",
+        "params": params,
+        "groups": [],
+        "status": status,
+        "error": error,
+        "plan": plan if status == "ok" else None,
+        "simulation": simulation,
+        "simulation_seconds": None,
+        "wall_seconds": 1.0,
+        "cpu_seconds": 1.0,
+        "finished_at": "2025-01-01T00:00:00",
+    }
 
 
-SEARCH = {"branching": 2, "successor": "fc", "heuristic": "fc", "heuristic_branching": 2, "symmetry": False,
-          "ordered": False, "seed": 0, "record_tree": False, "max_spread": None, "hand": None}
+SEARCH = {
+    "branching": 2,
+    "successor": "fc",
+    "heuristic": "fc",
+    "heuristic_branching": 2,
+    "symmetry": False,
+    "ordered": False,
+    "seed": 0,
+    "record_tree": False,
+    "max_spread": None,
+    "hand": None,
+}
 
 
 def synthetic_records() -> list[dict]:
@@ -170,20 +281,48 @@ def synthetic_records() -> list[dict]:
         records.append(_record(len(records), *args, **kwargs))
 
     for obj, opt in (("box", 0.35), ("donut", 0.2)):
-        add(obj, "es", _es_plan(opt), {"chunk": 200000, "bins": 10, "hand": None, "max_spread": None}, "ES",
-            simulation=_simulation([opt, 0.3, 0.2, 0.1], rng))
-        add(obj, "astar", _search_plan("astar", opt, tree=_tree() if obj == "box" else None), SEARCH, "A*",
-            simulation=_simulation([opt], rng))
+        add(
+            obj,
+            "es",
+            _es_plan(opt),
+            {"chunk": 200000, "bins": 10, "hand": None, "max_spread": None},
+            "ES",
+            simulation=_simulation([opt, 0.3, 0.2, 0.1], rng),
+        )
+        add(
+            obj,
+            "astar",
+            _search_plan("astar", opt, tree=_tree() if obj == "box" else None),
+            SEARCH,
+            "A*",
+            simulation=_simulation([opt], rng),
+        )
         add(obj, "astar", _search_plan("astar", opt * 0.9, symmetry=True), {**SEARCH, "symmetry": True}, "A* sym")
         for seed in range(3):
-            add(obj, "astar", _search_plan("astar", opt, trace_len=60 + seed), {**SEARCH, "heuristic": "ru", "seed": seed},
-                "A* Γh=ru")
+            add(
+                obj,
+                "astar",
+                _search_plan("astar", opt, trace_len=60 + seed),
+                {**SEARCH, "heuristic": "ru", "seed": seed},
+                "A* Γh=ru",
+            )
         add(obj, "dijkstra", _search_plan("dijkstra", opt, trace_len=90), {**SEARCH, "heuristic": "none"}, "Dijkstra")
         for eps in (0.4, 1.0):
-            add(obj, "wastar", _search_plan("wastar", opt * (1 - eps / 5), eps=eps, seconds=1.0 / (1 + eps)),
-                {**SEARCH, "eps": eps}, f"WA* eps={eps:g}")
-        add(obj, "hfts", _hfts_plan([0.05, 0.1, opt * 0.8]), {"runs": 3, "iterations": 40, "seed": 0, "hand": None},
-            "HFTS", simulation=_simulation([opt * 0.8, 0.1, 0.05, 0.02], rng, first=10))
+            add(
+                obj,
+                "wastar",
+                _search_plan("wastar", opt * (1 - eps / 5), eps=eps, seconds=1.0 / (1 + eps)),
+                {**SEARCH, "eps": eps},
+                f"WA* eps={eps:g}",
+            )
+        add(
+            obj,
+            "hfts",
+            _hfts_plan([0.05, 0.1, opt * 0.8]),
+            {"runs": 3, "iterations": 40, "seed": 0, "hand": None},
+            "HFTS",
+            simulation=_simulation([opt * 0.8, 0.1, 0.05, 0.02], rng, first=10),
+        )
     add("box", "astar", None, SEARCH, "A*", status="error", contacts=50)  # errored cell
     return records
 
@@ -223,8 +362,13 @@ def test_fig4_histogram_per_problem_with_every_method_marked(run_data):
     assert figure.get_figwidth() == pytest.approx(7.16)
     box, donut = figure.axes
     assert box.get_title() == "box\nFC 3.33 %, Q1 = 0: 150,000" and donut.get_title().startswith("donut")
-    assert _labels(box) == ["A* (optimum)", "HFTS runs: min-max, mean", "WA* eps=0.4: Q1 (o) to bound (|)",
-                            "WA* eps=1: Q1 (o) to bound (|)", "ES: grasps per Q1 bin"]
+    assert _labels(box) == [
+        "A* (optimum)",
+        "HFTS runs: min-max, mean",
+        "WA* eps=0.4: Q1 (o) to bound (|)",
+        "WA* eps=1: Q1 (o) to bound (|)",
+        "ES: grasps per Q1 bin",
+    ]
     assert len(box.patches) == 10  # one bar per histogram bin
     optimum = next(line for line in box.lines if line.get_label() == "A* (optimum)")
     assert optimum.get_xdata()[0] == pytest.approx(0.35)
@@ -268,8 +412,12 @@ def test_fig6_created_and_visited_with_and_without_symmetry_removal(run_data):
     figure = plots.fig6_states_per_level(run_data)
     assert _titles(figure) == ["box: A*", "donut: A*"]
     labels = _labels(figure.axes[0])
-    assert labels == ["created, with symmetry removal (b*=1.50)", "visited, with symmetry removal",
-                      "created, without symmetry removal (b*=1.90)", "visited, without symmetry removal"]
+    assert labels == [
+        "created, with symmetry removal (b*=1.50)",
+        "visited, with symmetry removal",
+        "created, without symmetry removal (b*=1.90)",
+        "visited, without symmetry removal",
+    ]
     assert list(figure.axes[0].lines[3].get_ydata()) == [1, 3, 9, 6, 2, 1]
     assert figure.axes[0].get_yscale() == "log" and figure.axes[0].get_xlabel() == "search level"
 
@@ -328,10 +476,19 @@ def test_method_colours_are_one_fixed_mapping():
     colours = {plots.method_colour(m) for m in ("astar", "wastar", "dijkstra", "es", "es-pruned", "hfts")}
     assert len(colours) == 6
     light, dark = plots.method_colour("wastar", 0.2), plots.method_colour("wastar", 1.4)
-    assert light != dark and sum(int(light[i:i + 2], 16) for i in (1, 3, 5)) > sum(
-        int(dark[i:i + 2], 16) for i in (1, 3, 5))
-    assert len({plots.method_colour("astar"), plots.method_colour("astar", constraint="SDH"),
-                plots.method_colour("astar", constraint="spread<=0.1 m")}) == 3
+    assert light != dark and sum(int(light[i : i + 2], 16) for i in (1, 3, 5)) > sum(
+        int(dark[i : i + 2], 16) for i in (1, 3, 5)
+    )
+    assert (
+        len(
+            {
+                plots.method_colour("astar"),
+                plots.method_colour("astar", constraint="SDH"),
+                plots.method_colour("astar", constraint="spread<=0.1 m"),
+            }
+        )
+        == 3
+    )
 
 
 # ------------------------------------------------------------ table
@@ -344,14 +501,27 @@ def test_time_table_rows_objects_columns_methods(run_data, tmp_path):
     assert plots.time_table(run_data, unit="s").values[0][4] == pytest.approx(900.0)
     md, csv_path, tex = table.write(tmp_path, "t")
     rows = list(csv.reader(io.StringIO(csv_path.read_text())))
-    assert rows[0] == ["object", "A* [min]", "WA* (eps=0.4) [min]", "WA* (eps=1) [min]", "Dijkstra [min]",
-                       "ES [min]", "HFTS [min]"]
+    assert rows[0] == [
+        "object",
+        "A* [min]",
+        "WA* (eps=0.4) [min]",
+        "WA* (eps=1) [min]",
+        "Dijkstra [min]",
+        "ES [min]",
+        "HFTS [min]",
+    ]
     assert [r[0] for r in rows[1:]] == ["box", "donut"] and float(rows[1][5]) == pytest.approx(15.0)
     lines = md.read_text().splitlines()
     assert len(lines) == 4 and lines[0].count("|") == 8 and lines[2].startswith("| box | 0.0333 |")
     latex = tex.read_text()
-    for needed in (r"\begin{tabular}{lrrrrrr}", r"\toprule", r"\midrule", r"\bottomrule",
-                   r"WA* ($\varepsilon{=}0.4$)", r"box & 0.0333 & "):
+    for needed in (
+        r"\begin{tabular}{lrrrrrr}",
+        r"\toprule",
+        r"\midrule",
+        r"\bottomrule",
+        r"WA* ($\varepsilon{=}0.4$)",
+        r"box & 0.0333 & ",
+    ):
         assert needed in latex
     with pytest.raises(OgcpError, match="unknown time unit"):
         plots.time_table(run_data, unit="h")
@@ -363,7 +533,10 @@ def test_plot_run_writes_type42_pdfs_pngs_and_tables(tmp_path):
     report = plots.plot_run(run, tmp_path / "out")
     names = [p.name for p in report.written]
     assert names == [f"{n}.{fmt}" for n in FIGURE_NAMES for fmt in ("pdf", "png")] + [
-        "fig9_times.md", "fig9_times.csv", "fig9_times.tex"]
+        "fig9_times.md",
+        "fig9_times.csv",
+        "fig9_times.tex",
+    ]
     for path in report.written:
         if path.suffix == ".pdf":
             data = path.read_bytes()
@@ -423,8 +596,14 @@ def test_tiny_real_suite_plots(tmp_path):
     SuiteRunner(parse_suite(TINY_SUITE), tmp_path / "run", log=lambda _: None).run()
     report = plots.plot_run(tmp_path / "run", tmp_path / "out", formats=["pdf"])
     written = {p.name for p in report.written}
-    assert {"fig4_q1_histograms.pdf", "fig5_search_tree.pdf", "fig6_states_per_level.pdf", "fig7_iterations_f.pdf",
-            "fig8_wastar_tradeoff.pdf", "fig9_times.md"} <= written
+    assert {
+        "fig4_q1_histograms.pdf",
+        "fig5_search_tree.pdf",
+        "fig6_states_per_level.pdf",
+        "fig7_iterations_f.pdf",
+        "fig8_wastar_tradeoff.pdf",
+        "fig9_times.md",
+    } <= written
     run = load_run(tmp_path / "run")
     assert len(plots.fig4_q1_histograms(run).axes) == 1
     assert plots.time_table(run).columns == ("A*", "WA* (eps=0.5)", "WA* (eps=1)", "Dijkstra", "ES", "HFTS")
@@ -460,8 +639,10 @@ def test_plot_command_lists_the_files_it_wrote(tmp_path, monkeypatch):
     argv = ["plot", str(run), "--only", "fig9_times", "fig6_states_per_level", "--format", "pdf"]
     status, out, err = _ogcp(argv, monkeypatch)
     assert status == 0
-    assert out.splitlines() == [str(run / "figures" / n) for n in
-                                ("fig6_states_per_level.pdf", "fig9_times.md", "fig9_times.csv", "fig9_times.tex")]
+    assert out.splitlines() == [
+        str(run / "figures" / n)
+        for n in ("fig6_states_per_level.pdf", "fig9_times.md", "fig9_times.csv", "fig9_times.tex")
+    ]
     assert "ogcp: note: 1 cell(s) with status error skipped" in err
     status, _, err = _ogcp(["plot", str(run), "--only", "fig10"], monkeypatch)
     assert status == 2 and "unknown figure 'fig10'" in err
@@ -470,6 +651,8 @@ def test_plot_command_lists_the_files_it_wrote(tmp_path, monkeypatch):
 
 
 def test_core_packages_never_import_matplotlib():
-    code = ("import sys, planner, sim_eval, benchmarks.plots, benchmarks.cli.app as cli; cli.build_parser();"
-            "assert 'matplotlib' not in sys.modules, 'matplotlib imported'")
+    code = (
+        "import sys, planner, sim_eval, benchmarks.plots, benchmarks.cli.app as cli; cli.build_parser();"
+        "assert 'matplotlib' not in sys.modules, 'matplotlib imported'"
+    )
     subprocess.run([sys.executable, "-c", code], check=True, cwd=ROOT, timeout=120)

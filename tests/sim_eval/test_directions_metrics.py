@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 from scipy.optimize import linprog
 
-from planner.infra.errors import OgcpError
 from planner.grasp.quality import q1_certificate
 from planner.grasp.wrench import contact_wrenches
+from planner.infra.errors import OgcpError
 from sim_eval.directions import (
     DirectionSet,
     axis_directions,

@@ -36,8 +36,15 @@ def _ramp(mesh, positions, normals, direction, expected, settings=None, rho=0.1)
     settled = settle(scene, settings)
     assert settled.gates["valid"], settled.gates
     d = np.asarray(direction, dtype=float)[None, :]
-    trials = ramp_trials(scene, settled, d, np.array([expected / settings.ramp_time]),
-                         settings.ramp_extent * settings.ramp_time, rho, settings)
+    trials = ramp_trials(
+        scene,
+        settled,
+        d,
+        np.array([expected / settings.ramp_time]),
+        settings.ramp_extent * settings.ramp_time,
+        rho,
+        settings,
+    )
     assert trials.failed[0]
     return float(trials.failure_load[0])
 
@@ -117,7 +124,8 @@ def test_force_closure_box_grasp_matches_its_prediction(box_grasp_result):
     assert np.all(best.measured[ok] <= best.predicted[ok] * 1.12)
     record = box_grasp_result.to_dict()
     assert record["schema"] == "ogcp.sim/1" and record["grasps"][0]["median_fidelity"] == pytest.approx(
-        best.median_fidelity)
+        best.median_fidelity
+    )
     json.dumps(record, allow_nan=False)  # valid JSON: NaN written as null
 
 
@@ -156,8 +164,11 @@ def test_plan_with_contacts_off_the_object_is_refused(tmp_path):
 
     mesh = builtin_mesh("box")
     contacts = sample_contacts(mesh, 30, seed=0, source={"kind": "builtin", "name": "box", "diagonal": 0.2})
-    record = GraspPlanner().plan(contacts, 3).to_dict({"size": 30, "com": contacts.com.tolist(), "mu": MU,
-                                                       "cone_edges": 8, "source": dict(contacts.source)})
+    record = (
+        GraspPlanner()
+        .plan(contacts, 3)
+        .to_dict({"size": 30, "com": contacts.com.tolist(), "mu": MU, "cone_edges": 8, "source": dict(contacts.source)})
+    )
     record["contacts"]["positions"][0][0] += 0.01
     with pytest.raises(OgcpError, match="not on the object"):
         evaluate_plan(record, {"directions": 0}, HULL)

@@ -78,6 +78,15 @@ from planner.grasp.kernel.batch import (
 from planner.grasp.kernel.geometry import BOUND, FALLBACK, OK, ZERO
 
 __all__ = [
-    "BOUND", "FALLBACK", "OK", "ZERO", "canonical_plane", "default_directions", "evaluate_batch", "kernel_q1",
-    "last_active", "q1_batch", "support_table",
+    "BOUND",
+    "FALLBACK",
+    "OK",
+    "ZERO",
+    "canonical_plane",
+    "default_directions",
+    "evaluate_batch",
+    "kernel_q1",
+    "last_active",
+    "q1_batch",
+    "support_table",
 ]

@@ -69,20 +69,38 @@ def _new_workspace(max_points: int, max_facets: int) -> tuple:
     """The :class:`Workspace` arrays, allocated inside compiled code (one per thread)."""
     size = 1 << 16
     return (
-        np.zeros((max_facets, DIM), dtype=np.int32), np.zeros((max_facets, DIM)), np.zeros(max_facets),
-        np.zeros((max_facets, DIM), dtype=np.int32), np.zeros(max_facets, dtype=np.bool_),
-        np.zeros(max_facets, dtype=np.bool_), np.zeros(max_facets, dtype=np.int32),
-        np.zeros((max_facets * DIM, 3), dtype=np.int32), np.zeros(size, dtype=np.int64),
-        np.zeros(size, dtype=np.int32), np.zeros(size, dtype=np.int64), np.zeros(size, dtype=np.int64),
-        np.zeros(size, dtype=np.int64), np.zeros(1, dtype=np.int64), np.zeros(max_points, dtype=np.bool_),
-        np.zeros((5, DIM)), np.zeros(DIM, dtype=np.int64), np.zeros((max_points, DIM)),
+        np.zeros((max_facets, DIM), dtype=np.int32),
+        np.zeros((max_facets, DIM)),
+        np.zeros(max_facets),
+        np.zeros((max_facets, DIM), dtype=np.int32),
+        np.zeros(max_facets, dtype=np.bool_),
+        np.zeros(max_facets, dtype=np.bool_),
+        np.zeros(max_facets, dtype=np.int32),
+        np.zeros((max_facets * DIM, 3), dtype=np.int32),
+        np.zeros(size, dtype=np.int64),
+        np.zeros(size, dtype=np.int32),
+        np.zeros(size, dtype=np.int64),
+        np.zeros(size, dtype=np.int64),
+        np.zeros(size, dtype=np.int64),
+        np.zeros(1, dtype=np.int64),
+        np.zeros(max_points, dtype=np.bool_),
+        np.zeros((5, DIM)),
+        np.zeros(DIM, dtype=np.int64),
+        np.zeros((max_points, DIM)),
     )
 
 
 @njit(cache=True, parallel=True)
 def _batch_parallel(
-    wc: np.ndarray, grasps: np.ndarray, table: np.ndarray, certify: bool, out: np.ndarray, status: np.ndarray,
-    threshold: float, nchunks: int, max_facets: int,
+    wc: np.ndarray,
+    grasps: np.ndarray,
+    table: np.ndarray,
+    certify: bool,
+    out: np.ndarray,
+    status: np.ndarray,
+    threshold: float,
+    nchunks: int,
+    max_facets: int,
 ) -> None:
     """:func:`_batch_kernel` over ``nchunks`` contiguous chunks in parallel (own workspace each)."""
     B = grasps.shape[0]
@@ -93,8 +111,6 @@ def _batch_parallel(
         ws = _new_workspace(max(64, npts), max_facets)
         stats = np.zeros(6, dtype=np.int64)
         _batch_kernel(wc, grasps[lo:hi], table, ws, certify, out[lo:hi], status[lo:hi], stats, threshold)
-
-
 
 
 # --------------------------------------------------------------------------------------
@@ -202,8 +218,17 @@ def evaluate_batch(
         import numba
 
         nchunks = 4 * numba.get_num_threads()
-        _batch_parallel(wc, g, table, certify, out, status, float(threshold), nchunks,
-                        MAX_FACETS if g.shape[1] * wc.shape[1] <= 64 else 1 << 17)
+        _batch_parallel(
+            wc,
+            g,
+            table,
+            certify,
+            out,
+            status,
+            float(threshold),
+            nchunks,
+            MAX_FACETS if g.shape[1] * wc.shape[1] <= 64 else 1 << 17,
+        )
     else:
         ws = _workspace(g.shape[1] * wc.shape[1])
         _batch_kernel(wc, g, table, ws.as_tuple(), certify, out, status, _STATS, float(threshold))

@@ -85,8 +85,17 @@ def _flat_pair_ok(
 
 @njit(cache=True)
 def _certify(
-    P: np.ndarray, FV: np.ndarray, FU: np.ndarray, FD: np.ndarray, FN: np.ndarray, alive: np.ndarray, hw: int,
-    eps: float, scale: float, B: np.ndarray, stats: np.ndarray,
+    P: np.ndarray,
+    FV: np.ndarray,
+    FU: np.ndarray,
+    FD: np.ndarray,
+    FN: np.ndarray,
+    alive: np.ndarray,
+    hw: int,
+    eps: float,
+    scale: float,
+    B: np.ndarray,
+    stats: np.ndarray,
 ) -> bool:
     """Check that the facet complex covers every direction from the origin.
 
@@ -143,6 +152,3 @@ def _certify(
             if not _flat_pair_ok(P, FV, FU, f, j, g, jg, scale, B):
                 return False
     return True
-
-
-

@@ -72,9 +72,26 @@ class Workspace:
         return self._tuple
 
     def _build_tuple(self) -> tuple[np.ndarray, ...]:
-        return (self.FV, self.FU, self.FD, self.FN, self.alive, self.vis, self.free, self.horizon, self.hkey,
-                self.hcnt, self.hown, self.hstamp, self.used, self.gen, self.active, self.M, self.perm, self.R)
-
+        return (
+            self.FV,
+            self.FU,
+            self.FD,
+            self.FN,
+            self.alive,
+            self.vis,
+            self.free,
+            self.horizon,
+            self.hkey,
+            self.hcnt,
+            self.hown,
+            self.hstamp,
+            self.used,
+            self.gen,
+            self.active,
+            self.M,
+            self.perm,
+            self.R,
+        )
 
 
 @njit(cache=True, inline="always")
@@ -339,7 +356,9 @@ def _q1_kernel(
             for k in range(DIM):
                 if k == pos_p:
                     continue
-                sl, nused = _hash_insert(_ridge_key(FV[h], k), h * 8 + k, hkey, hcnt, hown, hstamp, hg, used, nused, mask)
+                sl, nused = _hash_insert(
+                    _ridge_key(FV[h], k), h * 8 + k, hkey, hcnt, hown, hstamp, hg, used, nused, mask
+                )
                 if hcnt[sl] == 2:
                     o = hown[sl]
                     FN[h, k] = o // 8
@@ -357,5 +376,3 @@ def _q1_kernel(
                 free[nfree] = g
                 nfree += 1
     return FALLBACK, np.nan
-
-

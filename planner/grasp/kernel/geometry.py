@@ -33,7 +33,6 @@ ZERO = 3
 CUT_MARGIN = 1e-9
 
 
-
 # --------------------------------------------------------------------------------------
 # Small dense helpers (no allocation: all scratch arrays come from the caller).
 # --------------------------------------------------------------------------------------
@@ -169,7 +168,6 @@ def _reference_rank_ok(P: np.ndarray, n: int) -> bool:
     return sv.size == DIM and sv[-1] > RANK_TOL * max(sv[0], 1e-300)
 
 
-
 @njit(cache=True, inline="always")
 def _slot(key: np.int64, mask: np.int64) -> np.int64:
     """Fibonacci hash of a ridge key into an open-addressing table of size mask + 1."""
@@ -188,8 +186,16 @@ def _mask_for(count: int) -> np.int64:
 
 @njit(cache=True)
 def _hash_insert(
-    key: np.int64, owner: np.int64, hkey: np.ndarray, hcnt: np.ndarray, hown: np.ndarray,
-    hstamp: np.ndarray, gen: np.int64, used: np.ndarray, nused: int, mask: np.int64,
+    key: np.int64,
+    owner: np.int64,
+    hkey: np.ndarray,
+    hcnt: np.ndarray,
+    hown: np.ndarray,
+    hstamp: np.ndarray,
+    gen: np.int64,
+    used: np.ndarray,
+    nused: int,
+    mask: np.int64,
 ) -> tuple[np.int64, int]:
     """Insert or find ``key``; returns (slot, new nused). Slots are valid iff stamp == gen,
     so clearing the table between uses costs nothing (the generation is bumped). Only the
@@ -206,4 +212,3 @@ def _hash_insert(
     hown[s] = owner
     used[nused] = s
     return s, nused + 1
-

@@ -22,7 +22,9 @@ ON_FACET = 1e-11
 
 
 @njit(cache=True)
-def _canonical_plane(P: np.ndarray, n: int, u: np.ndarray, d: float, X: np.ndarray, out: np.ndarray) -> tuple[float, bool]:
+def _canonical_plane(
+    P: np.ndarray, n: int, u: np.ndarray, d: float, X: np.ndarray, out: np.ndarray
+) -> tuple[float, bool]:
     """Hyperplane through the points of ``P[:n]`` that lie on the facet ``u.x = d``.
 
     The points with ``|P_i . u - d| <= ON_FACET`` are centred on their mean (summed in

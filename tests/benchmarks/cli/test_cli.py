@@ -12,12 +12,19 @@ import pytest
 
 from benchmarks.cli import main
 from planner.grasp.contact_set import ContactSet, sample_contacts
-from planner.objects import builtin_mesh
 from planner.grasp.quality import q1
+from planner.objects import builtin_mesh
 
 STATS_KEYS = {
-    "created", "visited", "created_per_level", "visited_per_level", "q1_evaluations",
-    "effective_branching_factor", "trace", "wall_seconds", "cpu_seconds",
+    "created",
+    "visited",
+    "created_per_level",
+    "visited_per_level",
+    "q1_evaluations",
+    "effective_branching_factor",
+    "trace",
+    "wall_seconds",
+    "cpu_seconds",
 }
 
 
@@ -120,8 +127,15 @@ def test_record_tree_writes_the_search_tree(capsys):
 
 def _contact_json(tmp_path, bad_normal) -> str:
     normals = [[0.0, 0.0, 1.0], bad_normal, [1.0, 0.0, 0.0]]
-    data = {"schema": "ogcp.contacts/1", "positions": [[0.0, 0.0, 0.0], [0.1, 0.0, 0.0], [0.0, 0.1, 0.0]],
-            "normals": normals, "com": [0.0, 0.0, 0.0], "torque_scale": 0.1, "mu": 0.5, "cone_edges": 8}
+    data = {
+        "schema": "ogcp.contacts/1",
+        "positions": [[0.0, 0.0, 0.0], [0.1, 0.0, 0.0], [0.0, 0.1, 0.0]],
+        "normals": normals,
+        "com": [0.0, 0.0, 0.0],
+        "torque_scale": 0.1,
+        "mu": 0.5,
+        "cone_edges": 8,
+    }
     path = tmp_path / "bad.json"
     path.write_text(json.dumps(data))  # json.dumps writes float("nan") as the token NaN
     assert ("NaN" in path.read_text()) == any(np.isnan(bad_normal))
@@ -192,8 +206,10 @@ def test_contact_count_with_contact_file(capsys, tmp_path):
     _assert_one_error_line(capsys, ["plan", str(path), "-n", "10"], "does not apply to a contact file")
 
 
-@pytest.mark.parametrize("argv", [["plan", "box", "-n", "abc"], ["plan", "box", "-n", "0"],
-                                  ["plan", "box", "--eps", "x"], ["frobnicate"], []])
+@pytest.mark.parametrize(
+    "argv",
+    [["plan", "box", "-n", "abc"], ["plan", "box", "-n", "0"], ["plan", "box", "--eps", "x"], ["frobnicate"], []],
+)
 def test_argparse_errors_exit_2(capsys, argv):
     with pytest.raises(SystemExit) as info:
         main(argv)

@@ -35,8 +35,9 @@ def test_evaluate_prints_measured_against_predicted(plan_file):
 
 def test_evaluate_json_is_the_sim_schema(plan_file, tmp_path):
     target = tmp_path / "sim.json"
-    status, out, _ = _run(["evaluate", str(plan_file), "--directions", "2", "--decomposition", "convex_hull",
-                           "--json", "-o", str(target)])
+    status, out, _ = _run(
+        ["evaluate", str(plan_file), "--directions", "2", "--decomposition", "convex_hull", "--json", "-o", str(target)]
+    )
     assert status == 0
     record = json.loads(out)
     assert record == json.loads(target.read_text())
@@ -47,11 +48,14 @@ def test_evaluate_json_is_the_sim_schema(plan_file, tmp_path):
     assert record["settings"]["decomposition"]["method"] == "convex_hull"
 
 
-@pytest.mark.parametrize(("content", "message"), [
-    (None, "no such plan file"),
-    ("{not json", "not valid JSON"),
-    ('{"schema": "ogcp.contacts/1"}', "expected a plan"),
-])
+@pytest.mark.parametrize(
+    ("content", "message"),
+    [
+        (None, "no such plan file"),
+        ("{not json", "not valid JSON"),
+        ('{"schema": "ogcp.contacts/1"}', "expected a plan"),
+    ],
+)
 def test_evaluate_rejects_bad_plan_files(tmp_path, content, message):
     path = tmp_path / "bad.json"
     if content is not None:

@@ -69,13 +69,29 @@ def test_missing_file_reads_as_empty(tmp_path):
 
 def test_records_are_strict_json_with_numpy_values(tmp_path):
     store = ResultStore(tmp_path)
-    store.append({"id": "n", "nan": math.nan, "inf": -math.inf, "np": np.int64(7), "arr": np.arange(3),
-                  "f": np.float64(0.25), "nested": [{"v": np.float32(np.nan)}]})
+    store.append(
+        {
+            "id": "n",
+            "nan": math.nan,
+            "inf": -math.inf,
+            "np": np.int64(7),
+            "arr": np.arange(3),
+            "f": np.float64(0.25),
+            "nested": [{"v": np.float32(np.nan)}],
+        }
+    )
     line = store.results_path.read_text()
     assert "NaN" not in line and "Infinity" not in line
     record = json.loads(line)
-    assert record == {"id": "n", "nan": None, "inf": None, "np": 7, "arr": [0, 1, 2], "f": 0.25,
-                      "nested": [{"v": None}]}
+    assert record == {
+        "id": "n",
+        "nan": None,
+        "inf": None,
+        "np": 7,
+        "arr": [0, 1, 2],
+        "f": 0.25,
+        "nested": [{"v": None}],
+    }
     assert jsonable((1, np.bool_(True))) == [1, True]
 
 

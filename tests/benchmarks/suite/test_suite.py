@@ -19,13 +19,13 @@ import pytest
 
 import sim_eval
 from benchmarks import cli
-from benchmarks.suite.store import ResultStore
-from benchmarks.suite.runner import SuiteRunner
 from benchmarks.suite.config import builtin_suites, load_suite, parse_suite
+from benchmarks.suite.runner import SuiteRunner
+from benchmarks.suite.store import ResultStore
 from planner.grasp.contact_set import sample_contacts
+from planner.grasp.quality import q1
 from planner.infra.errors import OgcpError
 from planner.objects import builtin_mesh
-from planner.grasp.quality import q1
 
 ROOT = Path(__file__).resolve().parents[3]
 TINY = """
@@ -117,9 +117,13 @@ def test_cells_are_the_cartesian_product_with_stable_ids():
     assert {c.label for c in wastar} == {"WA* 0.5", "WA* 1"}
     # Reordered objects, methods and eps, comments added, defaults spelled out: the same cells.
     blocks = TINY.split("[[methods]]")
-    reordered = (blocks[0].replace('["box", "sphere"]', '["sphere", "box"]') + "# comment\n"
-                 + "[[methods]]".join(["", *reversed(blocks[1:])]).replace("[0.5, 1.0]", "[1.0, 0.5]")
-                 .replace('method = "astar"', 'method = "astar"\nbranching = 2\nsymmetry = false'))
+    reordered = (
+        blocks[0].replace('["box", "sphere"]', '["sphere", "box"]')
+        + "# comment\n"
+        + "[[methods]]".join(["", *reversed(blocks[1:])])
+        .replace("[0.5, 1.0]", "[1.0, 0.5]")
+        .replace('method = "astar"', 'method = "astar"\nbranching = 2\nsymmetry = false')
+    )
     again = parse_suite(reordered)
     assert sorted(c.id for c in again.cells) == sorted(c.id for c in suite.cells)
     assert again.hash == suite.hash
@@ -159,51 +163,96 @@ def test_groups_inherit_defaults_and_share_cells():
 BAD_SUITES = [
     ("objects = ['box']", "schema_version: missing; valid values: 1"),
     ("schema_version = 2", "schema_version: unsupported value 2; valid values: 1"),
-    ("schema_version = 1\nobjects = ['box']\nmethodz = 1\n[[methods]]\nmethod = 'astar'",
-     "top level: unknown key 'methodz'; valid keys: cone_edges, contact_seeds, contacts"),
-    ("schema_version = 1\nobjects = ['box']\n[[methods]]\nmethod = 'astra'",
-     "methods[0].method 'astra'; valid choices: astar, dijkstra, es, es-pruned, hfts, wastar"),
-    ("schema_version = 1\nobjects = ['box']\n[[methods]]\nmethod = 'wastar'\nepsilon = 1",
-     "methods[0] (method wastar): unknown key 'epsilon'; valid keys: branching, eps, hand"),
-    ("schema_version = 1\nobjects = ['box']\n[[methods]]\nmethod = 'wastar'\neps = [0.4, -1]",
-     "methods[0].eps[1]: expected a number >= 0, got -1"),
-    ("schema_version = 1\nobjects = ['box']\n[[methods]]\nmethod = 'wastar'\neps = 'big'",
-     "methods[0].eps: expected a number >= 0, got 'big'"),
-    ("schema_version = 1\nobjects = ['box']\n[[methods]]\nmethod = 'astar'\neps = 0.4",
-     "methods[0] (method astar): unknown key 'eps'"),
-    ("schema_version = 1\nobjects = ['box']\n[[methods]]\nmethod = 'astar'\nbranching = true",
-     "methods[0].branching: expected an integer >= 2, got True"),
-    ("schema_version = 1\nobjects = ['box']\n[[methods]]\nmethod = 'astar'\nheuristic = 'rnd'",
-     "methods[0].heuristic 'rnd'; valid choices: fc, none, ru"),
-    ("schema_version = 1\nobjects = ['box']\n[[methods]]\nmethod = 'dijkstra'\nheuristic = 'fc'",
-     "methods[0].heuristic 'fc'; valid choices: none"),
+    (
+        "schema_version = 1\nobjects = ['box']\nmethodz = 1\n[[methods]]\nmethod = 'astar'",
+        "top level: unknown key 'methodz'; valid keys: cone_edges, contact_seeds, contacts",
+    ),
+    (
+        "schema_version = 1\nobjects = ['box']\n[[methods]]\nmethod = 'astra'",
+        "methods[0].method 'astra'; valid choices: astar, dijkstra, es, es-pruned, hfts, wastar",
+    ),
+    (
+        "schema_version = 1\nobjects = ['box']\n[[methods]]\nmethod = 'wastar'\nepsilon = 1",
+        "methods[0] (method wastar): unknown key 'epsilon'; valid keys: branching, eps, hand",
+    ),
+    (
+        "schema_version = 1\nobjects = ['box']\n[[methods]]\nmethod = 'wastar'\neps = [0.4, -1]",
+        "methods[0].eps[1]: expected a number >= 0, got -1",
+    ),
+    (
+        "schema_version = 1\nobjects = ['box']\n[[methods]]\nmethod = 'wastar'\neps = 'big'",
+        "methods[0].eps: expected a number >= 0, got 'big'",
+    ),
+    (
+        "schema_version = 1\nobjects = ['box']\n[[methods]]\nmethod = 'astar'\neps = 0.4",
+        "methods[0] (method astar): unknown key 'eps'",
+    ),
+    (
+        "schema_version = 1\nobjects = ['box']\n[[methods]]\nmethod = 'astar'\nbranching = true",
+        "methods[0].branching: expected an integer >= 2, got True",
+    ),
+    (
+        "schema_version = 1\nobjects = ['box']\n[[methods]]\nmethod = 'astar'\nheuristic = 'rnd'",
+        "methods[0].heuristic 'rnd'; valid choices: fc, none, ru",
+    ),
+    (
+        "schema_version = 1\nobjects = ['box']\n[[methods]]\nmethod = 'dijkstra'\nheuristic = 'fc'",
+        "methods[0].heuristic 'fc'; valid choices: none",
+    ),
     ("schema_version = 1\nobjects = ['box']\nm = []\n[[methods]]\nmethod = 'astar'", "top level.m: empty list"),
-    ("schema_version = 1\nobjects = ['box']\ncontacts = 5\nm = [3, 6]\n[[methods]]\nmethod = 'astar'",
-     "m = 6 exceeds the contact count 5"),
-    ("schema_version = 1\nobjects = ['box']\nm = [4]\n[[methods]]\nmethod = 'astar'\nhand = 'sdh'",
-     "methods[0].hand: the sdh hand has 3 fingers"),
-    ("schema_version = 1\nobjects = ['box']\n[[methods]]\nmethod = 'astar'\nhand = 'shadow'",
-     "hand 'shadow'; valid choices: sdh"),
-    ("schema_version = 1\nobjects = ['box']\n[[methods]]\nmethod = 'es'\nhand_threshold = 0.2",
-     "methods[0].hand_threshold: applies only with hand = 'sdh'"),
-    ("schema_version = 1\nobjects = ['box']\n[[methods]]\nmethod = 'astar'\nlabel = 'A* {epz}'",
-     "methods[0].label: cannot fill 'A* {epz}'"),
-    ("schema_version = 1\nobjects = ['missing/part.obj']\n[[methods]]\nmethod = 'astar'",
-     "objects[0]: mesh file not found"),
-    ("schema_version = 1\nobjects = ['boxx']\n[[methods]]\nmethod = 'astar'",
-     "objects[0] object 'boxx'; valid choices: <path to a mesh file>, amphora, box, bunny"),
-    ("schema_version = 1\nobjects = ['box']\n[[methods]]\nmethod = 'astar'\n[simulation]\nenabled = true\nF_max = 1",
-     "simulation: unknown simulation setting 'F_max'; valid choices: cone"),
+    (
+        "schema_version = 1\nobjects = ['box']\ncontacts = 5\nm = [3, 6]\n[[methods]]\nmethod = 'astar'",
+        "m = 6 exceeds the contact count 5",
+    ),
+    (
+        "schema_version = 1\nobjects = ['box']\nm = [4]\n[[methods]]\nmethod = 'astar'\nhand = 'sdh'",
+        "methods[0].hand: the sdh hand has 3 fingers",
+    ),
+    (
+        "schema_version = 1\nobjects = ['box']\n[[methods]]\nmethod = 'astar'\nhand = 'shadow'",
+        "hand 'shadow'; valid choices: sdh",
+    ),
+    (
+        "schema_version = 1\nobjects = ['box']\n[[methods]]\nmethod = 'es'\nhand_threshold = 0.2",
+        "methods[0].hand_threshold: applies only with hand = 'sdh'",
+    ),
+    (
+        "schema_version = 1\nobjects = ['box']\n[[methods]]\nmethod = 'astar'\nlabel = 'A* {epz}'",
+        "methods[0].label: cannot fill 'A* {epz}'",
+    ),
+    (
+        "schema_version = 1\nobjects = ['missing/part.obj']\n[[methods]]\nmethod = 'astar'",
+        "objects[0]: mesh file not found",
+    ),
+    (
+        "schema_version = 1\nobjects = ['boxx']\n[[methods]]\nmethod = 'astar'",
+        "objects[0] object 'boxx'; valid choices: <path to a mesh file>, amphora, box, bunny",
+    ),
+    (
+        "schema_version = 1\nobjects = ['box']\n[[methods]]\nmethod = 'astar'\n[simulation]\nenabled = true\nF_max = 1",
+        "simulation: unknown simulation setting 'F_max'; valid choices: cone",
+    ),
     ("schema_version = 1\nobjects = ['box', 'box']\n[[methods]]\nmethod = 'astar'", "an object is listed twice"),
     ("schema_version = 1\nobjects = ['box']", "top level: missing key 'methods'"),
-    ("schema_version = 1\nobjects = ['box']\ncontact_seeds = {start = 0}\n[[methods]]\nmethod = 'astar'",
-     "contact_seeds: a seed range needs exactly the keys count, start"),
-    ("schema_version = 1\nobjects = ['box']\n[[methods]]\nmethod = 'astar'\n[simulation]\nenabled = 'yes'",
-     "simulation.enabled: expected true or false"),
-    ("schema_version = 1\nobjects = ['box']\n[[group]]\nname = 'g'\nm = 0\n[[group.methods]]\nmethod = 'es'",
-     "group[0].m: expected an integer >= 2, got 0"),
-    (("schema_version = 1\nobjects = ['box']\n[[methods]]\nmethod = 'astar'\nlabel = 'x'\n"
-     "[[methods]]\nmethod = 'astar'\nbranching = 2\nlabel = 'y'"), "labelled both 'x' and 'y'"),
+    (
+        "schema_version = 1\nobjects = ['box']\ncontact_seeds = {start = 0}\n[[methods]]\nmethod = 'astar'",
+        "contact_seeds: a seed range needs exactly the keys count, start",
+    ),
+    (
+        "schema_version = 1\nobjects = ['box']\n[[methods]]\nmethod = 'astar'\n[simulation]\nenabled = 'yes'",
+        "simulation.enabled: expected true or false",
+    ),
+    (
+        "schema_version = 1\nobjects = ['box']\n[[group]]\nname = 'g'\nm = 0\n[[group.methods]]\nmethod = 'es'",
+        "group[0].m: expected an integer >= 2, got 0",
+    ),
+    (
+        (
+            "schema_version = 1\nobjects = ['box']\n[[methods]]\nmethod = 'astar'\nlabel = 'x'\n"
+            "[[methods]]\nmethod = 'astar'\nbranching = 2\nlabel = 'y'"
+        ),
+        "labelled both 'x' and 'y'",
+    ),
     ("schema_version = 1\nobjects = [\n", "invalid TOML"),
 ]
 
@@ -225,12 +274,15 @@ def test_builtin_suites_load_and_cover_the_paper(tmp_path):
     objects = {"box", "sphere", "donut", "amphora", "bunny", "homer", "plane"}
     assert {c.object.spec for c in paper.cells if c.method == "es"} == objects
     assert {c.contacts for c in paper.cells if c.method == "es"} == {1000}
-    assert {(c.object.spec, c.m) for c in paper.cells if c.m > 3} == {(o, m) for o in ("bunny", "plane")
-                                                                      for m in (4, 5, 6)}
+    assert {(c.object.spec, c.m) for c in paper.cells if c.m > 3} == {
+        (o, m) for o in ("bunny", "plane") for m in (4, 5, 6)
+    }
     eps = {dict(c.variant)["eps"] for c in paper.cells if c.method == "wastar"}
     assert eps == {0.2, 0.4, 0.6, 0.8, 1.0, 1.2, 1.4}
     assert {dict(c.variant)["symmetry"] for c in paper.cells if c.object.spec == "homer" and c.method == "astar"} == {
-        True, False}
+        True,
+        False,
+    }
     sdh = load_suite("sdh")
     assert all(dict(c.variant)["hand"] == "sdh" or dict(c.variant).get("max_spread") for c in sdh.cells)
     with pytest.raises(OgcpError, match="unknown suite 'nope'; valid choices: <path to a suite .toml file>, paper"):
@@ -255,8 +307,11 @@ def test_tiny_suite_end_to_end(serial_run):
         contacts = sample_contacts(builtin_mesh(obj), 16, seed=0)
         grasps = [np.array(g) for g in itertools.combinations(range(16), 3)]
         best = max(q1(contacts.subset_wrenches(g)) for g in grasps)
-        spread = [g for g in grasps if np.max(np.linalg.norm(contacts.positions[g][:, None] - contacts.positions[g][None],
-                                                              axis=-1)) <= 0.15]
+        spread = [
+            g
+            for g in grasps
+            if np.max(np.linalg.norm(contacts.positions[g][:, None] - contacts.positions[g][None], axis=-1)) <= 0.15
+        ]
         best_spread = max(q1(contacts.subset_wrenches(g)) for g in spread)
         for label in ("A*", "Dijkstra", "ES"):
             assert by_label[(obj, label)]["plan"]["q1"] == pytest.approx(best, abs=1e-9)
@@ -265,7 +320,8 @@ def test_tiny_suite_end_to_end(serial_run):
         es, hfts = by_label[(obj, "ES")]["plan"], by_label[(obj, "HFTS iterations=5 runs=3")]["plan"]
         assert sum(es["histogram"]["counts"]) + es["histogram"]["zero"] == len(grasps)
         assert by_label[(obj, "ES max_spread=0.15")]["plan"]["stats"]["excluded_by_constraints"] == len(grasps) - len(
-            spread)
+            spread
+        )
         assert len(hfts["runs"]) == 3 and hfts["q1"] == max(run["q1"] for run in hfts["runs"]) <= best + 1e-12
         for eps in (0.5, 1.0):
             plan = by_label[(obj, f"WA* {eps:g}")]["plan"]
@@ -273,10 +329,32 @@ def test_tiny_suite_end_to_end(serial_run):
         stats = by_label[(obj, "A*")]["plan"]["stats"]
         assert sum(stats["created_per_level"]) == stats["created"] and stats["trace"]
     record = records[0]
-    assert set(record) == {"schema", "id", "params", "groups", "status", "error", "plan", "simulation",
-                           "simulation_seconds", "wall_seconds", "cpu_seconds", "finished_at"}
-    assert set(record["params"]) == {"object", "contacts", "contact_seed", "m", "mu", "cone_edges", "diagonal",
-                                     "method", "variant", "label"}
+    assert set(record) == {
+        "schema",
+        "id",
+        "params",
+        "groups",
+        "status",
+        "error",
+        "plan",
+        "simulation",
+        "simulation_seconds",
+        "wall_seconds",
+        "cpu_seconds",
+        "finished_at",
+    }
+    assert set(record["params"]) == {
+        "object",
+        "contacts",
+        "contact_seed",
+        "m",
+        "mu",
+        "cone_edges",
+        "diagonal",
+        "method",
+        "variant",
+        "label",
+    }
     manifest = ResultStore(serial_run).read_manifest()
     assert manifest["suite"]["content"] == TINY and manifest["suite"]["cells"] == TINY_CELLS
     assert set(manifest["versions"]) >= {"ogcp", "numpy", "scipy", "mujoco", "coacd"}
@@ -289,8 +367,9 @@ def test_parallel_processes_and_dask_match_serial(tiny_file, serial_run, tmp_pat
     suite = load_suite(tiny_file)
     SuiteRunner(suite, tmp_path / "loky", jobs=2).run()
     assert _results(tmp_path / "loky") == expected
-    with distributed.LocalCluster(n_workers=1, threads_per_worker=2, processes=False,
-                                  dashboard_address=None) as cluster:
+    with distributed.LocalCluster(
+        n_workers=1, threads_per_worker=2, processes=False, dashboard_address=None
+    ) as cluster:
         SuiteRunner(suite, tmp_path / "dask", backend="dask", address=cluster.scheduler_address).run()
     assert _results(tmp_path / "dask") == expected
 
@@ -318,8 +397,10 @@ def test_resume_after_a_partial_run_and_a_torn_line(tiny_file, serial_run, tmp_p
 
 def test_resume_after_the_process_is_killed(tiny_file, serial_run, tmp_path):
     out = tmp_path / "killed"
-    script = ("import sys\nfrom benchmarks.suite.runner import SuiteRunner\nfrom benchmarks.suite.config import load_suite\n"
-              "SuiteRunner(load_suite(sys.argv[1]), sys.argv[2]).run()\n")
+    script = (
+        "import sys\nfrom benchmarks.suite.runner import SuiteRunner\nfrom benchmarks.suite.config import load_suite\n"
+        "SuiteRunner(load_suite(sys.argv[1]), sys.argv[2]).run()\n"
+    )
     process = subprocess.Popen([sys.executable, "-c", script, str(tiny_file), str(out)], cwd=ROOT)
     results = out / "results.jsonl"
     deadline = time.monotonic() + 60
@@ -338,8 +419,9 @@ def test_resume_after_the_process_is_killed(tiny_file, serial_run, tmp_path):
 def test_failing_cells_are_recorded_and_the_suite_goes_on(tmp_path, monkeypatch):
     monkeypatch.setenv("OGCP_CACHE", str(tmp_path / "empty-cache"))  # bunny is not fetched there
     suite_file = tmp_path / "s.toml"
-    suite_file.write_text("schema_version = 1\nobjects = ['box', 'bunny']\ncontacts = 12\n"
-                          "[[methods]]\nmethod = 'astar'\n")
+    suite_file.write_text(
+        "schema_version = 1\nobjects = ['box', 'bunny']\ncontacts = 12\n[[methods]]\nmethod = 'astar'\n"
+    )
     out = tmp_path / "out"
     status, text, err = _ogcp(["suite", str(suite_file), "--out", str(out)], monkeypatch)
     assert status == 1 and "objects not fetched yet: bunny" in err and "failed: OgcpError" in err
@@ -359,11 +441,15 @@ def test_simulation_is_called_lazily_with_the_plan(tmp_path, monkeypatch):
 
     def evaluate_plan(plan: dict, settings: dict, **options) -> dict:
         calls.append((settings, options))
-        return {"schema": "ogcp.sim/1", "grasps": [{"label": "best", "grasp": plan["grasp"], "valid": True,
-                                                    "measured_min": 2 * plan["q1"]}]}
+        return {
+            "schema": "ogcp.sim/1",
+            "grasps": [{"label": "best", "grasp": plan["grasp"], "valid": True, "measured_min": 2 * plan["q1"]}],
+        }
 
-    text = ("schema_version = 1\nobjects = ['box']\ncontacts = 12\n[[methods]]\nmethod = 'astar'\n"
-            "[simulation]\nenabled = true\ndirections = 8\nmax_normal_force = 20.0\nmax_grasps = 1\n")
+    text = (
+        "schema_version = 1\nobjects = ['box']\ncontacts = 12\n[[methods]]\nmethod = 'astar'\n"
+        "[simulation]\nenabled = true\ndirections = 8\nmax_normal_force = 20.0\nmax_grasps = 1\n"
+    )
     monkeypatch.setattr(sim_eval, "evaluate_plan", evaluate_plan, raising=False)
     record = SuiteRunner(parse_suite(text), tmp_path / "a").run().records.popitem()[1]
     assert calls == [({"directions": 8, "max_normal_force": 20.0}, {"max_grasps": 1})]
@@ -390,20 +476,28 @@ def test_record_tree_is_passed_through(tmp_path):
 
 def test_slices_selected_with_only_add_up_to_the_full_run(tiny_file, serial_run, tmp_path, monkeypatch):
     out = tmp_path / "out"
-    status, text, _ = _ogcp(["suite", str(tiny_file), "--out", str(out), "--only", "object=box",
-                             "--only", "method=es,hfts"], monkeypatch)
+    status, text, _ = _ogcp(
+        ["suite", str(tiny_file), "--out", str(out), "--only", "object=box", "--only", "method=es,hfts"], monkeypatch
+    )
     assert status == 0 and "3 cells run, 0 already recorded, 0 errors, 13 remaining" in text
     assert {(r["params"]["object"], r["params"]["method"]) for r in _results(out).values()} == {
-        ("box", "es"), ("box", "hfts")}
+        ("box", "es"),
+        ("box", "hfts"),
+    }
     again = SuiteRunner(load_suite(tiny_file), out, resume=True, only=["object=box"]).run()
     assert (again.ran, again.remaining) == (5, 8)
     rest = SuiteRunner(load_suite(tiny_file), out, resume=True).run()
     assert rest.ran == 8 and _results(out) == _results(serial_run)
     assert [s["only"] for s in ResultStore(out).read_manifest()["sessions"]] == [
-        ["object=box", "method=es,hfts"], ["object=box"], []]
-    for only, message in [(["object=bunny"], "no cell of this suite has it; the suite has object = box, sphere"),
-                          (["colour=red"], "valid choices: contacts, group, label, m, method, object"),
-                          (["object"], "--only takes KEY=VALUE")]:
+        ["object=box", "method=es,hfts"],
+        ["object=box"],
+        [],
+    ]
+    for only, message in [
+        (["object=bunny"], "no cell of this suite has it; the suite has object = box, sphere"),
+        (["colour=red"], "valid choices: contacts, group, label, m, method, object"),
+        (["object"], "--only takes KEY=VALUE"),
+    ]:
         with pytest.raises(OgcpError, match=message):
             SuiteRunner(load_suite(tiny_file), tmp_path / "bad", only=only).run()
 

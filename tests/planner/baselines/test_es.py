@@ -11,8 +11,8 @@ import pytest
 from benchmarks.cli import main
 from planner.baselines.combinations import combinations_range, count
 from planner.baselines.es import ExhaustiveSearch
-from planner.infra.errors import OgcpError
 from planner.grasp.quality import q1
+from planner.infra.errors import OgcpError
 
 
 @pytest.fixture(scope="module")

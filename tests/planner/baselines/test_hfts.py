@@ -9,8 +9,8 @@ import pytest
 
 from benchmarks.cli import main
 from planner.baselines.hfts import HFTS, Hierarchy
-from planner.infra.errors import OgcpError
 from planner.grasp.quality import q1
+from planner.infra.errors import OgcpError
 from tests.conftest import exhaustive_best
 
 
@@ -41,7 +41,10 @@ def test_runs_are_deterministic_per_seed(donut, twenty_runs):
     assert [(r.grasp, r.q1) for r in again.runs] == [(r.grasp, r.q1) for r in twenty_runs.runs]
     alone = HFTS(runs=1, seed=7).run(donut, 3).runs[0]
     assert (alone.grasp, alone.q1, alone.objective_per_level) == (
-        twenty_runs.runs[7].grasp, twenty_runs.runs[7].q1, twenty_runs.runs[7].objective_per_level)
+        twenty_runs.runs[7].grasp,
+        twenty_runs.runs[7].q1,
+        twenty_runs.runs[7].objective_per_level,
+    )
     assert [r.seed for r in twenty_runs.runs] == list(range(20))
 
 

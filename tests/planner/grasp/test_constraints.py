@@ -9,9 +9,9 @@ import pytest
 
 from planner.grasp.constraints import DistinctContacts, MaxFingerSpread
 from planner.grasp.contact_set import ContactSet, sample_contacts
+from planner.grasp.quality import q1
 from planner.infra.errors import OgcpError
 from planner.objects import builtin_mesh
-from planner.grasp.quality import q1
 from planner.search.grasp_planner import GraspPlanner
 
 

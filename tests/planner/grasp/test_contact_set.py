@@ -10,9 +10,9 @@ import pytest
 import trimesh
 
 from planner.grasp.contact_set import SCHEMA, ContactSet, NonWatertightWarning, mass_properties, sample_contacts
+from planner.grasp.wrench import cone_edges, contact_wrenches, tangent_basis
 from planner.infra.errors import OgcpError
 from planner.objects import BUILTIN_OBJECTS, builtin_mesh, load_mesh, resolve_object
-from planner.grasp.wrench import cone_edges, contact_wrenches, tangent_basis
 
 
 def winding_number(mesh: trimesh.Trimesh, points: np.ndarray) -> np.ndarray:
@@ -64,8 +64,10 @@ def test_even_sampling_falls_short_for_some_n():
     level = log.level
     log.setLevel(logging.ERROR)
     try:
-        counts = {n: len(trimesh.sample.sample_surface_even(mesh, n, seed=np.random.default_rng([0, 0]))[0])
-                  for n in (7, 13, 20)}
+        counts = {
+            n: len(trimesh.sample.sample_surface_even(mesh, n, seed=np.random.default_rng([0, 0]))[0])
+            for n in (7, 13, 20)
+        }
     finally:
         log.setLevel(level)
     assert any(counts[n] < n for n in counts), counts

@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 from scipy.spatial import ConvexHull, QhullError
 
-from planner.grasp.support_bound import SupportBound
 from planner.grasp.contact_set import ContactSet
-from planner.grasp.subset_quality import GraspQuality
 from planner.grasp.quality import q1, q1_certificate, q1_certificate_direct
+from planner.grasp.subset_quality import GraspQuality
+from planner.grasp.support_bound import SupportBound
 from planner.grasp.wrench import contact_wrenches
 from tests.conftest import q1_by_facet_enumeration
 
@@ -220,10 +220,22 @@ def test_q1_is_invariant_to_translating_and_scaling_the_object(object_contacts):
     # tangent basis turns the linearised cone about the normal with the world axes.)
     contacts = object_contacts("amphora", 100, seed=6)
     shift, scale = np.array([0.3, -1.2, 2.5]), 3.7
-    moved = ContactSet(contacts.positions + shift, contacts.normals, contacts.com + shift,
-                       contacts.torque_scale, contacts.mu, contacts.cone_edges)
-    scaled = ContactSet(contacts.positions * scale, contacts.normals, contacts.com * scale,
-                        contacts.torque_scale * scale, contacts.mu, contacts.cone_edges)
+    moved = ContactSet(
+        contacts.positions + shift,
+        contacts.normals,
+        contacts.com + shift,
+        contacts.torque_scale,
+        contacts.mu,
+        contacts.cone_edges,
+    )
+    scaled = ContactSet(
+        contacts.positions * scale,
+        contacts.normals,
+        contacts.com * scale,
+        contacts.torque_scale * scale,
+        contacts.mu,
+        contacts.cone_edges,
+    )
     rng = np.random.default_rng(8)
     fc = 0
     for _ in range(60):

@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 from benchmarks.cli import main
+from planner.grasp.quality import q1
 from planner.hands.reachability import SDHReachability, finger_chain, pad_normals, self_collision_free
 from planner.hands.sdh import forward_kinematics, random_configurations
-from planner.grasp.quality import q1
 from planner.search.grasp_planner import GraspPlanner
 
 
@@ -63,9 +63,7 @@ def test_pruning_is_sound_against_brute_force(hand, donut):
     pruned = 0
     for _ in range(150):
         sets = [np.sort(rng.choice(18, int(rng.integers(1, 3)), replace=False)) for _ in range(3)]
-        reachable = any(
-            len({a, b, c}) == 3 and hand.accepts((a, b, c), donut) for a, b, c in itertools.product(*sets)
-        )
+        reachable = any(len({a, b, c}) == 3 and hand.accepts((a, b, c), donut) for a, b, c in itertools.product(*sets))
         admitted = hand.admits(sets, donut)
         assert admitted or not reachable  # never prunes a state that holds a reachable grasp
         pruned += not admitted
@@ -112,8 +110,9 @@ def test_hfts_penalises_the_residual(hand, object_contacts):
     free = HFTS(runs=12, seed=0).run(contacts, 3)
     with_hand = HFTS(runs=12, seed=0, hand=hand).run(contacts, 3)
     assert all(r.residual is None for r in free.runs) and all(r.residual is not None for r in with_hand.runs)
-    free_residuals = hand.residuals(contacts.positions[[list(r.grasp) for r in free.runs]],
-                                    contacts.normals[[list(r.grasp) for r in free.runs]])
+    free_residuals = hand.residuals(
+        contacts.positions[[list(r.grasp) for r in free.runs]], contacts.normals[[list(r.grasp) for r in free.runs]]
+    )
     assert np.mean([r.residual for r in with_hand.runs]) < np.mean(free_residuals)
     assert with_hand.config["hand"]["name"] == "sdh"
 

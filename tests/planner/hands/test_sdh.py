@@ -8,7 +8,6 @@ import mujoco
 import numpy as np
 import pytest
 
-from planner.infra.errors import OgcpError
 from planner.hands import (
     FINGER_BASES,
     JOINT_LIMITS,
@@ -20,6 +19,7 @@ from planner.hands import (
     sdh,
     sdh_model_path,
 )
+from planner.infra.errors import OgcpError
 
 TIP_HEIGHT = 0.0745 + 0.0165 + 0.0865 + 0.0685
 

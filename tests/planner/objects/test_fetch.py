@@ -19,11 +19,11 @@ import pytest
 import trimesh
 
 from benchmarks import cli
+from planner.infra.errors import OgcpError
+from planner.objects import BUILTIN_OBJECTS, resolve_object
 from planner.objects import fetch as assets
 from planner.objects import fetchable as asset_registry
 from planner.objects.fetchable import FETCH_GROUPS, FETCHABLE_OBJECTS, PAPER_OBJECTS, pip_target_args
-from planner.infra.errors import OgcpError
-from planner.objects import BUILTIN_OBJECTS, resolve_object
 
 PURELIB = "pymeshlab-2025.7.post1.data/purelib/"
 
@@ -102,8 +102,7 @@ def test_registry_is_consistent():
 def test_pip_target_args_pin_the_registered_wheel():
     assert pip_target_args("sleplet-1.5.2-py3-none-any.whl") == []
     args = pip_target_args("pymeshlab-2025.7.post1-cp311-cp311-manylinux_2_35_x86_64.whl")
-    assert " ".join(args) == ("--implementation cp --python-version 3.11 --abi cp311 "
-                              "--platform manylinux_2_35_x86_64")
+    assert " ".join(args) == ("--implementation cp --python-version 3.11 --abi cp311 --platform manylinux_2_35_x86_64")
     args = pip_target_args("pybullet-3.2.7-cp311-cp311-manylinux_2_17_x86_64.manylinux2014_x86_64.whl")
     assert args.count("--platform") == 2 and "manylinux2014_x86_64" in args
     with pytest.raises(OgcpError):
@@ -126,8 +125,14 @@ def test_fetch_extracts_verifies_and_normalises(cache, fake_pip, meshes):
     scale = 0.2 / np.linalg.norm(raw.extents)
     assert mesh.volume == pytest.approx(raw.volume * scale**3, rel=1e-9) and mesh.volume > 0
     assert np.allclose(mesh.extents, raw.extents * scale)
-    assert source == {"kind": "fetched", "name": "bunny", "package": "pymeshlab", "version": "2025.7.post1",
-                      "sha256": _sha(meshes["bunny"]), "diagonal": 0.2}
+    assert source == {
+        "kind": "fetched",
+        "name": "bunny",
+        "package": "pymeshlab",
+        "version": "2025.7.post1",
+        "sha256": _sha(meshes["bunny"]),
+        "diagonal": 0.2,
+    }
     wide, _ = resolve_object("bunny", 0.5)
     assert np.linalg.norm(wide.extents) == pytest.approx(0.5, rel=1e-12)
     assert not [p for p in _entry_files(cache) if p.name.startswith(".")]

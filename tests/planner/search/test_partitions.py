@@ -19,8 +19,12 @@ def contacts() -> ContactSet:
 
 
 def _index_sets(rng: np.random.Generator) -> list[np.ndarray]:
-    sets = [np.arange(N, dtype=np.intp), np.array([4], dtype=np.intp), np.array([2, 9], dtype=np.intp),
-            np.array([0, 1, 2], dtype=np.intp)]
+    sets = [
+        np.arange(N, dtype=np.intp),
+        np.array([4], dtype=np.intp),
+        np.array([2, 9], dtype=np.intp),
+        np.array([0, 1, 2], dtype=np.intp),
+    ]
     for size in (4, 5, 11, 30, 59):
         sets.append(np.sort(rng.choice(N, size, replace=False)).astype(np.intp))
     return sets

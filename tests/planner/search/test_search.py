@@ -9,11 +9,11 @@ import types
 import numpy as np
 import pytest
 
-from planner.search import best_first as search_run
-from planner.infra.errors import OgcpError, SearchTimeout
 from planner.grasp.quality import q1
-from planner.search.result import effective_branching_factor
+from planner.infra.errors import OgcpError, SearchTimeout
+from planner.search import best_first as search_run
 from planner.search.grasp_planner import GraspPlanner
+from planner.search.result import effective_branching_factor
 from tests.conftest import exhaustive_best
 
 OBJECTS = ("box", "sphere", "donut", "amphora")
@@ -46,7 +46,9 @@ def test_astar_finds_the_brute_force_optimum(name, n, m, seed, object_contacts, 
     contacts = object_contacts(name, n, seed)
     expected = optimum(name, n, m, seed)
     for successor, heuristic, branching in VARIANTS:
-        result = GraspPlanner(successor=successor, heuristic=heuristic, branching=branching, seed=seed).plan(contacts, m)
+        result = GraspPlanner(successor=successor, heuristic=heuristic, branching=branching, seed=seed).plan(
+            contacts, m
+        )
         assert result.q1 == pytest.approx(expected, abs=1e-9), (successor, heuristic, branching)
         assert result.bound == pytest.approx(result.q1, abs=1e-12)
         assert len(set(result.grasp)) == m and list(result.grasp) == sorted(result.grasp)
@@ -130,7 +132,12 @@ def test_search_is_deterministic(object_contacts):
         a = GraspPlanner(successor=successor, heuristic=successor, seed=7).plan(contacts, 3)
         b = GraspPlanner(successor=successor, heuristic=successor, seed=7).plan(contacts, 3)
         assert (a.grasp, a.q1, a.stats.created, a.stats.visited, a.stats.trace) == (
-            b.grasp, b.q1, b.stats.created, b.stats.visited, b.stats.trace)
+            b.grasp,
+            b.q1,
+            b.stats.created,
+            b.stats.visited,
+            b.stats.trace,
+        )
     assert a.config["seed"] == 7
 
 
@@ -175,8 +182,11 @@ def test_time_limit_stops_with_a_sound_bound(method, eps, object_contacts, optim
     stops = 0
     for limit in (1, 2, 5, 10, 20, 40, 80, 10_000):
         ticks = itertools.count()
-        monkeypatch.setattr(search_run, "time", types.SimpleNamespace(
-            perf_counter=lambda clock=ticks: float(next(clock)), process_time=lambda: 0.0))
+        monkeypatch.setattr(
+            search_run,
+            "time",
+            types.SimpleNamespace(perf_counter=lambda clock=ticks: float(next(clock)), process_time=lambda: 0.0),
+        )
         try:
             result = GraspPlanner(method=method, eps=eps, seed=2, time_limit=limit).plan(contacts, 3)
         except SearchTimeout as stop:

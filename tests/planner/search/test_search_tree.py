@@ -14,7 +14,9 @@ from planner.search.grasp_planner import GraspPlanner
 # is created by expanding its parent at the end (the path must still be a chain).
 @pytest.mark.parametrize("method, eps, n", [("astar", None, 40), ("wastar", 0.4, 40), ("wastar", 1.0, 100)])
 def test_tree_is_consistent_with_the_statistics_and_the_path(method, eps, n, object_contacts):
-    result = GraspPlanner(method=method, eps=eps, record_tree=True).plan(object_contacts("box", n, 2 if n == 100 else 0), 3)
+    result = GraspPlanner(method=method, eps=eps, record_tree=True).plan(
+        object_contacts("box", n, 2 if n == 100 else 0), 3
+    )
     tree, stats = result.tree, result.stats
     assert tree is not None
     assert len(tree.parent) == len(tree.level) == len(tree.visited) == len(tree.f) == stats.created
@@ -39,7 +41,12 @@ def test_recording_changes_nothing_and_json_has_the_tree_only_when_recorded(obje
     plain = GraspPlanner().plan(contacts, 3)
     recorded = GraspPlanner(record_tree=True).plan(contacts, 3)
     assert (plain.grasp, plain.q1, plain.stats.created, plain.stats.visited, plain.stats.trace) == (
-        recorded.grasp, recorded.q1, recorded.stats.created, recorded.stats.visited, recorded.stats.trace)
+        recorded.grasp,
+        recorded.q1,
+        recorded.stats.created,
+        recorded.stats.visited,
+        recorded.stats.trace,
+    )
     assert plain.tree is None and "tree" not in plain.to_dict()
     record = json.loads(json.dumps(recorded.to_dict()))
     tree = record["tree"]

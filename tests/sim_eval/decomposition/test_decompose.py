@@ -52,19 +52,23 @@ def ring_decomposition(tmp_path_factory: pytest.TempPathFactory) -> tuple[Decomp
 
 # --- settings and keys ---------------------------------------------------------------------------
 
-@pytest.mark.parametrize("bad, match", [
-    ({"method": "vhacd"}, "valid choices: coacd, convex_hull"),
-    ({"preprocess_mode": "maybe"}, "valid choices: auto, off, on"),
-    ({"threshold": 0.001}, "threshold"),
-    ({"threshold": float("nan")}, "threshold"),
-    ({"preprocess_resolution": 2000}, "preprocess_resolution"),
-    ({"mcts_iterations": 0}, "mcts_iterations"),
-    ({"seed": -1}, "seed"),
-    ({"seed": 1.5}, "seed"),
-    ({"max_convex_hull": 0}, "max_convex_hull"),
-    ({"merge": "yes"}, "merge"),
-    ({"timeout_s": 0}, "timeout"),
-])
+
+@pytest.mark.parametrize(
+    "bad, match",
+    [
+        ({"method": "vhacd"}, "valid choices: coacd, convex_hull"),
+        ({"preprocess_mode": "maybe"}, "valid choices: auto, off, on"),
+        ({"threshold": 0.001}, "threshold"),
+        ({"threshold": float("nan")}, "threshold"),
+        ({"preprocess_resolution": 2000}, "preprocess_resolution"),
+        ({"mcts_iterations": 0}, "mcts_iterations"),
+        ({"seed": -1}, "seed"),
+        ({"seed": 1.5}, "seed"),
+        ({"max_convex_hull": 0}, "max_convex_hull"),
+        ({"merge": "yes"}, "merge"),
+        ({"timeout_s": 0}, "timeout"),
+    ],
+)
 def test_invalid_settings_are_refused(bad: dict, match: str) -> None:
     with pytest.raises(OgcpError, match=match):
         DecompositionSettings(**bad)
@@ -96,8 +100,8 @@ def test_cache_key_follows_content_settings_and_not_timeout() -> None:
 
 # --- convex hull method and the cache ----------------------------------------------------------
 
-def test_convex_hull_of_a_box_is_one_part_with_the_box_volume(tmp_path: Path,
-                                                              monkeypatch: pytest.MonkeyPatch) -> None:
+
+def test_convex_hull_of_a_box_is_one_part_with_the_box_volume(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("OGCP_CACHE", str(tmp_path))
     result = decompose(trimesh.creation.box(extents=(0.3, 0.2, 0.1)), HULL)
     assert len(result.parts) == 1
@@ -134,8 +138,7 @@ def test_a_damaged_entry_is_recomputed(tmp_path: Path, monkeypatch: pytest.Monke
     assert [p.name for p in tmp_path.iterdir()] == [entry.name]  # no temporary or trash folders left
 
 
-def test_the_first_writer_wins_and_the_other_uses_its_entry(tmp_path: Path,
-                                                            monkeypatch: pytest.MonkeyPatch) -> None:
+def test_the_first_writer_wins_and_the_other_uses_its_entry(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     mesh = trimesh.creation.box(extents=(0.3, 0.2, 0.1))
     original = dec.hull_part
     winner: list[Decomposition] = []
@@ -163,6 +166,7 @@ def test_an_unwritable_cache_still_returns_the_parts(tmp_path: Path) -> None:
 
 
 # --- CoACD in the child process -----------------------------------------------------------------
+
 
 def test_coacd_splits_a_concave_ring_into_parts_of_its_volume(ring_decomposition: tuple) -> None:
     result, _ = ring_decomposition
@@ -198,15 +202,21 @@ def test_a_cache_hit_does_not_run_coacd_again(ring_decomposition: tuple, monkeyp
         decompose(_ring(), DecompositionSettings(**{**TINY, "seed": 1}), cache=cache)
 
 
-def test_a_run_past_the_timeout_is_killed(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
-                                          capsys: pytest.CaptureFixture[str]) -> None:
+def test_a_run_past_the_timeout_is_killed(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
     pid_file = tmp_path / "pid"
     sleeper = f"import os, time; open({str(pid_file)!r}, 'w').write(str(os.getpid())); time.sleep(60)"
     monkeypatch.setattr(coacd_runner, "_child_command", lambda workdir: [sys.executable, "-c", sleeper])
     start = time.monotonic()
     with pytest.raises(OgcpError, match=r"CoACD did not finish within 1.5 s on tiny box; raise --timeout"):
-        decompose(trimesh.creation.box(), DecompositionSettings(timeout_s=1.5), cache=tmp_path / "c",
-                  progress=True, name="tiny box")
+        decompose(
+            trimesh.creation.box(),
+            DecompositionSettings(timeout_s=1.5),
+            cache=tmp_path / "c",
+            progress=True,
+            name="tiny box",
+        )
     assert time.monotonic() - start < 20
     pid = int(pid_file.read_text())
     with pytest.raises(ProcessLookupError):
@@ -215,8 +225,7 @@ def test_a_run_past_the_timeout_is_killed(tmp_path: Path, monkeypatch: pytest.Mo
     assert not (tmp_path / "c").exists()
 
 
-def test_an_exception_in_the_child_surfaces_with_its_message(tmp_path: Path,
-                                                              monkeypatch: pytest.MonkeyPatch) -> None:
+def test_an_exception_in_the_child_surfaces_with_its_message(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(dec, "_coacd_kwargs", lambda settings: {"no_such_option": 1})
     with pytest.raises(OgcpError, match=r"CoACD failed on box: TypeError: .*no_such_option"):
         decompose(trimesh.creation.box(), DecompositionSettings(), cache=tmp_path, name="box")
@@ -245,6 +254,7 @@ def test_closed_manifold_check() -> None:
 
 
 # --- mass properties ----------------------------------------------------------------------------
+
 
 def test_inertia_of_a_box_matches_the_closed_form() -> None:
     a, b, c, mass = 0.3, 0.2, 0.1, 0.25
@@ -280,6 +290,7 @@ def test_inertia_refuses_bad_input() -> None:
 
 # --- distance to the union of parts -------------------------------------------------------------
 
+
 def _box_part(extents: tuple[float, float, float], centre: tuple[float, float, float] = (0, 0, 0)) -> tuple:
     part = hull_part(trimesh.creation.box(extents=extents).vertices + np.asarray(centre))
     assert part is not None
@@ -294,26 +305,30 @@ def test_distance_to_a_box_matches_closed_forms() -> None:
     axis = rng.integers(0, 3, size=50)
     on_face[np.arange(50), axis] = half[axis] * rng.choice([-1.0, 1.0], size=50)
     assert np.abs(surface_distance(parts, on_face)).max() < 1e-12
-    queries = np.array([
-        [half[0] + 0.02, 0.01, -0.02],           # straight out of the +x face
-        [half[0] + 0.03, half[1] + 0.04, 0.0],   # beyond an edge
-        [-half[0] - 0.01, -half[1] - 0.02, half[2] + 0.02],  # beyond a corner
-        [0.0, 0.0, 0.0],                         # centre: depth = smallest half extent
-        [0.14, 0.0, 0.0],                        # inside near +x face
-    ])
+    queries = np.array(
+        [
+            [half[0] + 0.02, 0.01, -0.02],  # straight out of the +x face
+            [half[0] + 0.03, half[1] + 0.04, 0.0],  # beyond an edge
+            [-half[0] - 0.01, -half[1] - 0.02, half[2] + 0.02],  # beyond a corner
+            [0.0, 0.0, 0.0],  # centre: depth = smallest half extent
+            [0.14, 0.0, 0.0],  # inside near +x face
+        ]
+    )
     expected = [0.02, 0.05, 0.03, -0.05, -0.01]
     np.testing.assert_allclose(surface_distance(parts, queries), expected, atol=1e-12)
 
 
 def test_distance_to_a_union_of_overlapping_parts() -> None:
     parts = [_box_part((0.2, 0.1, 0.1)), _box_part((0.1, 0.1, 0.3), centre=(0.1, 0.0, 0.0))]
-    queries = np.array([
-        [-0.2, 0.0, 0.0],      # left of part 0 only: 0.1
-        [0.1, 0.0, 0.25],      # above part 1 only: 0.1
-        [0.0, 0.0, 0.2],       # above part 0 (0.15 away), part 1's corner edge 0.05 in x and 0.05 in z
-        [0.075, 0.0, 0.0],     # in both: 0.025 deep in part 0 (x), 0.025 deep in part 1 (x): bound 0.025
-        [0.1, 0.0, 0.12],      # only in part 1: 0.03 below its top face
-    ])
+    queries = np.array(
+        [
+            [-0.2, 0.0, 0.0],  # left of part 0 only: 0.1
+            [0.1, 0.0, 0.25],  # above part 1 only: 0.1
+            [0.0, 0.0, 0.2],  # above part 0 (0.15 away), part 1's corner edge 0.05 in x and 0.05 in z
+            [0.075, 0.0, 0.0],  # in both: 0.025 deep in part 0 (x), 0.025 deep in part 1 (x): bound 0.025
+            [0.1, 0.0, 0.12],  # only in part 1: 0.03 below its top face
+        ]
+    )
     expected = [0.1, 0.1, np.hypot(0.05, 0.05), -0.025, -0.03]
     np.testing.assert_allclose(surface_distance(parts, queries), expected, atol=1e-12)
 
@@ -322,13 +337,15 @@ def test_triangle_distances_in_every_region() -> None:
     a, b, c = np.array([0.0, 0.0, 0.0]), np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0])
     rotation = Rotation.from_euler("zyx", [0.4, 0.2, -0.9]).as_matrix()
     shift = np.array([0.3, -0.2, 0.5])
-    local = np.array([
-        [0.2, 0.2, 0.7],     # above the interior: height
-        [-0.3, -0.4, 0.0],   # beyond corner a
-        [0.5, -0.2, 0.1],    # beyond edge ab
-        [1.0, 1.0, 0.0],     # beyond edge bc (its midpoint is nearest)
-        [2.0, -1.0, 0.0],    # beyond corner b
-    ])
+    local = np.array(
+        [
+            [0.2, 0.2, 0.7],  # above the interior: height
+            [-0.3, -0.4, 0.0],  # beyond corner a
+            [0.5, -0.2, 0.1],  # beyond edge ab
+            [1.0, 1.0, 0.0],  # beyond edge bc (its midpoint is nearest)
+            [2.0, -1.0, 0.0],  # beyond corner b
+        ]
+    )
     expected = [0.7, 0.5, np.hypot(0.2, 0.1), np.sqrt(0.5), np.sqrt(2.0)]
     triangle = (np.stack([a, b, c]) @ rotation.T + shift)[None]
     got = triangle_distances(local @ rotation.T + shift, triangle)[:, 0]
