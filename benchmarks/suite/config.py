@@ -21,12 +21,14 @@ from typing import Any
 
 from benchmarks.suite.params import METHOD_PARAMS, Param, complete, default_label, seed_values, values_of
 from planner.grasp.contact_set import DEFAULT_CONE_EDGES, DEFAULT_MU
+from planner.infra.assets import asset_path, assets_dir
 from planner.infra.errors import OgcpError, choice_error
 from planner.objects import BUILTIN_OBJECTS, DEFAULT_DIAGONAL, MESH_SUFFIXES, file_sha256
 from planner.objects.fetchable import FETCHABLE_OBJECTS
 
 SCHEMA_VERSION = 1
-SUITES_DIR = Path(__file__).resolve().parents[1] / "suites"
+# Built-in suites: assets/suites/NAME.toml (see planner.infra.assets).
+SUITES_FOLDER = "suites"
 GROUP_KEYS = (
     "contact_seeds",
     "contacts",
@@ -186,8 +188,8 @@ class Suite:
 
 
 def builtin_suites() -> list[str]:
-    """Names of the suites shipped in ``benchmarks/suites``."""
-    return sorted(p.stem for p in SUITES_DIR.glob("*.toml"))
+    """Names of the suites shipped in ``assets/suites``."""
+    return sorted(p.stem for p in (assets_dir() / SUITES_FOLDER).glob("*.toml"))
 
 
 def load_suite(spec: str | Path) -> Suite:
@@ -200,7 +202,7 @@ def load_suite(spec: str | Path) -> Suite:
     if not path.is_file():
         if str(spec) not in builtin_suites():
             raise choice_error("suite", str(spec), [*builtin_suites(), "<path to a suite .toml file>"])
-        path = SUITES_DIR / f"{spec}.toml"
+        path = asset_path(f"{SUITES_FOLDER}/{spec}.toml")
     try:
         text = path.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as exc:

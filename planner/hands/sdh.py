@@ -1,6 +1,6 @@
 """Kinematic model of the Schunk SDH three-finger hand (7 DOF), the numpy twin of its MJCF.
 
-Frames and signs (the same in ``sdh.xml`` beside this module):
+Frames and signs (the same in the MJCF, ``assets/hands/sdh.xml``):
 
 - Palm frame: z is the palm axis; the finger bases lie at ``z = PALM_HEIGHT`` on an
   equilateral triangle of side 0.066 m centred (to rounding) on that axis. Finger 1 rotates
@@ -28,6 +28,7 @@ from types import MappingProxyType
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from planner.infra.assets import asset_path
 from planner.infra.errors import OgcpError
 
 PALM_HEIGHT = 0.0745
@@ -81,8 +82,7 @@ TIP_SITES = ("tip_1", "tip_2", "tip_3")
 
 _PROXIMAL = np.array([1, 3, 5])
 _DISTAL = np.array([2, 4, 6])
-# Package data (pyproject), so a wheel install carries it as well as a checkout.
-_MODEL_PATH = Path(__file__).resolve().with_name("sdh.xml")
+_MODEL_ASSET = "hands/sdh.xml"
 
 
 @dataclass(frozen=True, eq=False)
@@ -217,7 +217,7 @@ def _is_natural(value: object) -> bool:
 
 
 def sdh_model_path() -> Path:
-    """Path of the SDH MJCF, ``planner/hands/sdh.xml`` (shipped as package data).
+    """Path of the SDH MJCF, ``assets/hands/sdh.xml`` (shipped as package data).
 
     Returns:
         The absolute path of the model file.
@@ -225,9 +225,4 @@ def sdh_model_path() -> Path:
     Raises:
         OgcpError: If the file is missing (a broken install).
     """
-    if not _MODEL_PATH.is_file():
-        raise OgcpError(
-            f"SDH model not found at {_MODEL_PATH}; the ogcp install is incomplete, reinstall it "
-            "(pip install --force-reinstall ogcp, or pip install -e . from a checkout)"
-        )
-    return _MODEL_PATH
+    return asset_path(_MODEL_ASSET)

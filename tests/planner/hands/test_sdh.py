@@ -67,9 +67,9 @@ def test_mjcf_hand_geoms_collide_with_objects_but_not_with_each_other(model):
     assert np.all((contype | conaffinity) & 1)  # MuJoCo's default object geom is 1 / 1
 
 
-def test_model_path_missing_is_a_clear_error(monkeypatch, tmp_path):
-    monkeypatch.setattr(sdh, "_MODEL_PATH", tmp_path / "sdh.xml")
-    with pytest.raises(OgcpError, match="SDH model not found"):
+def test_model_path_missing_is_a_clear_error(monkeypatch):
+    monkeypatch.setattr(sdh, "_MODEL_ASSET", "hands/missing.xml")
+    with pytest.raises(OgcpError, match="hands/missing.xml not found"):
         sdh_model_path()
 
 
