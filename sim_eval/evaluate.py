@@ -17,6 +17,7 @@ import math
 import time
 import traceback
 from collections.abc import Sequence
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -66,12 +67,12 @@ class GraspEvaluator:
         self,
         settings: SimSettings | None = None,
         decomposition: DecompositionSettings | None = None,
-        cache: str | None = None,
+        cache: str | Path | None = None,
         progress: bool = False,
     ) -> None:
         self.settings = settings
         self.decomposition = decomposition
-        self.cache = cache
+        self.cache = None if cache is None else Path(cache)
         self.progress = progress
 
     def evaluate(
@@ -97,19 +98,19 @@ class GraspEvaluator:
         """
         settings = self.settings or SimSettings()
         start = time.perf_counter()
-        grasps = [tuple(int(i) for i in g) for g in grasps]
-        labels = list(labels) if labels is not None else [f"grasp-{i}" for i in range(len(grasps))]
-        if len(labels) != len(grasps):
-            raise OgcpError(f"got {len(labels)} labels for {len(grasps)} grasps")
-        for g in grasps:
+        chosen = [tuple(int(i) for i in g) for g in grasps]
+        labels = list(labels) if labels is not None else [f"grasp-{i}" for i in range(len(chosen))]
+        if len(labels) != len(chosen):
+            raise OgcpError(f"got {len(labels)} labels for {len(chosen)} grasps")
+        for g in chosen:
             if len(g) < 2 or min(g) < 0 or max(g) >= len(contacts) or len(set(g)) != len(g):
                 raise OgcpError(f"grasp {list(g)} must hold >= 2 distinct indices in 0..{len(contacts) - 1}")
         if parts is None:
             parts = decompose(mesh, self.decomposition, cache=self.cache, progress=self.progress)
         com, inertia = object_inertia(mesh, settings.object_mass)
         results = []
-        bar = tqdm(total=len(grasps), desc="simulate", unit="grasp", disable=not self.progress)
-        for grasp, label in zip(grasps, labels, strict=True):
+        bar = tqdm(total=len(chosen), desc="simulate", unit="grasp", disable=not self.progress)
+        for grasp, label in zip(chosen, labels, strict=True):
             try:
                 results.append(self._grasp(mesh, contacts, grasp, label, parts, com, inertia, settings))
             except Exception as exc:  # noqa: BLE001 - one bad grasp must not sink the batch

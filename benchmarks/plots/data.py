@@ -229,9 +229,12 @@ def load_run(directory: str | Path) -> RunData:
     return RunData(directory, tuple(cells), tuple(notes), manifest)
 
 
+def _table(value: object) -> dict[str, Any]:
+    return value if isinstance(value, dict) else {}
+
+
 def _describe(record: dict[str, Any]) -> str:
-    params = record.get("params") if isinstance(record.get("params"), dict) else {}
-    error = record.get("error") if isinstance(record.get("error"), dict) else {}
+    params, error = _table(record.get("params")), _table(record.get("error"))
     what = " ".join(str(params[k]) for k in ("object", "label") if params.get(k) is not None) or record["id"]
     return f"{what} ({error.get('type', 'error')}: {error.get('message', '')})"
 

@@ -8,7 +8,7 @@ with a one-line reason when the run lacks the cells the figure needs.
 from __future__ import annotations
 
 from collections import Counter
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import numpy as np
 
@@ -41,7 +41,10 @@ VARIANT_KEYS = ("branching", "successor", "heuristic", "heuristic_branching")
 NOT_A_SERIES = ("seed", "record_tree")
 
 
-def _cap(panels: list[Any], notes: list[str] | None, what: str) -> list[Any]:
+Panel = TypeVar("Panel")
+
+
+def _cap(panels: list[Panel], notes: list[str] | None, what: str) -> list[Panel]:
     if len(panels) > MAX_PANELS and notes is not None:
         notes.append(f"{what}: drew the first {MAX_PANELS} of {len(panels)} panels")
     return panels[:MAX_PANELS]
@@ -151,10 +154,12 @@ def _histogram_panel(ax: Axes, es: CellData, others: list[CellData], title: str)
         ax.plot([values.mean()], [0.95], "D", transform=across, color=colour, markersize=3)
     step = min(0.08, (0.95 - BAR_SHARE) / max(len(wastar), 1))
     for i, cell in enumerate(wastar):
+        q1 = cell.q1
+        assert q1 is not None  # _wastar_by_eps keeps cells with a Q1
         bound = number(cell.plan.get("bound"))
         bound = bound if bound is not None else number(cell.plan.get("eps_bound"))
         y, colour = 0.95 - step * (i + 1), method_colour("wastar", cell.eps, cell.constraint)
-        ends = [cell.q1, bound if bound is not None else cell.q1]
+        ends = [q1, bound if bound is not None else q1]
         ax.plot(
             ends,
             [y, y],
@@ -170,10 +175,9 @@ def _histogram_panel(ax: Axes, es: CellData, others: list[CellData], title: str)
 def _wastar_by_eps(cells: list[CellData]) -> list[CellData]:
     """One WA* cell per eps (plain variants first), by increasing eps."""
     chosen: dict[float, CellData] = {}
-    for cell in sorted(
-        (c for c in cells if c.method == "wastar" and c.q1 is not None and c.eps is not None), key=lambda c: not c.plain
-    ):
-        chosen.setdefault(cell.eps, cell)  # type: ignore[arg-type]
+    for cell in sorted((c for c in cells if c.method == "wastar" and c.q1 is not None), key=lambda c: not c.plain):
+        if cell.eps is not None:
+            chosen.setdefault(cell.eps, cell)
     return [chosen[eps] for eps in sorted(chosen)]
 
 
@@ -248,7 +252,7 @@ def fig7_iterations_f(run: RunData, notes: list[str] | None = None) -> Figure:
     from matplotlib.collections import LineCollection
 
     names = run.problem_names()
-    panels = []
+    panels: list[tuple[str, list[list[CellData]]]] = []
     for problem, cells in run.by_problem().items():
         groups: dict[tuple[Any, ...], list[CellData]] = {}
         for cell in cells:
@@ -265,15 +269,16 @@ def fig7_iterations_f(run: RunData, notes: list[str] | None = None) -> Figure:
     if not panels:
         raise SkipFigure("needs A*/Dijkstra cells of one problem that differ in successor, heuristic or method")
     panels = _cap(panels, notes, "fig7")
-    rows = max(len(groups) for _, groups in panels)
+    rows = max(len(variants) for _, variants in panels)
     figure, axes = new_figure(len(panels), panel_height=2.1 + LEGEND_ROW * rows, max_columns=2)
-    for ax, (name, groups) in zip(axes, panels):
+    for ax, (name, variants) in zip(axes, panels):
         longest = 1
-        colours = variant_colours([members[0].method for members in groups])
-        for colour, members in zip(colours, groups):
+        colours = variant_colours([members[0].method for members in variants])
+        for colour, members in zip(colours, variants):
             style = "--" if members[0].method == "dijkstra" else "-"
-            traces = [_trace(c) for c in members]
-            order = np.argsort([len(t) for t in traces], kind="stable")  # type: ignore[arg-type]
+            # Every member has a trace (checked when grouping); the filter tells the type checker.
+            traces = [trace for trace in map(_trace, members) if trace is not None]
+            order = np.argsort([len(t) for t in traces], kind="stable")
             median = order[len(order) // 2]
             others = [traces[j] for j in order if j != median]
             if others:
@@ -286,7 +291,7 @@ def fig7_iterations_f(run: RunData, notes: list[str] | None = None) -> Figure:
             )
             trace = traces[median]
             ax.plot(trace[:, 0], trace[:, 1], linestyle=style, color=colour, label=f"{label} ({', '.join(extra)})")
-            longest = max(longest, *(len(t) for t in traces))  # type: ignore[arg-type]
+            longest = max(longest, *(len(t) for t in traces))
         if longest > 200:
             ax.set_xscale("symlog", linthresh=10)
         ax.autoscale_view()

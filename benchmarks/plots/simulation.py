@@ -134,10 +134,14 @@ def sim_q1_vs_resistance(run: RunData, notes: list[str] | None = None) -> Figure
         # A grasp returned by several methods (A* and ES) is one sample of the correlation.
         unique: dict[tuple[int, ...], tuple[float, float]] = {}
         for cell, grasps in cells:
-            kept = [g for g in grasps if g.q1 is not None and g.measured_min is not None]
-            for g in kept:
-                unique.setdefault(g.grasp, (g.q1, g.measured_min))
-            points = [(g.q1, g.measured_min, g.min_censored) for g in kept]
+            points = [
+                (g.q1, g.measured_min, g.min_censored)
+                for g in grasps
+                if g.q1 is not None and g.measured_min is not None
+            ]
+            for g in grasps:
+                if g.q1 is not None and g.measured_min is not None:
+                    unique.setdefault(g.grasp, (g.q1, g.measured_min))
             if not points:
                 continue
             q1, low, cut = (np.array(v) for v in zip(*points))

@@ -19,6 +19,7 @@ from planner.infra.errors import OgcpError
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
+    from matplotlib.typing import RcKeyType
 
 #: IEEE two-column widths [in].
 SINGLE_COLUMN = 3.5
@@ -29,7 +30,7 @@ LEGEND_ROW = 0.17
 FORMATS = ("pdf", "png")
 SAVE_FORMATS = ("pdf", "png", "svg")
 
-STYLE: dict[str, Any] = {
+STYLE: dict[RcKeyType, Any] = {
     # Type 42 keeps text as embedded TrueType: editable, searchable, accepted by IEEE/PDF-A checks.
     "pdf.fonttype": 42,
     "ps.fonttype": 42,
@@ -97,8 +98,8 @@ R = TypeVar("R")
 def _mix(colour: str, target: str, amount: float) -> str:
     from matplotlib.colors import to_hex, to_rgb
 
-    a, b = to_rgb(colour), to_rgb(target)
-    return to_hex(tuple((1 - amount) * x + amount * y for x, y in zip(a, b)))
+    red, green, blue = ((1 - amount) * x + amount * y for x, y in zip(to_rgb(colour), to_rgb(target), strict=True))
+    return to_hex((red, green, blue))
 
 
 def method_colour(method: str, eps: float | None = None, constraint: str = "") -> str:

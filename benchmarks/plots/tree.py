@@ -65,7 +65,7 @@ def layout_tree(tree: dict[str, Any]) -> TreeLayout:
     if any(p >= n or p < -1 or p == i for i, p in enumerate(parent)):
         raise ValueError("a parent index is out of range")
     children: list[list[int]] = [[] for _ in range(n)]
-    roots = []
+    roots: list[int] = []
     for i, p in enumerate(parent):
         (roots if p < 0 else children[p]).append(i)
     # Deepest first, so every child's leaf count is final before its parent adds it up.
@@ -94,8 +94,8 @@ def layout_tree(tree: dict[str, Any]) -> TreeLayout:
             pending.append(child)
     if len(seen) != n:
         raise ValueError("some states are not connected to a root")
-    path = next((tree[k] for k in PATH_KEYS if isinstance(tree.get(k), list)), [])
-    path = tuple(int(i) for i in path if isinstance(i, int) and 0 <= i < n)
+    listed: list[Any] = next((tree[k] for k in PATH_KEYS if isinstance(tree.get(k), list)), [])
+    path = tuple(int(i) for i in listed if isinstance(i, int) and 0 <= i < n)
     return TreeLayout(start + width / 2, width, level, visited, path)
 
 

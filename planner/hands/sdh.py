@@ -213,7 +213,8 @@ def _is_natural(value: object) -> bool:
     # Accepts 3 and 3.0 (and numpy integers) but not True, 2.5, "3" or NaN.
     if isinstance(value, bool) or not isinstance(value, int | float | np.integer | np.floating):
         return False
-    return bool(np.isfinite(value)) and int(value) == value and value >= 0
+    # One bool() around the whole test: numpy scalars compare to numpy bools.
+    return bool(np.isfinite(value) and int(value) == value and value >= 0)
 
 
 def sdh_model_path() -> Path:

@@ -147,7 +147,7 @@ def _parse_object(name: str, table: object, where: str) -> FetchableObject:
         # bool is an int subclass: vertices = true must not pass as 1.
         if not isinstance(value, expected) or (expected is int and isinstance(value, bool)):
             raise OgcpError(f"{where}.{field}: expected {expected.__name__}, got {value!r}")
-        if expected is str and not value.strip():
+        if isinstance(value, str) and not value.strip():
             raise OgcpError(f"{where}.{field}: must not be empty")
     for field in ("sha256", "wheel_sha256"):
         if not _HEX_SHA256.fullmatch(table[field]):

@@ -25,7 +25,7 @@ import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, NoReturn
 
 import numpy as np
 
@@ -163,8 +163,9 @@ class Search(SearchSpace):
             self.expand(open_list, state, depth, key, lower, g, ident)
         raise OgcpError("no grasp satisfies the constraints")
 
-    def stop_at_deadline(self, lower: float, open_list: list[Entry]) -> None:
+    def stop_at_deadline(self, lower: float, open_list: list[Entry]) -> NoReturn:
         """Raise :class:`SearchTimeout` with the best grasp so far and the certified bound."""
+        assert self.time_limit is not None  # without a limit the deadline is infinite
         # Every unexplored grasp lies below an open state whose stored lower bound of f
         # bounds its cost (the popped state included), so q0 - min bounds the optimum.
         lowest = min([lower] + [entry[4] for entry in open_list])
@@ -257,7 +258,9 @@ class Search(SearchSpace):
             entry = min(e for e in open_list if e[7] == inc.ident)
             key, neg_depth, _, state, lower, _, g, ident = entry
             self.expand(open_list, state, -neg_depth, key, lower, g, ident)
+            # Expanding the parent created the grasp's state and re-offered it.
             inc = self.incumbent
+            assert inc is not None
         goal_depth = self.depth(inc.state)
         g = self.q0 - inc.q
         self.visited[goal_depth] = self.visited.get(goal_depth, 0) + 1

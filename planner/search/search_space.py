@@ -125,7 +125,7 @@ class SearchSpace:
                 self._heuristic_parts[node] = parts
             options.append([(p, mask, ("h", node, i)) for i, (p, mask) in enumerate(parts)])
         for combo in itertools.product(*options):
-            parts = [p for p, _, _ in combo]
-            if self.valid(parts, all(len(p) == 1 for p in parts)):
+            members = [p for p, _, _ in combo]
+            if self.valid(members, all(len(p) == 1 for p in members)):
                 children.append(([mask for _, mask, _ in combo], [self.vector(key, p) for p, _, key in combo], None))
         return children

@@ -187,7 +187,7 @@ def _mask_for(count: int) -> np.int64:
 @njit(cache=True)
 def _hash_insert(
     key: np.int64,
-    owner: np.int64,
+    owner: int,
     hkey: np.ndarray,
     hcnt: np.ndarray,
     hown: np.ndarray,
