@@ -45,7 +45,8 @@ def test_every_code_package_is_listed_and_no_study_code_is():
         for init in (ROOT / top).rglob("__init__.py")
     }
     listed = set(SETUPTOOLS["packages"]) - {"ogcp_assets"}
-    assert not (found - NOT_SHIPPED) - listed, "add these packages to [tool.setuptools] packages in pyproject.toml"
+    missing = sorted(found - NOT_SHIPPED - listed)
+    assert not missing, f"add {missing} to [tool.setuptools] packages in pyproject.toml"
     assert not listed & NOT_SHIPPED
     assert listed <= found
 
