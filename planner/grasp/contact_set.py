@@ -28,6 +28,8 @@ from planner.infra.tolerance import TOL
 SCHEMA = "ogcp.contacts/1"
 DEFAULT_MU = 0.5
 DEFAULT_CONE_EDGES = 8
+#: Contacts sampled from a mesh when no count is given.
+DEFAULT_CONTACTS = 100
 #: ``source["sampling"]`` of a set from :func:`sample_contacts`.
 EVEN_SAMPLING = "even"
 
