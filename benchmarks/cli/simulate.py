@@ -12,6 +12,7 @@ from typing import Any
 from benchmarks.cli.options import finite_number, nonnegative_int
 from planner.infra.atomic import write_json_atomic
 from planner.infra.errors import OgcpError
+from planner.records.plan import load_plan
 
 AXIS_LABELS = ("+fx", "-fx", "+fy", "-fy", "+fz", "-fz", "+tx", "-tx", "+ty", "-ty", "+tz", "-tz", "q1-weakest")
 
@@ -157,7 +158,6 @@ def sim_summary(record: dict[str, Any]) -> str:
 
 def run_evaluate(args: argparse.Namespace) -> int:
     from sim_eval.evaluate import evaluate_plan
-    from sim_eval.plan_input import load_plan
 
     record = load_plan(args.plan)
     result = evaluate_plan(

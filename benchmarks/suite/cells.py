@@ -15,17 +15,12 @@ from functools import lru_cache
 from typing import Any
 
 from benchmarks.suite.config import Cell
-from benchmarks.suite.params import EXHAUSTIVE_METHODS, SEARCH_METHODS
 from benchmarks.suite.store import jsonable
-from planner.baselines.es import DEFAULT_BINS, ExhaustiveSearch
-from planner.baselines.hfts import HFTS
-from planner.grasp.constraints import Constraint, MaxFingerSpread
 from planner.grasp.contact_set import ContactSet, sample_contacts
-from planner.hands.reachability import SDHReachability
 from planner.infra.errors import OgcpError
+from planner.methods.registry import method_spec
+from planner.methods.runners import RunOptions
 from planner.objects import resolve_object
-from planner.records.plan import contact_set_record, hand_record
-from planner.search.grasp_planner import GraspPlanner
 
 CELL_SCHEMA = "ogcp.cell/1"
 #: Keys of the [simulation] table that are arguments of evaluate_plan, not simulation settings.
@@ -92,82 +87,15 @@ def _contacts(spec: str, diagonal: float | None, n: int, seed: int, mu: float, c
     return sample_contacts(mesh, n, seed, mu, cone_edges, source)
 
 
-@lru_cache(maxsize=4)
-def _hand(threshold: float) -> SDHReachability:
-    return SDHReachability(threshold=threshold)
-
-
-def _constraints(params: dict[str, Any]) -> tuple[list[Constraint], SDHReachability | None]:
-    constraints: list[Constraint] = []
-    if params.get("max_spread") is not None:
-        constraints.append(MaxFingerSpread(params["max_spread"]))
-    hand = _hand(params["hand_threshold"]) if params.get("hand") == "sdh" else None
-    if hand is not None:
-        constraints.append(hand)
-    return constraints, hand
-
-
 def plan_record(cell: Cell, contacts: ContactSet, time_limit: float | None = None) -> dict[str, Any]:
-    """Run the cell's method and return its ``ogcp.plan/1`` record.
+    """Run the cell's method and return its ``ogcp.plan/1`` record (the same record ``ogcp plan`` writes).
 
     Raises:
         OgcpError: For parameters the installed planner does not support.
     """
-    params = dict(cell.variant)
-    constraints, hand = _constraints(params)
-    described = contact_set_record(contacts)
-    if cell.method in SEARCH_METHODS:
-        record = _search(cell, params, constraints, contacts, described, time_limit)
-    elif cell.method in EXHAUSTIVE_METHODS:
-        search = ExhaustiveSearch(
-            pruned=cell.method == "es-pruned",
-            chunk=params["chunk"],
-            bins=params.get("bins", DEFAULT_BINS),
-            constraints=constraints,
-        )
-        record = search.run(contacts, cell.m).to_dict(described)
-    else:
-        search = HFTS(
-            runs=params["runs"],
-            seed=params["seed"],
-            iterations=params["iterations"],
-            position_weight=params["position_weight"],
-            hand=hand,
-        )
-        record = search.run(contacts, cell.m).to_dict(described)
-    if hand is not None:
-        record["hand"] = hand_record(hand, record["grasp"], contacts)
-    return record
-
-
-def _search(
-    cell: Cell,
-    params: dict[str, Any],
-    constraints: list[Constraint],
-    contacts: ContactSet,
-    described: dict[str, Any],
-    time_limit: float | None,
-) -> dict[str, Any]:
-    options = {
-        key: params[key]
-        for key in (
-            "branching",
-            "successor",
-            "heuristic",
-            "heuristic_branching",
-            "symmetry",
-            "ordered",
-            "seed",
-            "kmeans_iterations",
-            "position_weight",
-        )
-    }
-    if cell.method == "wastar":
-        options["eps"] = params["eps"]
-    result = GraspPlanner(
-        method=cell.method, constraints=constraints, record_tree=params["record_tree"], time_limit=time_limit, **options
-    ).plan(contacts, cell.m)
-    return result.to_dict(described)
+    spec = method_spec(cell.method)
+    options = RunOptions(time_limit=time_limit, contact_seed=cell.contact_seed)
+    return spec.run(spec.config(**dict(cell.variant)), contacts, cell.m, options).record
 
 
 def simulate(plan: dict[str, Any], settings: dict[str, Any]) -> dict[str, Any]:

@@ -19,10 +19,12 @@ import tomllib
 from pathlib import Path
 from typing import Any
 
-from benchmarks.suite.params import METHOD_PARAMS, Param, complete, default_label, seed_values, values_of
-from planner.grasp.contact_set import DEFAULT_CONE_EDGES, DEFAULT_MU
+from benchmarks.suite.params import METHOD_PARAMS, complete, default_label, seed_values, values_of
+from planner.grasp.contact_set import DEFAULT_CONE_EDGES, DEFAULT_CONTACTS, DEFAULT_MU
 from planner.infra.assets import asset_path, assets_dir
 from planner.infra.errors import OgcpError, choice_error
+from planner.methods.configs import DEFAULT_FINGERS, DEFAULT_SEED, HAND_FINGERS
+from planner.methods.options import Option
 from planner.objects import BUILTIN_OBJECTS, DEFAULT_DIAGONAL, MESH_SUFFIXES, file_sha256
 from planner.objects.fetchable import FETCHABLE_OBJECTS
 
@@ -271,13 +273,17 @@ class _Parser:
             if key not in table:
                 raise OgcpError(f"{where}: missing key {key!r} (set it in the group or at the top level)")
         objects = self.objects(f"{where}.objects", table["objects"])
-        contacts = values_of(f"{where}.contacts", table.get("contacts", 100), Param("int", 100, minimum=2))
-        seeds = seed_values(f"{where}.contact_seeds", table.get("contact_seeds", 0))
-        ms = values_of(f"{where}.m", table.get("m", 3), Param("int", 3, minimum=2))
-        mu = Param("float", DEFAULT_MU, minimum=0, exclusive=True).check(f"{where}.mu", table.get("mu", DEFAULT_MU))
-        edges = Param("int", 8, minimum=3).check(f"{where}.cone_edges", table.get("cone_edges", DEFAULT_CONE_EDGES))
-        simulate = Param("bool", True).check(f"{where}.simulate", table.get("simulate", True))
-        diagonal = Param("float", DEFAULT_DIAGONAL, minimum=0, exclusive=True).check(
+        contacts = values_of(
+            f"{where}.contacts", table.get("contacts", DEFAULT_CONTACTS), Option("int", DEFAULT_CONTACTS, minimum=2)
+        )
+        seeds = seed_values(f"{where}.contact_seeds", table.get("contact_seeds", DEFAULT_SEED))
+        ms = values_of(f"{where}.m", table.get("m", DEFAULT_FINGERS), Option("int", DEFAULT_FINGERS, minimum=2))
+        mu = Option("float", DEFAULT_MU, minimum=0, exclusive=True).check(f"{where}.mu", table.get("mu", DEFAULT_MU))
+        edges = Option("int", DEFAULT_CONE_EDGES, minimum=3).check(
+            f"{where}.cone_edges", table.get("cone_edges", DEFAULT_CONE_EDGES)
+        )
+        simulate = Option("bool", True).check(f"{where}.simulate", table.get("simulate", True))
+        diagonal = Option("float", DEFAULT_DIAGONAL, minimum=0, exclusive=True).check(
             f"{where}.diagonal", table.get("diagonal", DEFAULT_DIAGONAL)
         )
         variants = self.methods(f"{where}.methods", table["methods"])
@@ -287,8 +293,10 @@ class _Parser:
         for obj, n, seed, m, (method, params, label, vwhere) in itertools.product(
             objects, contacts, seeds, ms, variants
         ):
-            if params.get("hand") is not None and m != 3:
-                raise OgcpError(f"{vwhere}.hand: the {params['hand']} hand has 3 fingers; {where}.m includes {m}")
+            if params.get("hand") is not None and m != HAND_FINGERS:
+                raise OgcpError(
+                    f"{vwhere}.hand: the {params['hand']} hand has {HAND_FINGERS} fingers; {where}.m includes {m}"
+                )
             cells.append(
                 Cell(
                     obj,
@@ -374,7 +382,7 @@ def _check_simulation_settings(table: dict[str, Any]) -> None:
     """Check the settings against the simulation's own validation, so a typo fails before any cell runs."""
     settings = {k: v for k, v in table.items() if k not in ("enabled", "decomposition", "max_grasps")}
     if "max_grasps" in table:
-        Param("int", None, minimum=1).check("simulation.max_grasps", table["max_grasps"])
+        Option("int", None, minimum=1).check("simulation.max_grasps", table["max_grasps"])
     try:
         from sim_eval.decomposition.decompose import DecompositionSettings  # lazy: loads MuJoCo
         from sim_eval.settings import SimSettings

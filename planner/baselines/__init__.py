@@ -1,7 +1,8 @@
 """Baselines that ogcp's search is compared with: exhaustive search (ES) and HFTS."""
 
-from planner.baselines.es import DEFAULT_BINS, DEFAULT_CHUNK, ES_METHODS, ESResult, ExhaustiveSearch
+from planner.baselines.es import ES_METHODS, ESResult, ExhaustiveSearch
 from planner.baselines.hfts import HFTS, HFTSResult, HFTSRun
+from planner.methods.configs import DEFAULT_BINS, DEFAULT_CHUNK
 
 __all__ = [
     "DEFAULT_BINS",

@@ -33,15 +33,15 @@ from planner.grasp.kernel import FALLBACK, OK, default_directions, support_table
 from planner.grasp.kernel.geometry import CUT_MARGIN
 from planner.grasp.quality import exact_q1_batch, q1_certificate
 from planner.infra.errors import OgcpError
-from planner.infra.parallel import run_tasks, validate_backend
+from planner.infra.parallel import DEFAULT_BACKEND, DEFAULT_JOBS, run_tasks, validate_backend
 from planner.infra.provenance import provenance
+from planner.methods.configs import ESConfig, ESPrunedConfig
+from planner.methods.options import check_values
 from planner.records.plan import plan_record
 
 from . import combinations
 
-ES_METHODS = ("es", "es-pruned")
-DEFAULT_CHUNK = 200_000
-DEFAULT_BINS = 50
+ES_METHODS = (ESConfig.method, ESPrunedConfig.method)
 #: Grasps handed to the compiled kernel in one call inside a chunk.
 BOUND_BLOCK = 50_000
 #: es-pruned: grasps per kernel call between updates of the cut.
@@ -241,12 +241,12 @@ class ExhaustiveSearch:
     def __init__(
         self,
         pruned: bool = False,
-        jobs: int = 1,
-        backend: str = "loky",
+        jobs: int = DEFAULT_JOBS,
+        backend: str = DEFAULT_BACKEND,
         address: str | None = None,
         checkpoint: str | Path | None = None,
-        chunk: int = DEFAULT_CHUNK,
-        bins: int = DEFAULT_BINS,
+        chunk: int = ESConfig.chunk,
+        bins: int = ESConfig.bins,
         progress: bool = False,
         constraints: Sequence[Constraint] = (),
     ) -> None:
@@ -271,15 +271,14 @@ class ExhaustiveSearch:
         n = len(contacts)
         if not isinstance(m, (int, np.integer)) or m < 2 or m > n:
             raise OgcpError(f"m must be an integer with 2 <= m <= |C| = {n}, got {m!r}")
-        if not isinstance(self.chunk, int) or self.chunk < 1 or not isinstance(self.bins, int) or self.bins < 1:
-            raise OgcpError("chunk size and bins must be integers >= 1")
+        check_values(ESConfig, chunk=self.chunk, bins=self.bins)
         wall0 = time.perf_counter()
         q_ows = q1_certificate(contacts.wrenches.reshape(-1, 6)).q1
         edges = np.linspace(0.0, q_ows, self.bins + 1) if q_ows > 0 else np.linspace(0.0, 1.0, self.bins + 1)
         total = combinations.count(n, int(m))
         n_chunks = -(-total // self.chunk)
         config = {
-            "method": "es-pruned" if self.pruned else "es",
+            "method": ESPrunedConfig.method if self.pruned else ESConfig.method,
             "m": int(m),
             "chunk": self.chunk,
             "bins": self.bins,

@@ -34,8 +34,10 @@ from planner.grasp.contact_set import ContactSet
 from planner.grasp.quality import q1, q1_certificate, signed_q1
 from planner.grasp.wrench import contact_wrenches
 from planner.infra.errors import OgcpError
-from planner.infra.parallel import run_tasks, validate_backend
+from planner.infra.parallel import DEFAULT_BACKEND, DEFAULT_JOBS, run_tasks, validate_backend
 from planner.infra.provenance import provenance
+from planner.methods.configs import HFTSConfig
+from planner.methods.options import check_values
 from planner.records.plan import plan_record
 from planner.search.partitions import KMeansPartitioner
 
@@ -97,7 +99,7 @@ class HFTSResult:
     def to_dict(self, contact_set: dict[str, Any] | None = None) -> dict[str, Any]:
         """JSON form, schema ``ogcp.plan/1``, with ``runs`` listing every run."""
         return plan_record(
-            "hfts",
+            HFTSConfig.method,
             self.grasp,
             self.q1,
             self.q_ows,
@@ -242,13 +244,13 @@ class HFTS:
 
     def __init__(
         self,
-        runs: int = 20,
-        seed: int = 0,
-        iterations: int = 40,
-        position_weight: float = 1.0,
+        runs: int = HFTSConfig.runs,
+        seed: int = HFTSConfig.seed,
+        iterations: int = HFTSConfig.iterations,
+        position_weight: float = HFTSConfig.position_weight,
         hierarchy_seed: int = 0,
-        jobs: int = 1,
-        backend: str = "loky",
+        jobs: int = DEFAULT_JOBS,
+        backend: str = DEFAULT_BACKEND,
         address: str | None = None,
         hand: Any = None,
         residual_weight: float = 1.0,
@@ -268,12 +270,13 @@ class HFTS:
         """Run HFTS R times and collect the runs (best first in ``grasp``/``q1``)."""
         provenance()  # recorded now: the commit and versions of the code that runs
         validate_backend(self.backend, self.address, self.jobs)
-        for name in ("runs", "iterations"):
-            value = getattr(self, name)
-            if not isinstance(value, int) or value < 1:
-                raise OgcpError(f"HFTS {name} must be an integer >= 1, got {value!r}")
-        if not isinstance(self.seed, int) or self.seed < 0:
-            raise OgcpError(f"seed must be a non-negative integer, got {self.seed!r}")
+        check_values(
+            HFTSConfig,
+            runs=self.runs,
+            iterations=self.iterations,
+            seed=self.seed,
+            position_weight=self.position_weight,
+        )
         if not isinstance(m, (int, np.integer)) or m < 2 or m > len(contacts):
             raise OgcpError(f"m must be an integer with 2 <= m <= |C| = {len(contacts)}, got {m!r}")
         wall0 = time.perf_counter()
@@ -288,7 +291,7 @@ class HFTS:
         best = max(runs, key=lambda r: (r.q1, [-i for i in r.grasp]))
         idx = np.array(best.grasp, dtype=np.intp)
         config = {
-            "method": "hfts",
+            "method": HFTSConfig.method,
             "m": int(m),
             "runs": self.runs,
             "seed": self.seed,

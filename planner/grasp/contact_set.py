@@ -28,6 +28,10 @@ from planner.infra.tolerance import TOL
 SCHEMA = "ogcp.contacts/1"
 DEFAULT_MU = 0.5
 DEFAULT_CONE_EDGES = 8
+#: Contacts sampled from a mesh when no count is given.
+DEFAULT_CONTACTS = 100
+#: ``source["sampling"]`` of a set from :func:`sample_contacts`.
+EVEN_SAMPLING = "even"
 
 
 class NonWatertightWarning(UserWarning):
@@ -248,5 +252,5 @@ def sample_contacts(
         faces = np.concatenate([faces, extra_f])
     com, rho = mass_properties(mesh)
     record = dict(source or {})
-    record.update({"sampling": "even", "n": n, "seed": seed})
+    record.update({"sampling": EVEN_SAMPLING, "n": n, "seed": seed})
     return ContactSet(points, -mesh.face_normals[faces], com, rho, mu, cone_edges, record)

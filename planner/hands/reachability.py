@@ -41,6 +41,7 @@ from planner.hands.sdh import (
 )
 from planner.infra.cache import cache_dir as default_cache_dir
 from planner.infra.errors import OgcpError
+from planner.methods.configs import DEFAULT_HAND_THRESHOLD
 
 MODEL_VERSION = 1
 PAIRS = ((0, 1), (0, 2), (1, 2))
@@ -126,7 +127,11 @@ class SDHReachability:
     name = "sdh"
 
     def __init__(
-        self, samples: int = 10_000, seed: int = 0, threshold: float = 0.3, cache_dir: str | Path | None = None
+        self,
+        samples: int = 10_000,
+        seed: int = 0,
+        threshold: float = DEFAULT_HAND_THRESHOLD,
+        cache_dir: str | Path | None = None,
     ) -> None:
         if not isinstance(samples, int) or samples < 1:
             raise OgcpError(f"hand samples must be an integer >= 1, got {samples!r}")

@@ -16,6 +16,8 @@ import joblib
 from planner.infra.errors import OgcpError, choice_error
 
 BACKENDS = ("dask", "loky")
+DEFAULT_BACKEND = "loky"
+DEFAULT_JOBS = 1
 
 
 def validate_backend(backend: str, address: str | None, jobs: int) -> None:
@@ -53,8 +55,8 @@ def _backend_context(backend: str, address: str | None) -> Iterator[None]:
 def run_tasks(
     function: Callable[..., Any],
     tasks: Iterable[tuple[Any, ...]],
-    jobs: int = 1,
-    backend: str = "loky",
+    jobs: int = DEFAULT_JOBS,
+    backend: str = DEFAULT_BACKEND,
     address: str | None = None,
 ) -> Iterator[Any]:
     """Run ``function(*task)`` for every task, yielding results as they finish.

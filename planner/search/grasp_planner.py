@@ -46,13 +46,20 @@ from planner.grasp.constraints import Constraint, DistinctContacts
 from planner.grasp.contact_set import ContactSet
 from planner.infra.errors import OgcpError, choice_error
 from planner.infra.provenance import provenance
+from planner.methods.configs import (
+    DEFAULT_METHOD,
+    DEFAULT_WASTAR_EPS,
+    HEURISTICS,
+    SEARCH_CONFIGS,
+    SearchConfig,
+    WAStarConfig,
+)
+from planner.methods.options import options_of
 from planner.search.best_first import Search
-from planner.search.partitions import SUCCESSORS
 from planner.search.result import SearchResult
 
-METHODS = ("astar", "dijkstra", "wastar")
-HEURISTICS = (*SUCCESSORS, "none")
-DEFAULT_WASTAR_EPS = 0.4
+METHODS = tuple(sorted(SEARCH_CONFIGS))
+__all__ = ["DEFAULT_WASTAR_EPS", "HEURISTICS", "METHODS", "GraspPlanner"]
 
 
 class GraspPlanner:
@@ -63,7 +70,8 @@ class GraspPlanner:
     Args:
         method: ``astar`` (optimal), ``wastar`` (cost within 1 + eps of optimal) or
             ``dijkstra`` (uniform cost, h = 0).
-        eps: WA* inflation; default 0.4 for ``wastar`` and 0 otherwise.
+        eps: WA* inflation; default :data:`~planner.methods.configs.DEFAULT_WASTAR_EPS` for
+            ``wastar`` and 0 otherwise.
         branching: Branching factor b of the expansion successor function.
         successor: Expansion successor function Γ: ``fc`` (k-means) or ``ru`` (random).
         heuristic: Γh for the heuristic: ``fc``, ``ru`` or ``none``; default ``fc``
@@ -85,19 +93,19 @@ class GraspPlanner:
 
     def __init__(
         self,
-        method: str = "astar",
+        method: str = DEFAULT_METHOD,
         eps: float | None = None,
-        branching: int = 2,
-        successor: str = "fc",
+        branching: int = SearchConfig.branching,
+        successor: str = SearchConfig.successor,
         heuristic: str | None = None,
         heuristic_branching: int | None = None,
-        symmetry: bool = False,
-        ordered: bool = False,
-        seed: int = 0,
-        kmeans_iterations: int = 10,
-        position_weight: float = 1.0,
+        symmetry: bool = SearchConfig.symmetry,
+        ordered: bool = SearchConfig.ordered,
+        seed: int = SearchConfig.seed,
+        kmeans_iterations: int = SearchConfig.kmeans_iterations,
+        position_weight: float = SearchConfig.position_weight,
         constraints: Sequence[Constraint] = (),
-        record_tree: bool = False,
+        record_tree: bool = SearchConfig.record_tree,
         time_limit: float | None = None,
     ) -> None:
         self.method = method
@@ -116,44 +124,38 @@ class GraspPlanner:
         self.time_limit = time_limit
 
     def resolved_config(self) -> dict[str, Any]:
-        """Validate the parameters and fill in method-dependent defaults.
+        """Validate the parameters (by the method's configuration class) and fill in its defaults.
 
         Raises:
             OgcpError: For any invalid parameter, naming the valid values.
         """
         if self.method not in METHODS:
             raise choice_error("method", self.method, METHODS)
-        eps = self.eps
-        if eps is None:
-            eps = DEFAULT_WASTAR_EPS if self.method == "wastar" else 0.0
-        if not (isinstance(eps, (int, float)) and math.isfinite(eps) and eps >= 0):
-            raise OgcpError(f"eps must be a number >= 0, got {eps!r}")
-        if self.method != "wastar" and eps != 0:
-            raise OgcpError(f"eps applies to method 'wastar' only (method {self.method!r} got eps={eps})")
-        heuristic = self.heuristic or ("none" if self.method == "dijkstra" else "fc")
-        if heuristic not in HEURISTICS:
-            raise choice_error("heuristic", heuristic, HEURISTICS)
-        if self.method == "dijkstra" and heuristic != "none":
-            raise OgcpError(f"method 'dijkstra' uses no heuristic (got heuristic {heuristic!r})")
-        if self.successor not in SUCCESSORS:
-            raise choice_error("successor function", self.successor, SUCCESSORS)
-        for name, value in (("branching", self.branching), ("heuristic_branching", self.heuristic_branching)):
-            if value is not None and (not isinstance(value, (int, np.integer)) or value < 2):
-                raise OgcpError(f"{name} b must be an integer >= 2, got {value!r}")
-        if not isinstance(self.seed, (int, np.integer)) or self.seed < 0:
-            raise OgcpError(f"seed must be a non-negative integer, got {self.seed!r}")
+        # The constructor's arguments are named as the configuration's fields.
+        values: dict[str, Any] = {name: getattr(self, name) for name in options_of(SearchConfig)}
+        if values["heuristic"] is None:
+            del values["heuristic"]  # the method's own default
+        eps = 0.0
+        if self.method == WAStarConfig.method:
+            if self.eps is not None:
+                values["eps"] = self.eps
+        elif self.eps is not None:
+            eps = options_of(WAStarConfig)["eps"].check("eps", self.eps)
+            if eps != 0:  # eps = 0 is every search's inflation, so it is accepted everywhere
+                raise OgcpError(f"eps applies to method 'wastar' only (method {self.method!r} got eps={eps:g})")
+        config = SEARCH_CONFIGS[self.method](**values)
         return {
             "method": self.method,
-            "eps": float(eps),
-            "branching": int(self.branching),
-            "successor": self.successor,
-            "heuristic": heuristic,
-            "heuristic_branching": int(self.heuristic_branching or self.branching),
-            "symmetry": bool(self.symmetry),
-            "ordered": bool(self.ordered),
-            "seed": int(self.seed),
-            "kmeans_iterations": int(self.kmeans_iterations),
-            "position_weight": float(self.position_weight),
+            "eps": float(getattr(config, "eps", eps)),
+            "branching": config.branching,
+            "successor": config.successor,
+            "heuristic": config.heuristic,
+            "heuristic_branching": config.heuristic_branching,
+            "symmetry": config.symmetry,
+            "ordered": config.ordered,
+            "seed": config.seed,
+            "kmeans_iterations": config.kmeans_iterations,
+            "position_weight": config.position_weight,
             "constraints": [c.describe() for c in self.constraints],
         }
 

@@ -22,6 +22,7 @@ from numpy.typing import NDArray
 
 from planner.grasp.contact_set import ContactSet
 from planner.infra.errors import OgcpError, choice_error
+from planner.methods.configs import SUCCESSORS, SearchConfig
 
 Indices = NDArray[np.intp]
 
@@ -54,7 +55,7 @@ class RandomPartitioner:
 
     name = "ru"
 
-    def __init__(self, branching: int = 2, seed: int = 0) -> None:
+    def __init__(self, branching: int = SearchConfig.branching, seed: int = SearchConfig.seed) -> None:
         self.branching = branching
         self.seed = seed
 
@@ -79,10 +80,10 @@ class KMeansPartitioner:
     def __init__(
         self,
         contacts: ContactSet,
-        branching: int = 2,
-        iterations: int = 10,
-        position_weight: float = 1.0,
-        seed: int = 0,
+        branching: int = SearchConfig.branching,
+        iterations: int = SearchConfig.kmeans_iterations,
+        position_weight: float = SearchConfig.position_weight,
+        seed: int = SearchConfig.seed,
     ) -> None:
         self.branching = branching
         self.iterations = iterations
@@ -132,16 +133,13 @@ class KMeansPartitioner:
         return np.array(centres, dtype=float)
 
 
-SUCCESSORS = ("fc", "ru")
-
-
 def make_partitioner(
     kind: str,
     contacts: ContactSet,
     branching: int,
     seed: int,
-    iterations: int = 10,
-    position_weight: float = 1.0,
+    iterations: int = SearchConfig.kmeans_iterations,
+    position_weight: float = SearchConfig.position_weight,
 ) -> Partitioner:
     """Build a partitioner by name.
 

@@ -101,7 +101,7 @@ def test_dask_local_cluster_matches_local_processes(amphora):
         ({"backend": "dask"}, "needs --address"),
         ({"address": "localhost:1"}, "applies to backend 'dask' only"),
         ({"jobs": 0}, "jobs must be"),
-        ({"chunk": 0}, "chunk size"),
+        ({"chunk": 0}, "chunk: expected an integer >= 1"),
     ],
 )
 def test_invalid_settings_are_rejected(amphora, kwargs, message):

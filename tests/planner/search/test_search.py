@@ -155,7 +155,7 @@ def test_symmetry_removal_is_approximate_but_sound(object_contacts, optimum):
     "kwargs, m, message",
     [
         ({"method": "greedy"}, 3, "astar, dijkstra, wastar"),
-        ({"eps": -0.1, "method": "wastar"}, 3, "eps must be"),
+        ({"eps": -0.1, "method": "wastar"}, 3, "eps: expected a number >= 0"),
         ({"eps": 0.3}, 3, "wastar"),
         ({"branching": 1}, 3, "branching"),
         ({"successor": "xx"}, 3, "fc, ru"),

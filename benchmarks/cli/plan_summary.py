@@ -1,0 +1,125 @@
+"""The readable summaries that ``ogcp plan`` prints (``--json`` prints the record instead)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from planner.baselines.es import ESResult
+from planner.baselines.hfts import HFTSResult
+from planner.grasp.contact_set import ContactSet
+from planner.methods.registry import METHODS
+from planner.methods.runners import MethodRun
+from planner.search.result import SearchResult
+
+
+def describe(run: MethodRun, contacts: ContactSet) -> str:
+    """Readable multi-line summary of any method's run."""
+    if isinstance(run.result, ESResult):
+        return es_summary(run.result, contacts)
+    if isinstance(run.result, HFTSResult):
+        return hfts_summary(run.result, contacts) + _optimum_text(run.result, run.record.get("optimum"))
+    return search_summary(run.result, contacts) + _hand_text(run.record.get("hand"))
+
+
+def search_summary(result: SearchResult, contacts: ContactSet) -> str:
+    """Readable multi-line summary of an A*, WA* or Dijkstra plan."""
+    s, c = result.stats, result.config
+    source = contacts.source
+    what = source.get("name") or source.get("path") or "contact file"
+    heuristic = f"Γh={c['heuristic']} b={c['heuristic_branching']}" if c["heuristic"] != "none" else "no heuristic"
+    method = METHODS[result.method].title + (f" (eps={result.eps:g})" if result.method == "wastar" else "")
+    if result.method == "wastar":
+        certificate = f"within bound: optimum <= {result.bound:.6f} (guarantee: <= {result.eps_bound:.6f})"
+    elif c["symmetry"]:
+        certificate = "optimal up to approximate symmetry removal"
+    else:
+        certificate = "optimal (certified)"
+    lines = [
+        f"object: {what}   |C| = {len(contacts)}   mu = {contacts.mu:g}   k = {contacts.cone_edges}   seed = {c['seed']}",
+        f"search: {method}, m = {c['m']}, Γ={c['successor']} b={c['branching']}, {heuristic}"
+        + (", symmetry removal" if c["symmetry"] else ""),
+        f"grasp: {list(result.grasp)}   Q1 = {result.q1:.6f}   Q_OWS = {result.q_ows:.6f}",
+        f"certificate: {certificate}",
+        (
+            f"states: created {s.created}, visited {s.visited}, b* = {s.effective_branching_factor:.2f}, "
+            f"solution depth {s.solution_depth}"
+        ),
+        f"created per level: {list(s.created_per_level)}",
+        f"visited per level: {list(s.visited_per_level)}",
+        (
+            f"Q1 evaluations: {s.q1_evaluations} (cache hits {s.q1_cache_hits}, rejected by bound {s.bound_rejections}), "
+            f"hull calls {s.hull_calls}"
+        ),
+        f"time: {s.wall_seconds:.2f} s wall, {s.cpu_seconds:.2f} s CPU",
+        "contacts (index: position [m] / inward normal):",
+    ]
+    for i, p, n in zip(result.grasp, result.positions, result.normals):
+        lines.append(f"  {i:5d}: [{p[0]:+.4f} {p[1]:+.4f} {p[2]:+.4f}] / [{n[0]:+.3f} {n[1]:+.3f} {n[2]:+.3f}]")
+    return "\n".join(lines)
+
+
+def es_summary(result: ESResult, contacts: ContactSet) -> str:
+    """Readable summary of an exhaustive search."""
+    lines = [
+        f"object: {contacts.source.get('name') or contacts.source.get('path') or 'contact file'}   |C| = {len(contacts)}",
+        (
+            f"search: {result.method}, m = {result.config['m']}, {result.grasps} grasps in {result.chunks} chunks "
+            f"({result.resumed} resumed), backend {result.config['backend']}"
+        ),
+        f"grasp: {list(result.grasp)}   Q1 = {result.q1:.6f}   Q_OWS = {result.q_ows:.6f}",
+    ]
+    admissible = result.grasps - result.excluded
+    if result.excluded:
+        lines.append(f"constraints: {result.excluded} grasps excluded, {admissible} admissible")
+    if result.counts is not None and admissible:
+        lines.append(
+            f"force closure: {admissible - result.zero} of {admissible} "
+            f"({100 * result.force_closure_fraction:.2f} %); histogram over (0, Q_OWS]: {result.counts.tolist()}"
+        )
+    lines.append(
+        f"exact evaluations: {result.exact_evaluations}; time: {result.wall_seconds:.2f} s wall, "
+        f"{result.cpu_seconds:.2f} s CPU (all workers)"
+    )
+    return "\n".join(lines)
+
+
+def hfts_summary(result: HFTSResult, contacts: ContactSet) -> str:
+    """Readable summary of the HFTS runs."""
+    s = result.summary()
+    lines = [
+        f"object: {contacts.source.get('name') or contacts.source.get('path') or 'contact file'}   |C| = {len(contacts)}",
+        (
+            f"search: HFTS, m = {result.config['m']}, {s['runs']} runs (seeds {result.config['seed']}.."
+            f"{result.config['seed'] + s['runs'] - 1}), {result.config['levels']} cluster levels"
+        ),
+        f"best run: grasp {list(result.grasp)}   Q1 = {result.q1:.6f}   Q_OWS = {result.q_ows:.6f}",
+        (
+            f"spread: mean {s['mean']:.6f}  std {s['std']:.6f}  max {s['max']:.6f}  "
+            f"force closure {100 * s['force_closure_fraction']:.0f} %"
+        ),
+        f"Q1 evaluations: {s['q1_evaluations']}; time: {s['wall_seconds']:.2f} s wall, {s['cpu_seconds']:.2f} s CPU",
+        "runs (seed: Q1):  " + "  ".join(f"{r.seed}: {r.q1:.4f}" for r in result.runs),
+    ]
+    return "\n".join(lines)
+
+
+def _optimum_text(result: HFTSResult, optimum: dict[str, Any] | None) -> str:
+    if optimum is None:
+        return ""
+    gaps = optimum["q1"] - result.values
+    return (
+        f"\nA* optimum: grasp {optimum['grasp']}   Q1 = {optimum['q1']:.6f}   "
+        f"HFTS gap: best {gaps.min():.6f}, mean {gaps.mean():.6f}, "
+        f"runs reaching it {int(np.sum(gaps <= 0))} of {len(gaps)}"
+    )
+
+
+def _hand_text(hand: dict[str, Any] | None) -> str:
+    if hand is None:
+        return ""
+    return (
+        f"\nhand: {hand['name']}, residual {hand['residual']:.3f}, fingers on contacts {hand['finger_contacts']}, "
+        f"joint angles [rad] {[round(a, 3) for a in hand['joint_angles']]}"
+    )

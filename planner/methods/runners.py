@@ -1,0 +1,169 @@
+"""Running a configured method on a contact set: the engine's result and its complete plan record.
+
+Everything a record holds beyond what the engine writes (the ``hand`` block, HFTS's A*
+``optimum``, the seed of exhaustive search) is added here, in one place, so that
+``ogcp plan`` and the suite cells write the same ``ogcp.plan/1`` records.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+from functools import lru_cache
+from pathlib import Path
+from typing import Any
+
+from planner.baselines.es import ESResult, ExhaustiveSearch
+from planner.baselines.hfts import HFTS, HFTSResult
+from planner.grasp.constraints import Constraint, MaxFingerSpread
+from planner.grasp.contact_set import ContactSet
+from planner.hands.reachability import SDHReachability
+from planner.infra.errors import OgcpError
+from planner.infra.parallel import DEFAULT_BACKEND, DEFAULT_JOBS
+from planner.methods.configs import (
+    HAND_FINGERS,
+    AStarConfig,
+    ConstraintOptions,
+    ESConfig,
+    ESPrunedConfig,
+    HandOptions,
+    HFTSConfig,
+)
+from planner.methods.options import MethodConfig, options_of
+from planner.records.plan import contact_set_record, hand_record
+from planner.search.grasp_planner import GraspPlanner
+from planner.search.result import SearchResult
+
+
+@dataclass(frozen=True)
+class RunOptions:
+    """How to run a method, as opposed to what it computes (never part of a suite cell's id).
+
+    Attributes:
+        time_limit: Wall-clock budget of A*, WA* and Dijkstra [s]; None: unlimited.
+        progress: Show a progress bar on stderr (search, exhaustive search).
+        jobs: Worker processes (exhaustive search, HFTS).
+        backend: Parallel backend ``loky`` or ``dask`` (exhaustive search, HFTS).
+        address: Dask scheduler ``HOST:PORT`` (backend ``dask``).
+        checkpoint: Directory of finished chunks, so a rerun resumes (exhaustive search).
+        optimum: Also run A* and record its optimum next to HFTS's runs.
+        contact_seed: Seed the contacts were sampled with; exhaustive search, which has no
+            seed of its own, records it as ``config.seed``. None: not recorded.
+    """
+
+    time_limit: float | None = None
+    progress: bool = False
+    jobs: int = DEFAULT_JOBS
+    backend: str = DEFAULT_BACKEND
+    address: str | None = None
+    checkpoint: str | Path | None = None
+    optimum: bool = False
+    contact_seed: int | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class MethodRun:
+    """A finished run.
+
+    Attributes:
+        result: The engine's result.
+        record: Its complete ``ogcp.plan/1`` record.
+    """
+
+    result: SearchResult | ESResult | HFTSResult
+    record: dict[str, Any]
+
+
+#: The model of every hand in :data:`~planner.methods.configs.HANDS`.
+HAND_MODELS = {"sdh": SDHReachability}
+
+
+@lru_cache(maxsize=4)
+def hand_model(name: str, threshold: float) -> SDHReachability:
+    """The hand model (cached: sampling it takes seconds, and a worker runs many cells)."""
+    return HAND_MODELS[name](threshold=threshold)
+
+
+def constraints_of(config: HandOptions, m: int) -> tuple[list[Constraint], SDHReachability | None]:
+    """The grasp constraints a configuration asks for; the hand model is also returned.
+
+    Raises:
+        OgcpError: For a hand and m other than its number of fingers.
+    """
+    constraints: list[Constraint] = []
+    if isinstance(config, ConstraintOptions) and config.max_spread is not None:
+        constraints.append(MaxFingerSpread(config.max_spread))
+    if config.hand is None:
+        return constraints, None
+    if m != HAND_FINGERS:
+        raise OgcpError(f"the {config.hand} hand has {HAND_FINGERS} fingers; got m = {m}")
+    hand = hand_model(config.hand, config.hand_threshold)
+    return [*constraints, hand], hand
+
+
+def engine_arguments(config: MethodConfig) -> dict[str, Any]:
+    """The configuration's own parameters, named as the engine's constructor names them (constraints apart)."""
+    constraint_fields = {f.name for f in fields(ConstraintOptions)}
+    return {name: getattr(config, name) for name in options_of(config) if name not in constraint_fields}
+
+
+def _with_hand(record: dict[str, Any], hand: SDHReachability | None, contacts: ContactSet) -> dict[str, Any]:
+    if hand is not None:
+        record["hand"] = hand_record(hand, record["grasp"], contacts)
+    return record
+
+
+def run_search(config: AStarConfig, contacts: ContactSet, m: int, options: RunOptions) -> MethodRun:
+    """A*, WA* or Dijkstra (by ``config.method``).
+
+    Raises:
+        OgcpError: For invalid parameters, or when no grasp satisfies the constraints.
+        SearchTimeout: When ``options.time_limit`` runs out first.
+    """
+    constraints, hand = constraints_of(config, m)
+    planner = GraspPlanner(
+        method=config.method, constraints=constraints, time_limit=options.time_limit, **engine_arguments(config)
+    )
+    result = planner.plan(contacts, m, progress=options.progress)
+    return MethodRun(result, _with_hand(result.to_dict(contact_set_record(contacts)), hand, contacts))
+
+
+def run_exhaustive(config: ESConfig | ESPrunedConfig, contacts: ContactSet, m: int, options: RunOptions) -> MethodRun:
+    """Exhaustive search, with (``es``) or without (``es-pruned``) the histogram.
+
+    Raises:
+        OgcpError: For invalid parameters, a checkpoint of another run, or no admissible grasp.
+    """
+    constraints, hand = constraints_of(config, m)
+    search = ExhaustiveSearch(
+        pruned=config.method == ESPrunedConfig.method,
+        jobs=options.jobs,
+        backend=options.backend,
+        address=options.address,
+        checkpoint=options.checkpoint,
+        progress=options.progress,
+        constraints=constraints,
+        **engine_arguments(config),
+    )
+    result = search.run(contacts, m)
+    record = result.to_dict(contact_set_record(contacts))
+    if options.contact_seed is not None:
+        record["config"]["seed"] = options.contact_seed
+    return MethodRun(result, _with_hand(record, hand, contacts))
+
+
+def run_hfts(config: HFTSConfig, contacts: ContactSet, m: int, options: RunOptions) -> MethodRun:
+    """HFTS's runs, and with ``options.optimum`` the A* optimum under the same hand.
+
+    Raises:
+        OgcpError: For invalid parameters.
+    """
+    hand = constraints_of(config, m)[1]
+    search = HFTS(
+        jobs=options.jobs, backend=options.backend, address=options.address, hand=hand, **engine_arguments(config)
+    )
+    result = search.run(contacts, m)
+    record = _with_hand(result.to_dict(contact_set_record(contacts)), hand, contacts)
+    if options.optimum:
+        optimum = GraspPlanner(seed=config.seed, constraints=[hand] if hand else ()).plan(contacts, m)
+        record["optimum"] = {"method": optimum.method, "grasp": list(optimum.grasp), "q1": optimum.q1}
+    return MethodRun(result, record)
