@@ -1,6 +1,6 @@
 """``ogcp plan``'s method flags, generated from the methods' declared options.
 
-Every method parameter (:mod:`planner.methods.configs`) becomes one flag: ``branching``
+Every method parameter (:mod:`planner.config.methods`) becomes one flag: ``branching``
 is ``--branching``, with the option's type, help and default. Flags default to None
 ("not given"), so the configuration fills in its own defaults and a flag given to a method
 that does not take it is an error instead of being silently ignored.
@@ -10,11 +10,12 @@ from __future__ import annotations
 
 import argparse
 from collections import Counter
+from collections.abc import Callable
 from typing import Any
 
 from benchmarks.cli.options import integer, number
+from planner.config.options import MethodConfig, Option
 from planner.infra.errors import OgcpError
-from planner.methods.options import MethodConfig, Option
 from planner.methods.registry import METHODS, MethodSpec
 
 #: Parameters that the contact options already provide (``--seed`` seeds the contacts and the method).
@@ -24,7 +25,7 @@ GROUPS = (
     ("exhaustive search (--method es / es-pruned)", ("es", "es-pruned")),
     ("HFTS baseline (--method hfts)", ("hfts",)),
 )
-_TYPES = {"int": integer, "float": number, "choice": str}
+_TYPES: dict[str, Callable[[str], Any]] = {"int": integer, "float": number, "choice": str}
 
 
 def flag(field: str) -> str:

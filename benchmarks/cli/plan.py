@@ -16,11 +16,11 @@ from typing import Any
 from benchmarks.cli.method_options import GROUPS, add_method_options, config_from_args, not_applicable
 from benchmarks.cli.options import integer, number, positive_int
 from benchmarks.cli.plan_summary import describe
+from planner.config.methods import DEFAULT_FINGERS, DEFAULT_METHOD, DEFAULT_SEED
 from planner.grasp.contact_set import DEFAULT_CONE_EDGES, DEFAULT_CONTACTS, DEFAULT_MU, ContactSet, sample_contacts
 from planner.infra.atomic import write_json_atomic
 from planner.infra.errors import OgcpError
 from planner.infra.parallel import BACKENDS, DEFAULT_BACKEND, DEFAULT_JOBS
-from planner.methods.configs import DEFAULT_FINGERS, DEFAULT_METHOD, DEFAULT_SEED
 from planner.methods.registry import METHODS, MethodSpec, method_spec
 from planner.methods.runners import RunOptions
 from planner.objects import BUILTIN_OBJECTS, DEFAULT_DIAGONAL, resolve_object

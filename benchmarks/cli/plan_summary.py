@@ -73,7 +73,12 @@ def es_summary(result: ESResult, contacts: ContactSet) -> str:
     admissible = result.grasps - result.excluded
     if result.excluded:
         lines.append(f"constraints: {result.excluded} grasps excluded, {admissible} admissible")
-    if result.counts is not None and admissible:
+    if (
+        result.counts is not None
+        and result.zero is not None
+        and result.force_closure_fraction is not None
+        and admissible
+    ):
         lines.append(
             f"force closure: {admissible - result.zero} of {admissible} "
             f"({100 * result.force_closure_fraction:.2f} %); histogram over (0, Q_OWS]: {result.counts.tolist()}"

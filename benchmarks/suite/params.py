@@ -1,7 +1,7 @@
 """The method parameters a suite may set: a thin adapter over :mod:`planner.methods`.
 
 Each method's parameters, types, ranges and defaults are its configuration's declared
-options (:mod:`planner.methods.configs`); here they are read as a suite file's keys. A
+options (:mod:`planner.config.methods`); here they are read as a suite file's keys. A
 variant is completed by the configuration itself, and its canonical form (every
 parameter, sorted by name) is what is hashed into the cell id.
 """
@@ -10,9 +10,9 @@ from __future__ import annotations
 
 from typing import Any
 
+from planner.config.methods import DEFAULT_HAND_THRESHOLD, SEED
+from planner.config.options import ConfigError, Option
 from planner.infra.errors import OgcpError
-from planner.methods.configs import DEFAULT_HAND_THRESHOLD, SEED
-from planner.methods.options import ConfigError, Option
 from planner.methods.registry import EXHAUSTIVE_METHODS, METHODS, OPTIMAL_METHODS
 
 __all__ = [

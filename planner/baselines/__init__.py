@@ -2,7 +2,7 @@
 
 from planner.baselines.es import ES_METHODS, ESResult, ExhaustiveSearch
 from planner.baselines.hfts import HFTS, HFTSResult, HFTSRun
-from planner.methods.configs import DEFAULT_BINS, DEFAULT_CHUNK
+from planner.config.methods import DEFAULT_BINS, DEFAULT_CHUNK
 
 __all__ = [
     "DEFAULT_BINS",

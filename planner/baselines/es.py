@@ -27,6 +27,8 @@ import numpy as np
 from numpy.typing import NDArray
 from tqdm import tqdm
 
+from planner.config.methods import ESConfig, ESPrunedConfig
+from planner.config.options import check_values
 from planner.grasp.constraints import Constraint, accepts_many
 from planner.grasp.contact_set import ContactSet
 from planner.grasp.kernel import FALLBACK, OK, default_directions, support_table
@@ -35,8 +37,6 @@ from planner.grasp.quality import exact_q1_batch, q1_certificate
 from planner.infra.errors import OgcpError
 from planner.infra.parallel import DEFAULT_BACKEND, DEFAULT_JOBS, run_tasks, validate_backend
 from planner.infra.provenance import provenance
-from planner.methods.configs import ESConfig, ESPrunedConfig
-from planner.methods.options import check_values
 from planner.records.plan import plan_record
 
 from . import combinations
@@ -321,7 +321,9 @@ class ExhaustiveSearch:
         best_q, best_g = -1.0, None
         for index in sorted(results):
             r = results[index]
-            if r.best_grasp is not None and (r.best_q1 > best_q or (r.best_q1 == best_q and r.best_grasp < best_g)):
+            if r.best_grasp is not None and (
+                best_g is None or r.best_q1 > best_q or (r.best_q1 == best_q and r.best_grasp < best_g)
+            ):
                 best_q, best_g = r.best_q1, r.best_grasp
         if best_g is None:
             raise OgcpError("no grasp satisfies the constraints")

@@ -30,14 +30,14 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from planner.config.methods import HFTSConfig
+from planner.config.options import check_values
 from planner.grasp.contact_set import ContactSet
 from planner.grasp.quality import q1, q1_certificate, signed_q1
 from planner.grasp.wrench import contact_wrenches
 from planner.infra.errors import OgcpError
 from planner.infra.parallel import DEFAULT_BACKEND, DEFAULT_JOBS, run_tasks, validate_backend
 from planner.infra.provenance import provenance
-from planner.methods.configs import HFTSConfig
-from planner.methods.options import check_values
 from planner.records.plan import plan_record
 from planner.search.partitions import KMeansPartitioner
 

@@ -29,6 +29,7 @@ from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 from scipy.spatial.distance import cdist
 
+from planner.config.methods import DEFAULT_HAND_THRESHOLD
 from planner.grasp.contact_set import ContactSet
 from planner.hands.sdh import (
     BASE_ROTATION_SIGN,
@@ -41,7 +42,6 @@ from planner.hands.sdh import (
 )
 from planner.infra.cache import cache_dir as default_cache_dir
 from planner.infra.errors import OgcpError
-from planner.methods.configs import DEFAULT_HAND_THRESHOLD
 
 MODEL_VERSION = 1
 PAIRS = ((0, 1), (0, 2), (1, 2))

@@ -14,9 +14,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from planner.grasp.contact_set import ContactSet
-from planner.infra.errors import choice_error
-from planner.methods.configs import (
+from planner.config.methods import (
     AStarConfig,
     DijkstraConfig,
     ESConfig,
@@ -25,7 +23,9 @@ from planner.methods.configs import (
     SearchConfig,
     WAStarConfig,
 )
-from planner.methods.options import MethodConfig, Option, options_of
+from planner.config.options import MethodConfig, Option, options_of
+from planner.grasp.contact_set import ContactSet
+from planner.infra.errors import choice_error
 from planner.methods.runners import MethodRun, RunOptions, run_exhaustive, run_hfts, run_search
 
 Runner = Callable[[Any, ContactSet, int, RunOptions], MethodRun]

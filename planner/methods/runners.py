@@ -14,12 +14,7 @@ from typing import Any
 
 from planner.baselines.es import ESResult, ExhaustiveSearch
 from planner.baselines.hfts import HFTS, HFTSResult
-from planner.grasp.constraints import Constraint, MaxFingerSpread
-from planner.grasp.contact_set import ContactSet
-from planner.hands.reachability import SDHReachability
-from planner.infra.errors import OgcpError
-from planner.infra.parallel import DEFAULT_BACKEND, DEFAULT_JOBS
-from planner.methods.configs import (
+from planner.config.methods import (
     HAND_FINGERS,
     AStarConfig,
     ConstraintOptions,
@@ -28,7 +23,12 @@ from planner.methods.configs import (
     HandOptions,
     HFTSConfig,
 )
-from planner.methods.options import MethodConfig, options_of
+from planner.config.options import MethodConfig, options_of
+from planner.grasp.constraints import Constraint, MaxFingerSpread
+from planner.grasp.contact_set import ContactSet
+from planner.hands.reachability import SDHReachability
+from planner.infra.errors import OgcpError
+from planner.infra.parallel import DEFAULT_BACKEND, DEFAULT_JOBS
 from planner.records.plan import contact_set_record, hand_record
 from planner.search.grasp_planner import GraspPlanner
 from planner.search.result import SearchResult
@@ -73,7 +73,7 @@ class MethodRun:
     record: dict[str, Any]
 
 
-#: The model of every hand in :data:`~planner.methods.configs.HANDS`.
+#: The model of every hand in :data:`~planner.config.methods.HANDS`.
 HAND_MODELS = {"sdh": SDHReachability}
 
 

@@ -42,11 +42,7 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
-from planner.grasp.constraints import Constraint, DistinctContacts
-from planner.grasp.contact_set import ContactSet
-from planner.infra.errors import OgcpError, choice_error
-from planner.infra.provenance import provenance
-from planner.methods.configs import (
+from planner.config.methods import (
     DEFAULT_METHOD,
     DEFAULT_WASTAR_EPS,
     HEURISTICS,
@@ -54,7 +50,11 @@ from planner.methods.configs import (
     SearchConfig,
     WAStarConfig,
 )
-from planner.methods.options import options_of
+from planner.config.options import options_of
+from planner.grasp.constraints import Constraint, DistinctContacts
+from planner.grasp.contact_set import ContactSet
+from planner.infra.errors import OgcpError, choice_error
+from planner.infra.provenance import provenance
 from planner.search.best_first import Search
 from planner.search.result import SearchResult
 
@@ -70,7 +70,7 @@ class GraspPlanner:
     Args:
         method: ``astar`` (optimal), ``wastar`` (cost within 1 + eps of optimal) or
             ``dijkstra`` (uniform cost, h = 0).
-        eps: WA* inflation; default :data:`~planner.methods.configs.DEFAULT_WASTAR_EPS` for
+        eps: WA* inflation; default :data:`~planner.config.methods.DEFAULT_WASTAR_EPS` for
             ``wastar`` and 0 otherwise.
         branching: Branching factor b of the expansion successor function.
         successor: Expansion successor function Γ: ``fc`` (k-means) or ``ru`` (random).

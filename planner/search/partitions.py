@@ -20,9 +20,9 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import NDArray
 
+from planner.config.methods import SUCCESSORS, SearchConfig
 from planner.grasp.contact_set import ContactSet
 from planner.infra.errors import OgcpError, choice_error
-from planner.methods.configs import SUCCESSORS, SearchConfig
 
 Indices = NDArray[np.intp]
 

@@ -14,7 +14,7 @@ from benchmarks.cli import build_parser, main
 from benchmarks.cli.method_options import config_from_args, declared_options, flag
 from benchmarks.suite.cells import contact_set, plan_record
 from benchmarks.suite.config import parse_suite
-from planner.methods.configs import DEFAULT_FINGERS, DEFAULT_METHOD
+from planner.config.methods import DEFAULT_FINGERS, DEFAULT_METHOD
 from planner.methods.registry import METHODS, method_spec
 
 

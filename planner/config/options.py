@@ -114,7 +114,7 @@ def field_of(declared: Option) -> Any:
     return dataclasses.field(default=declared.default, metadata={METADATA_KEY: declared})
 
 
-def options_of(config: type | object) -> dict[str, Option]:
+def options_of(config: type[MethodConfig] | MethodConfig) -> dict[str, Option]:
     """Field name -> Option of a configuration class or instance, in field order."""
     return {f.name: f.metadata[METADATA_KEY] for f in dataclasses.fields(config) if METADATA_KEY in f.metadata}
 

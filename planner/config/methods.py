@@ -13,7 +13,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import ClassVar
 
-from planner.methods.options import ConfigError, MethodConfig, Option, field_of, option
+from planner.config.options import ConfigError, MethodConfig, Option, field_of, option
 
 #: Method of ``ogcp plan`` and of :class:`GraspPlanner` when none is named.
 DEFAULT_METHOD = "astar"

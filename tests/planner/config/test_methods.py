@@ -9,9 +9,7 @@ import pytest
 
 from planner.baselines.es import ExhaustiveSearch
 from planner.baselines.hfts import HFTS
-from planner.hands.reachability import SDHReachability
-from planner.infra.errors import OgcpError
-from planner.methods.configs import (
+from planner.config.methods import (
     DEFAULT_HAND_THRESHOLD,
     HANDS,
     AStarConfig,
@@ -21,7 +19,9 @@ from planner.methods.configs import (
     HFTSConfig,
     WAStarConfig,
 )
-from planner.methods.options import ConfigError, Option, options_of
+from planner.config.options import ConfigError, Option, options_of
+from planner.hands.reachability import SDHReachability
+from planner.infra.errors import OgcpError
 from planner.methods.registry import EXHAUSTIVE_METHODS, METHODS, OPTIMAL_METHODS, SEARCH_METHODS, method_spec
 from planner.methods.runners import HAND_MODELS
 from planner.search.grasp_planner import GraspPlanner

@@ -1,0 +1,30 @@
+"""Validated configurations of the planning methods: every default, range and choice written once.
+
+:mod:`planner.config.options` declares one parameter (:class:`Option`) and the validated base
+class; :mod:`planner.config.methods` holds one frozen configuration per method. The engines
+(search, baselines, hands) read their defaults here; the CLI's options and the suites'
+parameter table are generated from the same declarations.
+"""
+
+from planner.config.methods import (
+    AStarConfig,
+    DijkstraConfig,
+    ESConfig,
+    ESPrunedConfig,
+    HFTSConfig,
+    WAStarConfig,
+)
+from planner.config.options import ConfigError, MethodConfig, Option, options_of
+
+__all__ = [
+    "AStarConfig",
+    "ConfigError",
+    "DijkstraConfig",
+    "ESConfig",
+    "ESPrunedConfig",
+    "HFTSConfig",
+    "MethodConfig",
+    "Option",
+    "WAStarConfig",
+    "options_of",
+]
