@@ -84,10 +84,6 @@ class Decomposition:
     meta: dict[str, Any] = field(default_factory=dict)
     cache_path: Path | None = None
 
-    def meshes(self) -> list[trimesh.Trimesh]:
-        """The parts as trimesh meshes."""
-        return [trimesh.Trimesh(v, f, process=False) for v, f in self.parts]
-
 
 def coacd_version() -> str:
     """Version of the installed CoACD ("missing" when it is not installed)."""
