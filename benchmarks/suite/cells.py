@@ -10,13 +10,12 @@ from __future__ import annotations
 
 import datetime
 import time
-import traceback
 from functools import lru_cache
 from typing import Any
 
 from benchmarks.suite.config import Cell
 from benchmarks.suite.params import EXHAUSTIVE_METHODS, SEARCH_METHODS
-from benchmarks.suite.store import jsonable
+from benchmarks.suite.record import CellError, CellRecord
 from planner.baselines.es import DEFAULT_BINS, ExhaustiveSearch
 from planner.baselines.hfts import HFTS
 from planner.grasp.constraints import Constraint, MaxFingerSpread
@@ -27,10 +26,8 @@ from planner.objects import resolve_object
 from planner.records.plan import contact_set_record, hand_record
 from planner.search.grasp_planner import GraspPlanner
 
-CELL_SCHEMA = "ogcp.cell/1"
 #: Keys of the [simulation] table that are arguments of evaluate_plan, not simulation settings.
 SIMULATION_ARGUMENTS = ("decomposition", "max_grasps")
-TRACEBACK_LINES = 15
 
 
 def run_cell(cell: Cell, simulation: dict[str, Any] | None = None, time_limit: float | None = None) -> dict[str, Any]:
@@ -44,39 +41,31 @@ def run_cell(cell: Cell, simulation: dict[str, Any] | None = None, time_limit: f
             it the cell is recorded as a ``SearchTimeout`` error. None: unlimited.
 
     Returns:
-        The record (see the README's ``results.jsonl`` section for its keys).
+        The JSON form of its :class:`~benchmarks.suite.record.CellRecord` (schema ``ogcp.cell/1``).
     """
     wall0, cpu0 = time.perf_counter(), time.process_time()
-    record: dict[str, Any] = {
-        "schema": CELL_SCHEMA,
-        "id": cell.id,
-        "params": cell.params(),
-        "groups": list(cell.groups),
-        "status": "ok",
-        "error": None,
-        "plan": None,
-        "simulation": None,
-        "simulation_seconds": None,
-    }
+    plan = sim = sim_seconds = error = None
     try:
-        record["plan"] = plan_record(cell, contact_set(cell), time_limit)
+        plan = plan_record(cell, contact_set(cell), time_limit)
         if simulation is not None:
             sim0 = time.perf_counter()
-            record["simulation"] = simulate(record["plan"], simulation)
-            record["simulation_seconds"] = time.perf_counter() - sim0
+            sim = simulate(plan, simulation)
+            sim_seconds = time.perf_counter() - sim0
     except Exception as exc:  # noqa: BLE001 - a failing cell is data, never the end of the suite
-        lines = traceback.format_exc().rstrip().splitlines()
-        message = (str(exc).strip().splitlines() or [""])[0]
-        record["status"] = "error"
-        record["error"] = {
-            "type": type(exc).__name__,
-            "message": message,
-            "traceback": "\n".join(lines[-TRACEBACK_LINES:]),
-        }
-    record["wall_seconds"] = time.perf_counter() - wall0
-    record["cpu_seconds"] = time.process_time() - cpu0
-    record["finished_at"] = datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")
-    return jsonable(record)
+        error = CellError.from_exception(exc)
+    return CellRecord(
+        id=cell.id,
+        params=cell.params(),
+        groups=tuple(cell.groups),
+        status="ok" if error is None else "error",
+        error=error,
+        plan=plan,
+        simulation=sim,
+        simulation_seconds=sim_seconds,
+        wall_seconds=time.perf_counter() - wall0,
+        cpu_seconds=time.process_time() - cpu0,
+        finished_at=datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
+    ).to_dict()
 
 
 def contact_set(cell: Cell) -> ContactSet:

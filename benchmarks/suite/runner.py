@@ -22,6 +22,7 @@ from tqdm import tqdm
 
 from benchmarks.suite.cells import run_cell
 from benchmarks.suite.config import Suite
+from benchmarks.suite.record import CellRecord
 from benchmarks.suite.select import Selection, is_selected, parse_selection
 from benchmarks.suite.store import LOCK, ResultStore
 from planner.infra.errors import OgcpError
@@ -204,11 +205,7 @@ class SuiteRunner:
         if stray:
             self.log(f"ogcp: warning: {len(stray)} records in {store.results_path} are not cells of this suite")
         done = {k: v for k, v in done.items() if k in ids}
-        todo = [
-            c
-            for c in self.suite.cells
-            if c.id not in done or (self.retry_errors and done[c.id].get("status") == "error")
-        ]
+        todo = [c for c in self.suite.cells if c.id not in done or (self.retry_errors and _failed(done[c.id]))]
         skipped = len(self.suite.cells) - len(todo)
         todo = [c for c in todo if is_selected(c, selection)]
         if self.max_cells is not None:
@@ -227,19 +224,20 @@ class SuiteRunner:
         try:
             tasks = [(cell, settings if cell.simulate else None, self.time_limit) for cell in todo]
             finished = run_tasks(run_cell, tasks, self.jobs, self.backend, self.address) if tasks else iter(())
-            for record in finished:
-                store.append(record)
-                records[record["id"]] = record
+            for line in finished:
+                store.append(line)
+                records[line["id"]] = line
                 bar.update()
-                if record["status"] == "error":
-                    error = record["error"]
+                record = CellRecord.from_dict(line)
+                if record.error is not None:
                     tqdm.write(
-                        f"ogcp: cell {record['id']} ({_describe(record)}) failed: {error['type']}: {error['message']}",
+                        f"ogcp: cell {record.id} ({record.describe()}) failed: "
+                        f"{record.error.type}: {record.error.message}",
                         file=sys.stderr,
                     )
         finally:
             bar.close()
-        errors = sum(1 for r in records.values() if r.get("status") == "error")
+        errors = sum(1 for r in records.values() if _failed(r))
         return RunSummary(
             len(self.suite.cells), skipped, len(todo), errors, len(self.suite.cells) - len(records), records
         )
@@ -255,20 +253,30 @@ def summary_table(suite: Suite, records: dict[str, dict[str, Any]]) -> str:
     totals = {key: sum(1 for c in suite.cells if (c.object.spec, c.label) == key) for key in rows}
     width = max([len(label) for _, label in rows] + [6])
     lines = [f"{'object':<12} {'method':<{width}} {'done':>9} {'errors':>6} {'best Q1':>10} {'wall s':>9}"]
-    for (obj, label), found in rows.items():
-        values = [r["plan"]["q1"] for r in found if r.get("status") == "ok" and r.get("plan")]
+    for (obj, label), done in rows.items():
+        found = [r for r in map(_parsed, done) if r is not None]
+        values = [r.plan["q1"] for r in found if r.ok and r.plan]
         best = f"{max(values):10.6f}" if values else f"{'-':>10}"
-        errors = sum(1 for r in found if r.get("status") == "error")
-        wall = sum(r.get("wall_seconds") or 0.0 for r in found)
+        errors = sum(1 for r in found if r.status == "error")
+        wall = sum(r.wall_seconds or 0.0 for r in found)
         lines.append(
-            f"{obj:<12} {label:<{width}} {f'{len(found)}/{totals[(obj, label)]}':>9} {errors:>6} {best} {wall:9.2f}"
+            f"{obj:<12} {label:<{width}} {f'{len(done)}/{totals[(obj, label)]}':>9} {errors:>6} {best} {wall:9.2f}"
         )
     return "\n".join(lines)
 
 
-def _describe(record: dict[str, Any]) -> str:
-    p = record["params"]
-    return f"{p['object']} n={p['contacts']} seed={p['contact_seed']} m={p['m']} {p['label']}"
+def _parsed(line: dict[str, Any]) -> CellRecord | None:
+    """The cell record of a ``results.jsonl`` line, None for a line that is not one."""
+    try:
+        return CellRecord.from_dict(line)
+    except OgcpError:
+        return None
+
+
+def _failed(line: dict[str, Any]) -> bool:
+    """Whether a ``results.jsonl`` line records a failed cell."""
+    record = _parsed(line)
+    return record is not None and record.status == "error"
 
 
 def _is_fresh(directory: Path) -> bool:
