@@ -27,6 +27,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from benchmarks.suite.manifest import suite_hash
 from benchmarks.suite.params import EXHAUSTIVE_METHODS, OPTIMAL_METHODS
 from benchmarks.suite.record import CellRecord
 from benchmarks.suite.store import ResultStore
@@ -302,7 +303,7 @@ class Comparison:
         """The printed report and the exit status (0: no regression, 1: regressions)."""
         failures = self.failures()
         lines = [f"RUN {self.run.directory} vs BASELINE {self.baseline.directory}", self.table()]
-        hashes = [(d.manifest or {}).get("suite", {}).get("hash") for d in (self.run, self.baseline)]
+        hashes = [suite_hash(d.manifest) for d in (self.run, self.baseline)]
         if hashes[0] != hashes[1]:
             lines.append(f"note: suite hashes differ (RUN {hashes[0]}, BASELINE {hashes[1]}); cells matched by id")
         extra = len(set(self.run.records) - set(self.baseline.records))

@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from benchmarks.suite.manifest import ManifestSuite
 from benchmarks.suite.record import PROBLEM_FIELDS, CellRecord, Problem
 from benchmarks.suite.store import MANIFEST, RESULTS, read_results
 from planner.infra.errors import OgcpError
@@ -255,8 +256,8 @@ def _manifest(directory: Path, notes: list[str]) -> dict[str, Any] | None:
 
 def _missing(manifest: dict[str, Any] | None, recorded: set[str]) -> str | None:
     """The note on cells the suite lists that the folder does not hold yet."""
-    suite = (manifest or {}).get("suite")
-    if not isinstance(suite, dict):
+    suite = ManifestSuite.of(manifest)
+    if suite is None:
         return None
     expected = _suite_cells(suite)
     if expected is not None:
@@ -264,21 +265,19 @@ def _missing(manifest: dict[str, Any] | None, recorded: set[str]) -> str | None:
         if absent:
             return f"{len(absent)} cell(s) of the suite not run yet (skipped): {_list(absent)}"
         return None
-    total = suite.get("cells")
-    if isinstance(total, int) and total > len(recorded):
-        return f"{total - len(recorded)} cell(s) of the suite not run yet (skipped)"
+    if suite.cells is not None and suite.cells > len(recorded):
+        return f"{suite.cells - len(recorded)} cell(s) of the suite not run yet (skipped)"
     return None
 
 
-def _suite_cells(suite: dict[str, Any]) -> dict[str, str] | None:
+def _suite_cells(suite: ManifestSuite) -> dict[str, str] | None:
     """id -> description of every cell of the manifest's suite, or None when it cannot be re-read."""
     from benchmarks.suite.config import parse_suite
 
-    text = suite.get("content")
-    if not isinstance(text, str):
+    if suite.content is None:
         return None
     try:
-        parsed = parse_suite(text, source=str(suite.get("source", "manifest")))
+        parsed = parse_suite(suite.content, source=suite.source or "manifest")
     except OgcpError:
         # Mesh paths relative to a suite file elsewhere do not resolve here; count instead.
         return None

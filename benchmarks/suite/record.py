@@ -17,7 +17,6 @@ from benchmarks.suite.store import jsonable
 from planner.infra.errors import OgcpError
 
 CELL_SCHEMA = "ogcp.cell/1"
-STATUSES = ("ok", "error")
 #: Lines of a failing cell's traceback kept in its record.
 TRACEBACK_LINES = 15
 #: Params that make two cells plan on the same contact set: object, |C|, contact seed, m, mu, k, diagonal.

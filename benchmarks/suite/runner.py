@@ -9,9 +9,6 @@ and refuses a folder written by a different suite (another hash).
 
 from __future__ import annotations
 
-import datetime
-import os
-import platform
 import sys
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -22,14 +19,12 @@ from tqdm import tqdm
 
 from benchmarks.suite.cells import run_cell
 from benchmarks.suite.config import Suite
+from benchmarks.suite.manifest import ManifestSuite, first_commit, new_manifest, session_record, with_session
 from benchmarks.suite.record import CellRecord
 from benchmarks.suite.select import Selection, is_selected, parse_selection
 from benchmarks.suite.store import LOCK, ResultStore
 from planner.infra.errors import OgcpError
 from planner.infra.parallel import run_tasks, validate_backend
-from planner.infra.provenance import provenance
-
-MANIFEST_SCHEMA = "ogcp.suite-run/1"
 
 
 @dataclass(frozen=True)
@@ -140,62 +135,34 @@ class SuiteRunner:
 
     def _check_manifest(self, store: ResultStore, fresh: bool) -> dict[str, Any]:
         manifest = None if fresh else store.read_manifest()
-        session = self._session()
+        session = session_record(
+            self.jobs,
+            self.backend,
+            self.address,
+            self.resume,
+            self.retry_errors,
+            self.max_cells,
+            self.only,
+            self.time_limit,
+        )
         if manifest is None:
-            manifest = self._new_manifest(session)
+            manifest = new_manifest(self.suite, session)
         else:
-            recorded = manifest.get("suite", {}).get("hash")
-            if recorded != self.suite.hash:
-                held = f"{self.out} holds suite {manifest.get('suite', {}).get('name')!r} with hash {recorded}"
-                if recorded == self.suite.without_simulation().hash:
+            recorded = ManifestSuite.of(manifest)
+            digest = recorded.hash if recorded else None
+            if digest != self.suite.hash:
+                held = f"{self.out} holds suite {recorded.name if recorded else None!r} with hash {digest}"
+                if digest == self.suite.without_simulation().hash:
                     raise OgcpError(f"{held}, run with --no-simulation; resume with --no-simulation too")
                 raise OgcpError(f"{held}; this suite's hash is {self.suite.hash}: the suite changed, use another --out")
-            first = manifest.get("sessions", [{}])[0].get("git_commit")
+            first = first_commit(manifest)
             if first != session["git_commit"]:
                 self.log(
                     f"ogcp: warning: resuming with git commit {session['git_commit']}; the run started with {first}"
                 )
-            manifest["sessions"] = [*manifest.get("sessions", []), session]
+            manifest = with_session(manifest, session)
         store.write_manifest(manifest)
         return manifest
-
-    def _session(self) -> dict[str, Any]:
-        info = provenance()
-        return {
-            "started_at": _now(),
-            "git_commit": info["git_commit"],
-            "versions": info["versions"],
-            "jobs": self.jobs,
-            "backend": self.backend,
-            "address": self.address,
-            "resume": self.resume,
-            "retry_errors": self.retry_errors,
-            "max_cells": self.max_cells,
-            "only": list(self.only),
-            "time_limit": self.time_limit,
-        }
-
-    def _new_manifest(self, session: dict[str, Any]) -> dict[str, Any]:
-        info = provenance()
-        suite = self.suite
-        return {
-            "schema": MANIFEST_SCHEMA,
-            "suite": {
-                "name": suite.name,
-                "source": suite.source,
-                "hash": suite.hash,
-                "cells": len(suite.cells),
-                "simulation_enabled": suite.simulate,
-                "content": suite.text,
-            },
-            "seeds": suite.seeds(),
-            "started_at": session["started_at"],
-            "versions": info["versions"],
-            "git_commit": info["git_commit"],
-            "python": info["python"],
-            "cpu": {"model": _cpu_model(), "count": os.cpu_count(), "platform": platform.platform()},
-            "sessions": [session],
-        }
 
     def _run_cells(
         self, store: ResultStore, manifest: dict[str, Any], done: dict[str, dict[str, Any]], selection: Selection
@@ -284,18 +251,3 @@ def _is_fresh(directory: Path) -> bool:
     if directory.exists() and not directory.is_dir():
         raise OgcpError(f"--out {directory} is a file, not a folder")
     return not directory.exists() or all(p.name == LOCK for p in directory.iterdir())
-
-
-def _now() -> str:
-    return datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")
-
-
-def _cpu_model() -> str:
-    try:
-        with open("/proc/cpuinfo", encoding="utf-8") as handle:
-            for line in handle:
-                if line.startswith("model name"):
-                    return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or platform.machine()
