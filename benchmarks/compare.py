@@ -27,12 +27,14 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from benchmarks.suite.manifest import suite_hash
 from benchmarks.suite.params import EXHAUSTIVE_METHODS, OPTIMAL_METHODS
+from benchmarks.suite.record import CellRecord
 from benchmarks.suite.store import ResultStore
 from planner.infra.errors import OgcpError, choice_error
+from sim_eval.result import SimGraspRecord, SimRecord
 
 TIME_KEYS = ("cpu", "plan", "wall")
-CONTACT_KEYS = ("object", "contacts", "contact_seed", "m", "mu", "cone_edges", "diagonal")
 CONSTRAINT_KEYS = ("max_spread", "hand", "hand_threshold")
 
 
@@ -90,7 +92,7 @@ class RunData:
     """A suite output folder as read for comparison."""
 
     directory: Path
-    records: dict[str, dict[str, Any]]
+    records: dict[str, CellRecord]
     manifest: dict[str, Any] | None
     problems: tuple[str, ...]
 
@@ -107,49 +109,50 @@ def load_run(directory: str | Path) -> RunData:
     if not store.results_path.is_file():
         raise OgcpError(f"{directory}: no results.jsonl (expected the --out folder of ogcp suite)")
     report = store.read()
-    for record in report.records:
-        if not isinstance(record.get("params"), dict) or "status" not in record:
-            raise OgcpError(f"{store.results_path}: record {record['id']} has no params/status: not a cell record")
-    return RunData(store.directory, report.latest(), store.read_manifest(), report.problems)
+    records = {}
+    for line in report.records:
+        try:
+            record = CellRecord.from_dict(line)
+        except OgcpError as exc:
+            raise OgcpError(f"{store.results_path}: {exc}") from None
+        records[record.id] = record  # the latest record of a cell wins
+    return RunData(store.directory, records, store.read_manifest(), report.problems)
 
 
-def simulated_grasps(record: dict[str, Any]) -> dict[str, dict[str, Any]]:
+def simulated_grasps(record: CellRecord) -> dict[str, SimGraspRecord]:
     """label -> simulated grasp of the cell's ``ogcp.sim/1`` record (empty without simulation)."""
-    sim = record.get("simulation")
-    grasps = sim.get("grasps") if isinstance(sim, dict) else None
-    if not isinstance(grasps, list):
+    if record.simulation is None:
         return {}
-    return {str(g.get("label")): g for g in grasps if isinstance(g, dict)}
+    return {g.label: g for g in SimRecord.from_dict(record.simulation).grasps}
 
 
-def invalid_grasps(record: dict[str, Any]) -> set[str]:
+def invalid_grasps(record: CellRecord) -> set[str]:
     """Labels of the simulated grasps that fail the validity gates."""
-    return {label for label, g in simulated_grasps(record).items() if g.get("valid") is False}
+    return {label for label, g in simulated_grasps(record).items() if g.valid is False}
 
 
-def resistance_changes(new: dict[str, Any], base: dict[str, Any]) -> dict[str, tuple[float, float]]:
+def resistance_changes(new: CellRecord, base: CellRecord) -> dict[str, tuple[float, float]]:
     """label -> (RUN, BASELINE) minimum measured resistance, for grasps measured in both."""
     run, reference = simulated_grasps(new), simulated_grasps(base)
     pairs = {}
     for label, grasp in reference.items():
-        before, after = grasp.get("measured_min"), run.get(label, {}).get("measured_min")
-        if isinstance(before, (int, float)) and isinstance(after, (int, float)):
-            pairs[label] = (float(after), float(before))
+        after = run[label].measured_min if label in run else None
+        if grasp.measured_min is not None and after is not None:
+            pairs[label] = (after, grasp.measured_min)
     return pairs
 
 
-def _time(record: dict[str, Any], key: str) -> float | None:
+def _time(record: CellRecord, key: str) -> float | None:
     if key == "plan":
-        plan = record.get("plan")
-        value = (plan.get("stats") or {}).get("cpu_seconds") if isinstance(plan, dict) else None
+        plan = record.plan
+        value = (plan.get("stats") or {}).get("cpu_seconds") if plan is not None else None
     else:
-        value = record.get(f"{key}_seconds")
+        value = record.cpu_seconds if key == "cpu" else record.wall_seconds
     return float(value) if isinstance(value, (int, float)) else None
 
 
-def _q1(record: dict[str, Any]) -> float | None:
-    plan = record.get("plan")
-    return plan.get("q1") if record.get("status") == "ok" and isinstance(plan, dict) else None
+def _q1(record: CellRecord) -> float | None:
+    return record.plan.get("q1") if record.ok and record.plan is not None else None
 
 
 class Comparison:
@@ -182,12 +185,13 @@ class Comparison:
         """The findings that fail the comparison (``missing`` only unless allowed)."""
         return [f for f in self.findings() if not (f.kind == "missing" and self.tolerances.allow_missing)]
 
-    def _cell(self, cell: str, new: dict[str, Any], base: dict[str, Any]) -> list[Finding]:
+    def _cell(self, cell: str, new: CellRecord, base: CellRecord) -> list[Finding]:
         t = self.tolerances
-        if new.get("status") != "ok":
-            if base.get("status") == "ok":
-                error = new.get("error") or {}
-                return [_finding("error", new, cell, f"failed: {error.get('type')}: {error.get('message')}")]
+        if not new.ok:
+            if base.ok:
+                error = new.error
+                what = f"{error.type}: {error.message}" if error is not None else "None: None"
+                return [_finding("error", new, cell, f"failed: {what}")]
             return []
         found = []
         q_new, q_base = _q1(new), _q1(base)
@@ -227,16 +231,16 @@ class Comparison:
     def _optimality(self) -> list[Finding]:
         optimum: dict[tuple[Any, ...], float] = {}
         for record in self.run.records.values():
-            if record["params"]["method"] in EXHAUSTIVE_METHODS and _q1(record) is not None:
+            if record.method in EXHAUSTIVE_METHODS and _q1(record) is not None:
                 optimum.setdefault(_problem(record), _q1(record))
         found = []
         for cell, record in self.run.records.items():
-            params, value = record["params"], _q1(record)
+            value = _q1(record)
             reference = optimum.get(_problem(record))
             if reference is None or value is None:
                 continue
-            symmetry = params.get("variant", {}).get("symmetry", False)
-            if params["method"] in OPTIMAL_METHODS and not symmetry:
+            symmetry = record.variant.get("symmetry", False)
+            if record.method in OPTIMAL_METHODS and not symmetry:
                 if abs(value - reference) > self.tolerances.optimality:
                     found.append(
                         _finding(
@@ -246,8 +250,8 @@ class Comparison:
                             f"Q1 {value:.12g} differs from the exhaustive optimum {reference:.12g}",
                         )
                     )
-            elif params["method"] == "wastar" and not symmetry:
-                q_ows, eps = record["plan"]["q_ows"], params["variant"]["eps"]
+            elif record.method == "wastar" and not symmetry:
+                q_ows, eps = record.plan["q_ows"], record.variant["eps"]
                 guarantee = q_ows - (1 + eps) * (q_ows - reference)
                 if value < guarantee - self.tolerances.optimality:
                     found.append(
@@ -260,7 +264,7 @@ class Comparison:
     def table(self) -> str:
         """Per object and method label: cells, Q1 change, time ratio, gate failures, resistance change."""
         t = self.tolerances
-        rows: dict[tuple[str, str], list[tuple[dict[str, Any] | None, dict[str, Any]]]] = {}
+        rows: dict[tuple[str, str], list[tuple[CellRecord | None, CellRecord]]] = {}
         for cell, base in self.baseline.records.items():
             new = self.run.records.get(cell)
             rows.setdefault(_row(new or base), []).append((new, base))
@@ -299,7 +303,7 @@ class Comparison:
         """The printed report and the exit status (0: no regression, 1: regressions)."""
         failures = self.failures()
         lines = [f"RUN {self.run.directory} vs BASELINE {self.baseline.directory}", self.table()]
-        hashes = [(d.manifest or {}).get("suite", {}).get("hash") for d in (self.run, self.baseline)]
+        hashes = [suite_hash(d.manifest) for d in (self.run, self.baseline)]
         if hashes[0] != hashes[1]:
             lines.append(f"note: suite hashes differ (RUN {hashes[0]}, BASELINE {hashes[1]}); cells matched by id")
         extra = len(set(self.run.records) - set(self.baseline.records))
@@ -329,18 +333,16 @@ def compare_dirs(run: str | Path, baseline: str | Path, tolerances: Tolerances |
     return Comparison(load_run(run), load_run(baseline), tolerances).report()
 
 
-def _problem(record: dict[str, Any]) -> tuple[Any, ...]:
+def _problem(record: CellRecord) -> tuple[Any, ...]:
     """The optimisation problem a cell solves: contact set, m and constraints."""
-    params = record["params"]
-    variant = params.get("variant", {})
-    return tuple(params.get(k) for k in CONTACT_KEYS) + tuple(variant.get(k) for k in CONSTRAINT_KEYS)
+    return record.problem + tuple(record.variant.get(k) for k in CONSTRAINT_KEYS)
 
 
-def _row(record: dict[str, Any]) -> tuple[str, str]:
-    return str(record["params"].get("object")), str(record["params"].get("label"))
+def _row(record: CellRecord) -> tuple[str, str]:
+    return record.object, str(record.params.get("label"))
 
 
-def _finding(kind: str, record: dict[str, Any], cell: str, detail: str) -> Finding:
-    params = record["params"]
+def _finding(kind: str, record: CellRecord, cell: str, detail: str) -> Finding:
+    params = record.params
     where = f"[n={params.get('contacts')} seed={params.get('contact_seed')} m={params.get('m')} id={cell}]"
     return Finding(kind, *_row(record), where, detail)

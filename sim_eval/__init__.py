@@ -9,7 +9,7 @@ types; it never runs a search and never imports matplotlib.
 
 from sim_eval.decomposition.decompose import Decomposition, DecompositionSettings
 from sim_eval.evaluate import GraspEvaluator, evaluate_plan
-from sim_eval.result import SIM_SCHEMA, GraspSimResult, SimResult
+from sim_eval.result import SIM_SCHEMA, GraspSimResult, SimGraspRecord, SimRecord, SimResult
 from sim_eval.settings import SimSettings
 
 __all__ = [
@@ -18,6 +18,8 @@ __all__ = [
     "DecompositionSettings",
     "GraspEvaluator",
     "GraspSimResult",
+    "SimGraspRecord",
+    "SimRecord",
     "SimResult",
     "SimSettings",
     "evaluate_plan",

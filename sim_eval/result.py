@@ -1,4 +1,10 @@
-"""Simulation results and their versioned JSON form (schema ``ogcp.sim/1``)."""
+"""Simulation results and their versioned JSON form (schema ``ogcp.sim/1``), written and read here.
+
+:class:`SimResult` and :class:`GraspSimResult` build the record; :class:`SimRecord` and
+:class:`SimGraspRecord` read it back (a suite's ``results.jsonl``, ``ogcp evaluate -o``), so
+no other module spells its keys. Reading is lenient: a key that is missing or of the wrong
+type reads as None, an empty value or NaN, so partial and hand-written records still read.
+"""
 
 from __future__ import annotations
 
@@ -152,4 +158,141 @@ class SimResult:
                 "wall_seconds": self.wall_seconds,
                 "provenance": self.provenance,
             }
+        )
+
+
+def _number(value: Any) -> float | None:
+    """A finite float, else None (JSON writes NaN as null; a bool is not a number)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return None
+    return float(value) if math.isfinite(value) else None
+
+
+def _floats(values: Any) -> NDArray[np.float64]:
+    """A JSON list of numbers as a float array, NaN for nulls; empty for anything but a list."""
+    if not isinstance(values, list):
+        return np.zeros(0)
+    return np.array([math.nan if _number(v) is None else float(v) for v in values], dtype=float)
+
+
+def _mapping(value: Any) -> dict[str, Any]:
+    return value if isinstance(value, dict) else {}
+
+
+@dataclass(frozen=True, eq=False)
+class SimGraspRecord:
+    """One grasp of an ``ogcp.sim/1`` record, as read back; see :class:`GraspSimResult`.
+
+    Attributes:
+        label: Where the grasp came from (``"None"`` when the record has no label).
+        grasp: Contact indices, or None when not recorded.
+        q1: Ferrari-Canny Q1 [N], None when not finite.
+        valid: Whether the preload passed every gate; None when not recorded.
+        error: Why the grasp could not be simulated, if it could not.
+        gates: Validity gates of the preload.
+        normal_forces: Tip normal forces after settling, shape (m,) [N].
+        surface_distance: Distance of each contact from the decomposed surface, shape (m,) [m].
+        direction_labels: Labels of the disturbance directions, length D.
+        directions: Disturbance directions (scaled wrench space), shape (D, 6).
+        predicted: Analytic resistance per direction, shape (D,) [N]; NaN where null.
+        measured: Measured resistance per direction, shape (D,) [N]; NaN where null.
+        censored: Directions held to the end of the ramp, shape (D,).
+        fidelity: ``|measured / predicted - 1|`` per direction, shape (D,); NaN where null.
+        predicted_min: Smallest predicted resistance [N], None when undefined.
+        measured_min: Smallest measured resistance [N], None unless every direction was measured.
+        median_fidelity: Median per-direction fidelity, None when undefined.
+        hold_tests: Pass/fail of the constant-load tests.
+    """
+
+    label: str
+    grasp: tuple[int, ...] | None
+    q1: float | None
+    valid: bool | None
+    error: str | None
+    gates: dict[str, Any]
+    normal_forces: NDArray[np.float64]
+    surface_distance: NDArray[np.float64]
+    direction_labels: tuple[str, ...]
+    directions: NDArray[np.float64]
+    predicted: NDArray[np.float64]
+    measured: NDArray[np.float64]
+    censored: NDArray[np.bool_]
+    fidelity: NDArray[np.float64]
+    predicted_min: float | None
+    measured_min: float | None
+    median_fidelity: float | None
+    hold_tests: dict[str, Any]
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> SimGraspRecord:
+        """Read one entry of an ``ogcp.sim/1`` record's ``grasps`` list (never raises for missing keys)."""
+        grasp, labels, censored = data.get("grasp"), data.get("directions"), data.get("censored")
+        valid, error = data.get("valid"), data.get("error")
+        try:
+            directions = np.array(data.get("direction_vectors"), dtype=float).reshape(-1, 6)
+        except (TypeError, ValueError):
+            directions = np.zeros((0, 6))
+        return cls(
+            label=str(data.get("label")),
+            grasp=tuple(int(i) for i in grasp) if isinstance(grasp, list) else None,
+            q1=_number(data.get("q1")),
+            valid=valid if isinstance(valid, bool) else None,
+            error=None if error is None else str(error),
+            gates=_mapping(data.get("gates")),
+            normal_forces=_floats(data.get("normal_forces")),
+            surface_distance=_floats(data.get("surface_distance")),
+            direction_labels=tuple(str(v) for v in labels) if isinstance(labels, list) else (),
+            directions=directions,
+            predicted=_floats(data.get("predicted")),
+            measured=_floats(data.get("measured")),
+            censored=np.array([bool(v) for v in censored] if isinstance(censored, list) else [], dtype=bool),
+            fidelity=_floats(data.get("fidelity")),
+            predicted_min=_number(data.get("predicted_min")),
+            measured_min=_number(data.get("measured_min")),
+            median_fidelity=_number(data.get("median_fidelity")),
+            hold_tests=_mapping(data.get("hold_tests")),
+        )
+
+
+@dataclass(frozen=True, eq=False)
+class SimRecord:
+    """An ``ogcp.sim/1`` record, as read back; see :class:`SimResult`.
+
+    Attributes:
+        schema: The record's ``schema`` (None when absent; not checked, so that partial
+            records read).
+        object: Description of the object.
+        grasps: Per-grasp results (entries that are not JSON objects are skipped).
+        set_metrics: Correlations, AUC, holding load and median fidelity over the valid grasps.
+        settings: Every simulation setting used.
+        decomposition: Metadata of the convex decomposition.
+        wall_seconds: Wall time of the evaluation [s], None when not recorded.
+        provenance: Versions, git commit, machine.
+    """
+
+    schema: str | None
+    object: dict[str, Any]
+    grasps: tuple[SimGraspRecord, ...]
+    set_metrics: dict[str, Any]
+    settings: dict[str, Any]
+    decomposition: dict[str, Any]
+    wall_seconds: float | None
+    provenance: dict[str, Any]
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> SimRecord:
+        """Read an ``ogcp.sim/1`` record (never raises for missing keys)."""
+        grasps = data.get("grasps")
+        schema = data.get("schema")
+        return cls(
+            schema=schema if isinstance(schema, str) else None,
+            object=_mapping(data.get("object")),
+            grasps=tuple(SimGraspRecord.from_dict(g) for g in grasps if isinstance(g, dict))
+            if isinstance(grasps, list)
+            else (),
+            set_metrics=_mapping(data.get("set_metrics")),
+            settings=_mapping(data.get("settings")),
+            decomposition=_mapping(data.get("decomposition")),
+            wall_seconds=_number(data.get("wall_seconds")),
+            provenance=_mapping(data.get("provenance")),
         )

@@ -39,7 +39,6 @@ class GraspScene:
         object_qpos: Address of the object's free-joint qpos (7 values: position, quaternion).
         object_geoms: Geom ids of the object's convex parts, shape (parts,).
         tip_geoms: Geom ids of the fingertips, shape (m,).
-        normal_actuators: Actuator ids of the normal servos, shape (m,).
         preload_ctrl: Control vector that preloads the grasp, shape (nu,).
         tip_radius: Fingertip radius [m].
         mu: Friction coefficient of every tip-object contact.
@@ -50,7 +49,6 @@ class GraspScene:
     object_qpos: int
     object_geoms: NDArray[np.intp]
     tip_geoms: NDArray[np.intp]
-    normal_actuators: NDArray[np.intp]
     preload_ctrl: NDArray[np.float64]
     tip_radius: float
     mu: float
@@ -213,7 +211,6 @@ def build_scene(
         int(model.jnt_qposadr[joint]),
         object_geoms,
         tip_geoms,
-        normal_acts,
         ctrl,
         float(tip_radius),
         float(mu),

@@ -9,6 +9,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from benchmarks.cli.options import finite_number, nonnegative_int
 from planner.infra.atomic import write_json_atomic
 from planner.infra.errors import OgcpError
@@ -117,33 +119,36 @@ def _fmt(value: float | None, digits: int = 3) -> str:
 
 def sim_summary(record: dict[str, Any]) -> str:
     """Human-readable table of an ``ogcp.sim/1`` record."""
-    name = record["object"].get("name") or record["object"].get("path", "?")
-    lines = [f"object: {name}, {len(record['grasps'])} grasp(s), {record['wall_seconds']:.1f} s"]
-    for g in record["grasps"]:
-        head = f"\n{g['label']} {g['grasp']}: Q1 {_fmt(g['q1'], 4)} N"
-        if g["error"]:
-            lines.append(f"{head}  ERROR {g['error']}")
+    from sim_eval.result import SimRecord
+
+    sim = SimRecord.from_dict(record)
+    name = sim.object.get("name") or sim.object.get("path", "?")
+    lines = [f"object: {name}, {len(sim.grasps)} grasp(s), {sim.wall_seconds:.1f} s"]
+    for g in sim.grasps:
+        head = f"\n{g.label} {list(g.grasp or ())}: Q1 {_fmt(g.q1, 4)} N"
+        if g.error:
+            lines.append(f"{head}  ERROR {g.error}")
             continue
-        gates = g["gates"]
+        gates = g.gates
         lines.append(
-            f"{head}  valid {g['valid']} (penetration {gates['initial_penetration'] * 1e3:.3f} mm, "
+            f"{head}  valid {g.valid} (penetration {gates['initial_penetration'] * 1e3:.3f} mm, "
             f"tips in contact {gates['tips_in_contact']}, creep {gates['creep'] * 1e6:.2f} um)"
         )
-        for name, test in g["hold_tests"].items():
+        for name, test in g.hold_tests.items():
             lines.append(
                 f"  {name} test: {'pass' if test['success'] else 'FAIL'} {dict(zip(test['axes'], test['passed']))}"
             )
-        if not g["measured"] or all(v is None for v in g["measured"]):
+        if not np.isfinite(g.measured).any():
             continue
         lines.append("  direction    predicted [N]  measured [N]  fidelity")
-        for label, p, m, c, f in zip(g["directions"], g["predicted"], g["measured"], g["censored"], g["fidelity"]):
+        for label, p, m, c, f in zip(g.direction_labels, g.predicted, g.measured, g.censored, g.fidelity):
             if label in AXIS_LABELS:
                 lines.append(f"  {label:<11}  {_fmt(p):>13}  {_fmt(m):>12}{'+' if c else ' '} {_fmt(f)}")
         lines.append(
-            f"  minimum      {_fmt(g['predicted_min']):>13}  {_fmt(g['measured_min']):>12}   "
-            f"median fidelity over {len(g['directions'])} directions: {_fmt(g['median_fidelity'])}"
+            f"  minimum      {_fmt(g.predicted_min):>13}  {_fmt(g.measured_min):>12}   "
+            f"median fidelity over {len(g.direction_labels)} directions: {_fmt(g.median_fidelity)}"
         )
-    m = record["set_metrics"]
+    m = sim.set_metrics
     lines.append(f"\nset: {m['n_valid']} valid of {m['n_simulated']}, median fidelity {_fmt(m.get('median_fidelity'))}")
     if "q1_vs_measured" in m:
         q, p = m["q1_vs_measured"], m["predicted_vs_measured"]

@@ -15,21 +15,20 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from benchmarks.suite.manifest import ManifestSuite
+from benchmarks.suite.record import PROBLEM_FIELDS, CellRecord, Problem
 from benchmarks.suite.store import MANIFEST, RESULTS, read_results
 from planner.infra.errors import OgcpError
+from sim_eval.result import SimRecord
 
 from .style import METHOD_TITLES
 
-#: Problem fields in order: what makes two cells plan on the same contact set.
-PROBLEM_FIELDS = ("object", "contacts", "contact_seed", "m", "mu", "cone_edges", "diagonal")
 #: Search parameters at their suite defaults: the "plain" A*/WA*/Dijkstra of tables and Fig. 4.
 PLAIN_SEARCH = {"branching": 2, "successor": "fc", "symmetry": False, "ordered": False}
 SEARCH_METHODS = ("astar", "wastar", "dijkstra")
 DEFAULT_HEURISTIC = {"astar": "fc", "wastar": "fc", "dijkstra": "none"}
 #: Notes listing individual cells stop after this many.
 MAX_LISTED = 5
-
-Problem = tuple[Any, ...]
 
 
 class SkipFigure(Exception):
@@ -58,29 +57,28 @@ class CellData:
     id: str
     params: dict[str, Any]
     plan: dict[str, Any]
-    simulation: dict[str, Any] | None
-    record: dict[str, Any]
+    simulation: SimRecord | None
+    record: CellRecord
 
     @property
     def method(self) -> str:
-        return str(self.params.get("method") or self.plan.get("method"))
+        return str(self.record.method or self.plan.get("method"))
 
     @property
     def variant(self) -> dict[str, Any]:
-        variant = self.params.get("variant")
-        return variant if isinstance(variant, dict) else {}
+        return self.record.variant
 
     @property
     def object(self) -> str:
-        return str(self.params.get("object"))
+        return self.record.object
 
     @property
     def label(self) -> str:
-        return str(self.params.get("label") or METHOD_TITLES.get(self.method, self.method))
+        return self.record.label or METHOD_TITLES.get(self.method, self.method)
 
     @property
     def problem(self) -> Problem:
-        return tuple(self.params.get(name) for name in PROBLEM_FIELDS)
+        return self.record.problem
 
     @property
     def eps(self) -> float | None:
@@ -123,12 +121,12 @@ class CellData:
     def cpu_seconds(self) -> float | None:
         """The method's CPU time (summed over workers where the method records it)."""
         value = number(self.stats.get("cpu_seconds"))
-        return value if value is not None else number(self.record.get("cpu_seconds"))
+        return value if value is not None else number(self.record.cpu_seconds)
 
     def wall_seconds(self) -> float | None:
         """The method's wall time."""
         value = number(self.stats.get("wall_seconds"))
-        return value if value is not None else number(self.record.get("wall_seconds"))
+        return value if value is not None else number(self.record.wall_seconds)
 
 
 @dataclass(frozen=True)
@@ -205,17 +203,19 @@ def load_run(directory: str | Path) -> RunData:
         raise OgcpError(f"{results}: no cell records yet; nothing to plot")
     notes = list(report.problems)
     cells, errors, unusable = [], [], []
-    for record in latest.values():
-        params, plan = record.get("params"), record.get("plan")
-        if record.get("status") == "error":
+    for line in latest.values():
+        try:
+            record = CellRecord.from_dict(line)
+        except OgcpError:
+            unusable.append(line["id"])
+            continue
+        if record.status == "error":
             errors.append(record)
-        elif record.get("status") != "ok" or not isinstance(params, dict) or not isinstance(plan, dict):
-            unusable.append(record["id"])
+        elif not record.ok or record.plan is None:
+            unusable.append(record.id)
         else:
-            simulation = record.get("simulation")
-            cells.append(
-                CellData(record["id"], params, plan, simulation if isinstance(simulation, dict) else None, record)
-            )
+            simulation = SimRecord.from_dict(record.simulation) if record.simulation is not None else None
+            cells.append(CellData(record.id, record.params, record.plan, simulation, record))
     if errors:
         notes.append(f"{len(errors)} cell(s) with status error skipped: {_list(_describe(r) for r in errors)}")
     if unusable:
@@ -229,14 +229,10 @@ def load_run(directory: str | Path) -> RunData:
     return RunData(directory, tuple(cells), tuple(notes), manifest)
 
 
-def _table(value: object) -> dict[str, Any]:
-    return value if isinstance(value, dict) else {}
-
-
-def _describe(record: dict[str, Any]) -> str:
-    params, error = _table(record.get("params")), _table(record.get("error"))
-    what = " ".join(str(params[k]) for k in ("object", "label") if params.get(k) is not None) or record["id"]
-    return f"{what} ({error.get('type', 'error')}: {error.get('message', '')})"
+def _describe(record: CellRecord) -> str:
+    params, error = record.params, record.error
+    what = " ".join(str(params[k]) for k in ("object", "label") if params.get(k) is not None) or record.id
+    return f"{what} ({error.type if error else 'error'}: {error.message if error else ''})"
 
 
 def _list(items: Iterable[str]) -> str:
@@ -260,8 +256,8 @@ def _manifest(directory: Path, notes: list[str]) -> dict[str, Any] | None:
 
 def _missing(manifest: dict[str, Any] | None, recorded: set[str]) -> str | None:
     """The note on cells the suite lists that the folder does not hold yet."""
-    suite = (manifest or {}).get("suite")
-    if not isinstance(suite, dict):
+    suite = ManifestSuite.of(manifest)
+    if suite is None:
         return None
     expected = _suite_cells(suite)
     if expected is not None:
@@ -269,21 +265,19 @@ def _missing(manifest: dict[str, Any] | None, recorded: set[str]) -> str | None:
         if absent:
             return f"{len(absent)} cell(s) of the suite not run yet (skipped): {_list(absent)}"
         return None
-    total = suite.get("cells")
-    if isinstance(total, int) and total > len(recorded):
-        return f"{total - len(recorded)} cell(s) of the suite not run yet (skipped)"
+    if suite.cells is not None and suite.cells > len(recorded):
+        return f"{suite.cells - len(recorded)} cell(s) of the suite not run yet (skipped)"
     return None
 
 
-def _suite_cells(suite: dict[str, Any]) -> dict[str, str] | None:
+def _suite_cells(suite: ManifestSuite) -> dict[str, str] | None:
     """id -> description of every cell of the manifest's suite, or None when it cannot be re-read."""
     from benchmarks.suite.config import parse_suite
 
-    text = suite.get("content")
-    if not isinstance(text, str):
+    if suite.content is None:
         return None
     try:
-        parsed = parse_suite(text, source=str(suite.get("source", "manifest")))
+        parsed = parse_suite(suite.content, source=suite.source or "manifest")
     except OgcpError:
         # Mesh paths relative to a suite file elsewhere do not resolve here; count instead.
         return None

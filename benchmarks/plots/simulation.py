@@ -52,37 +52,25 @@ class SimGrasp:
     fidelity: np.ndarray
 
 
-def _array(values: Any, dtype: Any = float) -> np.ndarray:
-    if not isinstance(values, list):
-        return np.zeros(0, dtype=dtype)
-    if dtype is bool:
-        return np.array([bool(v) for v in values], dtype=bool)
-    return np.array([np.nan if number(v) is None else float(v) for v in values], dtype=float)
-
-
 def valid_grasps(cell: CellData) -> list[SimGrasp]:
     """The cell's valid simulated grasps (none without a simulation record)."""
-    grasps = (cell.simulation or {}).get("grasps")
     out = []
-    for g in grasps if isinstance(grasps, list) else []:
-        if not isinstance(g, dict) or not g.get("valid"):
+    for g in cell.simulation.grasps if cell.simulation is not None else ():
+        if not g.valid:
             continue
-        measured, predicted = _array(g.get("measured")), _array(g.get("predicted"))
-        censored = _array(g.get("censored"), bool)
+        measured, predicted, censored, fidelity = g.measured, g.predicted, g.censored, g.fidelity
         if len(censored) != len(measured):
             censored = np.zeros(len(measured), dtype=bool)
         if len(predicted) != len(measured):
             predicted = np.full(len(measured), np.nan)
-        fidelity = _array(g.get("fidelity"))
-        low = number(g.get("measured_min"))
         at_min = bool(len(measured) and np.isfinite(measured).all() and censored[int(np.argmin(measured))])
-        indices = g.get("grasp")
-        grasp = tuple(sorted(int(i) for i in indices)) if isinstance(indices, list) else (id(g),)
+        # A grasp without indices counts as its own (the same grasp may come from several cells).
+        grasp = tuple(sorted(g.grasp)) if g.grasp is not None else (id(g),)
         out.append(
             SimGrasp(
                 grasp,
-                number(g.get("q1")),
-                low,
+                g.q1,
+                g.measured_min,
                 at_min,
                 predicted,
                 measured,
@@ -264,7 +252,7 @@ def sim_survival(run: RunData, notes: list[str] | None = None) -> Figure:
             low = [g.measured_min for g in grasps if g.measured_min is not None]
             per_method.setdefault(cell.label, (cell, []))[1].extend(low)
             per_object.setdefault(names[problem], []).extend(low)
-            load = number(((cell.simulation or {}).get("set_metrics") or {}).get("holding_load"))
+            load = number(cell.simulation.set_metrics.get("holding_load")) if cell.simulation is not None else None
             if load is not None:
                 holding.add(load)
     if not any(per_object.values()):

@@ -30,6 +30,7 @@ from sim_eval.directions import direction_set
 from sim_eval.evaluate import GraspEvaluator
 from sim_eval.predict import predicted_resistance
 from sim_eval.protocol import ramp_trials, serial_trials, settle
+from sim_eval.result import SimRecord
 from sim_eval.scene import build_scene
 from sim_eval.settings import SimSettings
 
@@ -108,7 +109,7 @@ def study_object(
     for fast, half in zip(result.grasps, slow.grasps, strict=False):
         ok = ~fast.censored & ~half.censored & np.isfinite(fast.measured) & np.isfinite(half.measured)
         changes.extend(np.abs(half.measured[ok] / fast.measured[ok] - 1).tolist())
-    record = result.to_dict()
+    record = SimRecord.from_dict(result.to_dict())
     rate = {
         "grasps": len(slow.grasps),
         "directions": len(changes),
@@ -121,13 +122,21 @@ def study_object(
         "contacts": n,
         "grasps": len(grasps),
         "labels": labels,
-        "set_metrics": record["set_metrics"],
+        "set_metrics": record.set_metrics,
         "rate_halving": rate,
         "per_grasp": [
-            {k: g[k] for k in ("label", "grasp", "q1", "valid", "predicted_min", "measured_min", "median_fidelity")}
-            for g in record["grasps"]
+            {
+                "label": g.label,
+                "grasp": list(g.grasp or ()),
+                "q1": g.q1,
+                "valid": g.valid,
+                "predicted_min": g.predicted_min,
+                "measured_min": g.measured_min,
+                "median_fidelity": g.median_fidelity,
+            }
+            for g in record.grasps
         ],
-        "wall_seconds": record["wall_seconds"],
+        "wall_seconds": record.wall_seconds,
     }
     if args.throughput:
         summary["throughput"] = throughput(contacts, mesh, grasps[0], settings)

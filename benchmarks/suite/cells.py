@@ -10,22 +10,18 @@ from __future__ import annotations
 
 import datetime
 import time
-import traceback
 from functools import lru_cache
 from typing import Any
 
 from benchmarks.suite.config import Cell
-from benchmarks.suite.store import jsonable
+from benchmarks.suite.record import CellError, CellRecord
 from planner.grasp.contact_set import ContactSet, sample_contacts
-from planner.infra.errors import OgcpError
 from planner.methods.registry import method_spec
 from planner.methods.runners import RunOptions
 from planner.objects import resolve_object
 
-CELL_SCHEMA = "ogcp.cell/1"
 #: Keys of the [simulation] table that are arguments of evaluate_plan, not simulation settings.
 SIMULATION_ARGUMENTS = ("decomposition", "max_grasps")
-TRACEBACK_LINES = 15
 
 
 def run_cell(cell: Cell, simulation: dict[str, Any] | None = None, time_limit: float | None = None) -> dict[str, Any]:
@@ -39,39 +35,31 @@ def run_cell(cell: Cell, simulation: dict[str, Any] | None = None, time_limit: f
             it the cell is recorded as a ``SearchTimeout`` error. None: unlimited.
 
     Returns:
-        The record (see the README's ``results.jsonl`` section for its keys).
+        The JSON form of its :class:`~benchmarks.suite.record.CellRecord` (schema ``ogcp.cell/1``).
     """
     wall0, cpu0 = time.perf_counter(), time.process_time()
-    record: dict[str, Any] = {
-        "schema": CELL_SCHEMA,
-        "id": cell.id,
-        "params": cell.params(),
-        "groups": list(cell.groups),
-        "status": "ok",
-        "error": None,
-        "plan": None,
-        "simulation": None,
-        "simulation_seconds": None,
-    }
+    plan = sim = sim_seconds = error = None
     try:
-        record["plan"] = plan_record(cell, contact_set(cell), time_limit)
+        plan = plan_record(cell, contact_set(cell), time_limit)
         if simulation is not None:
             sim0 = time.perf_counter()
-            record["simulation"] = simulate(record["plan"], simulation)
-            record["simulation_seconds"] = time.perf_counter() - sim0
+            sim = simulate(plan, simulation)
+            sim_seconds = time.perf_counter() - sim0
     except Exception as exc:  # noqa: BLE001 - a failing cell is data, never the end of the suite
-        lines = traceback.format_exc().rstrip().splitlines()
-        message = (str(exc).strip().splitlines() or [""])[0]
-        record["status"] = "error"
-        record["error"] = {
-            "type": type(exc).__name__,
-            "message": message,
-            "traceback": "\n".join(lines[-TRACEBACK_LINES:]),
-        }
-    record["wall_seconds"] = time.perf_counter() - wall0
-    record["cpu_seconds"] = time.process_time() - cpu0
-    record["finished_at"] = datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")
-    return jsonable(record)
+        error = CellError.from_exception(exc)
+    return CellRecord(
+        id=cell.id,
+        params=cell.params(),
+        groups=tuple(cell.groups),
+        status="ok" if error is None else "error",
+        error=error,
+        plan=plan,
+        simulation=sim,
+        simulation_seconds=sim_seconds,
+        wall_seconds=time.perf_counter() - wall0,
+        cpu_seconds=time.process_time() - cpu0,
+        finished_at=datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
+    ).to_dict()
 
 
 def contact_set(cell: Cell) -> ContactSet:
@@ -105,18 +93,9 @@ def simulate(plan: dict[str, Any], settings: dict[str, Any]) -> dict[str, Any]:
         plan: The ``ogcp.plan/1`` record.
         settings: Simulation settings; ``decomposition`` (a table) and ``max_grasps`` go to
             ``evaluate_plan`` as their own arguments.
-
-    Raises:
-        OgcpError: When the simulation API is not installed.
     """
-    try:
-        from sim_eval import evaluate_plan  # lazy: MuJoCo loads only when a suite simulates
-    except ImportError as exc:
-        raise OgcpError(
-            f"simulation is enabled but sim_eval.evaluate_plan is not available ({exc}); "
-            "set [simulation] enabled = false or pass --no-simulation"
-        ) from exc
+    from sim_eval import evaluate_plan  # lazy: MuJoCo loads only when a suite simulates
+
     options = dict(settings)
     extra = {key: options.pop(key) for key in SIMULATION_ARGUMENTS if key in options}
-    result = evaluate_plan(plan, options, **extra)
-    return result.to_dict() if hasattr(result, "to_dict") else result
+    return evaluate_plan(plan, options, **extra).to_dict()

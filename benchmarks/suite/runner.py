@@ -9,9 +9,6 @@ and refuses a folder written by a different suite (another hash).
 
 from __future__ import annotations
 
-import datetime
-import os
-import platform
 import sys
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -22,13 +19,12 @@ from tqdm import tqdm
 
 from benchmarks.suite.cells import run_cell
 from benchmarks.suite.config import Suite
+from benchmarks.suite.manifest import ManifestSuite, first_commit, new_manifest, session_record, with_session
+from benchmarks.suite.record import CellRecord
 from benchmarks.suite.select import Selection, is_selected, parse_selection
 from benchmarks.suite.store import LOCK, ResultStore
 from planner.infra.errors import OgcpError
 from planner.infra.parallel import run_tasks, validate_backend
-from planner.infra.provenance import provenance
-
-MANIFEST_SCHEMA = "ogcp.suite-run/1"
 
 
 @dataclass(frozen=True)
@@ -139,62 +135,34 @@ class SuiteRunner:
 
     def _check_manifest(self, store: ResultStore, fresh: bool) -> dict[str, Any]:
         manifest = None if fresh else store.read_manifest()
-        session = self._session()
+        session = session_record(
+            self.jobs,
+            self.backend,
+            self.address,
+            self.resume,
+            self.retry_errors,
+            self.max_cells,
+            self.only,
+            self.time_limit,
+        )
         if manifest is None:
-            manifest = self._new_manifest(session)
+            manifest = new_manifest(self.suite, session)
         else:
-            recorded = manifest.get("suite", {}).get("hash")
-            if recorded != self.suite.hash:
-                held = f"{self.out} holds suite {manifest.get('suite', {}).get('name')!r} with hash {recorded}"
-                if recorded == self.suite.without_simulation().hash:
+            recorded = ManifestSuite.of(manifest)
+            digest = recorded.hash if recorded else None
+            if digest != self.suite.hash:
+                held = f"{self.out} holds suite {recorded.name if recorded else None!r} with hash {digest}"
+                if digest == self.suite.without_simulation().hash:
                     raise OgcpError(f"{held}, run with --no-simulation; resume with --no-simulation too")
                 raise OgcpError(f"{held}; this suite's hash is {self.suite.hash}: the suite changed, use another --out")
-            first = manifest.get("sessions", [{}])[0].get("git_commit")
+            first = first_commit(manifest)
             if first != session["git_commit"]:
                 self.log(
                     f"ogcp: warning: resuming with git commit {session['git_commit']}; the run started with {first}"
                 )
-            manifest["sessions"] = [*manifest.get("sessions", []), session]
+            manifest = with_session(manifest, session)
         store.write_manifest(manifest)
         return manifest
-
-    def _session(self) -> dict[str, Any]:
-        info = provenance()
-        return {
-            "started_at": _now(),
-            "git_commit": info["git_commit"],
-            "versions": info["versions"],
-            "jobs": self.jobs,
-            "backend": self.backend,
-            "address": self.address,
-            "resume": self.resume,
-            "retry_errors": self.retry_errors,
-            "max_cells": self.max_cells,
-            "only": list(self.only),
-            "time_limit": self.time_limit,
-        }
-
-    def _new_manifest(self, session: dict[str, Any]) -> dict[str, Any]:
-        info = provenance()
-        suite = self.suite
-        return {
-            "schema": MANIFEST_SCHEMA,
-            "suite": {
-                "name": suite.name,
-                "source": suite.source,
-                "hash": suite.hash,
-                "cells": len(suite.cells),
-                "simulation_enabled": suite.simulate,
-                "content": suite.text,
-            },
-            "seeds": suite.seeds(),
-            "started_at": session["started_at"],
-            "versions": info["versions"],
-            "git_commit": info["git_commit"],
-            "python": info["python"],
-            "cpu": {"model": _cpu_model(), "count": os.cpu_count(), "platform": platform.platform()},
-            "sessions": [session],
-        }
 
     def _run_cells(
         self, store: ResultStore, manifest: dict[str, Any], done: dict[str, dict[str, Any]], selection: Selection
@@ -204,11 +172,7 @@ class SuiteRunner:
         if stray:
             self.log(f"ogcp: warning: {len(stray)} records in {store.results_path} are not cells of this suite")
         done = {k: v for k, v in done.items() if k in ids}
-        todo = [
-            c
-            for c in self.suite.cells
-            if c.id not in done or (self.retry_errors and done[c.id].get("status") == "error")
-        ]
+        todo = [c for c in self.suite.cells if c.id not in done or (self.retry_errors and _failed(done[c.id]))]
         skipped = len(self.suite.cells) - len(todo)
         todo = [c for c in todo if is_selected(c, selection)]
         if self.max_cells is not None:
@@ -227,19 +191,20 @@ class SuiteRunner:
         try:
             tasks = [(cell, settings if cell.simulate else None, self.time_limit) for cell in todo]
             finished = run_tasks(run_cell, tasks, self.jobs, self.backend, self.address) if tasks else iter(())
-            for record in finished:
-                store.append(record)
-                records[record["id"]] = record
+            for line in finished:
+                store.append(line)
+                records[line["id"]] = line
                 bar.update()
-                if record["status"] == "error":
-                    error = record["error"]
+                record = CellRecord.from_dict(line)
+                if record.error is not None:
                     tqdm.write(
-                        f"ogcp: cell {record['id']} ({_describe(record)}) failed: {error['type']}: {error['message']}",
+                        f"ogcp: cell {record.id} ({record.describe()}) failed: "
+                        f"{record.error.type}: {record.error.message}",
                         file=sys.stderr,
                     )
         finally:
             bar.close()
-        errors = sum(1 for r in records.values() if r.get("status") == "error")
+        errors = sum(1 for r in records.values() if _failed(r))
         return RunSummary(
             len(self.suite.cells), skipped, len(todo), errors, len(self.suite.cells) - len(records), records
         )
@@ -255,20 +220,30 @@ def summary_table(suite: Suite, records: dict[str, dict[str, Any]]) -> str:
     totals = {key: sum(1 for c in suite.cells if (c.object.spec, c.label) == key) for key in rows}
     width = max([len(label) for _, label in rows] + [6])
     lines = [f"{'object':<12} {'method':<{width}} {'done':>9} {'errors':>6} {'best Q1':>10} {'wall s':>9}"]
-    for (obj, label), found in rows.items():
-        values = [r["plan"]["q1"] for r in found if r.get("status") == "ok" and r.get("plan")]
+    for (obj, label), done in rows.items():
+        found = [r for r in map(_parsed, done) if r is not None]
+        values = [r.plan["q1"] for r in found if r.ok and r.plan]
         best = f"{max(values):10.6f}" if values else f"{'-':>10}"
-        errors = sum(1 for r in found if r.get("status") == "error")
-        wall = sum(r.get("wall_seconds") or 0.0 for r in found)
+        errors = sum(1 for r in found if r.status == "error")
+        wall = sum(r.wall_seconds or 0.0 for r in found)
         lines.append(
-            f"{obj:<12} {label:<{width}} {f'{len(found)}/{totals[(obj, label)]}':>9} {errors:>6} {best} {wall:9.2f}"
+            f"{obj:<12} {label:<{width}} {f'{len(done)}/{totals[(obj, label)]}':>9} {errors:>6} {best} {wall:9.2f}"
         )
     return "\n".join(lines)
 
 
-def _describe(record: dict[str, Any]) -> str:
-    p = record["params"]
-    return f"{p['object']} n={p['contacts']} seed={p['contact_seed']} m={p['m']} {p['label']}"
+def _parsed(line: dict[str, Any]) -> CellRecord | None:
+    """The cell record of a ``results.jsonl`` line, None for a line that is not one."""
+    try:
+        return CellRecord.from_dict(line)
+    except OgcpError:
+        return None
+
+
+def _failed(line: dict[str, Any]) -> bool:
+    """Whether a ``results.jsonl`` line records a failed cell."""
+    record = _parsed(line)
+    return record is not None and record.status == "error"
 
 
 def _is_fresh(directory: Path) -> bool:
@@ -276,18 +251,3 @@ def _is_fresh(directory: Path) -> bool:
     if directory.exists() and not directory.is_dir():
         raise OgcpError(f"--out {directory} is a file, not a folder")
     return not directory.exists() or all(p.name == LOCK for p in directory.iterdir())
-
-
-def _now() -> str:
-    return datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")
-
-
-def _cpu_model() -> str:
-    try:
-        with open("/proc/cpuinfo", encoding="utf-8") as handle:
-            for line in handle:
-                if line.startswith("model name"):
-                    return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or platform.machine()

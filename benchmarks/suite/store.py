@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from planner.infra.atomic import write_json_atomic
+from planner.infra.atomic import fsync_directory, write_json_atomic
 from planner.infra.errors import OgcpError
 
 RESULTS = "results.jsonl"
@@ -167,7 +167,7 @@ class ResultStore:
             finally:
                 os.close(fd)
             if created:
-                _fsync_directory(self.directory)
+                fsync_directory(self.directory)
         except OSError as exc:
             raise OgcpError(f"cannot append to {self.results_path}: {exc.strerror or exc}") from exc
         if written != len(line):
@@ -190,11 +190,3 @@ class ResultStore:
             yield
         finally:
             os.close(fd)
-
-
-def _fsync_directory(directory: Path) -> None:
-    fd = os.open(directory, os.O_RDONLY)
-    try:
-        os.fsync(fd)
-    finally:
-        os.close(fd)

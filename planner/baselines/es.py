@@ -34,6 +34,7 @@ from planner.grasp.contact_set import ContactSet
 from planner.grasp.kernel import FALLBACK, OK, default_directions, support_table
 from planner.grasp.kernel.geometry import CUT_MARGIN
 from planner.grasp.quality import exact_q1_batch, q1_certificate
+from planner.infra.atomic import write_json_atomic
 from planner.infra.errors import OgcpError
 from planner.infra.parallel import DEFAULT_BACKEND, DEFAULT_JOBS, run_tasks, validate_backend
 from planner.infra.provenance import provenance
@@ -380,7 +381,7 @@ class _ChunkStore:
                     f"checkpoint {self.directory} belongs to a different run ({stored}); use another directory"
                 )
         else:
-            _write_atomic(manifest, self.key)
+            write_json_atomic(manifest, self.key, indent=None)
         done = {}
         for path in sorted(self.directory.glob("chunk_*.json")):
             try:
@@ -395,10 +396,4 @@ class _ChunkStore:
 
     def save(self, result: ChunkResult) -> None:
         if self.directory is not None:
-            _write_atomic(self.directory / f"chunk_{result.index:07d}.json", result.to_dict())
-
-
-def _write_atomic(path: Path, data: dict[str, Any]) -> None:
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(json.dumps(data) + "\n")
-    tmp.replace(path)
+            write_json_atomic(self.directory / f"chunk_{result.index:07d}.json", result.to_dict(), indent=None)

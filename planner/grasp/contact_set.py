@@ -22,6 +22,7 @@ import trimesh
 from numpy.typing import NDArray
 
 from planner.grasp.wrench import contact_wrenches
+from planner.infra.atomic import write_json_atomic
 from planner.infra.errors import OgcpError
 from planner.infra.tolerance import TOL
 
@@ -161,11 +162,12 @@ class ContactSet:
             raise OgcpError(f"{where}: malformed contact data ({exc})") from exc
 
     def save(self, path: str | Path) -> None:
-        """Write the JSON form atomically (a crash never leaves a half-written file)."""
-        path = Path(path)
-        tmp = path.with_name(path.name + ".tmp")
-        tmp.write_text(json.dumps(self.to_dict(), indent=1) + "\n")
-        tmp.replace(path)
+        """Write the JSON form atomically (a crash never leaves a half-written file).
+
+        Raises:
+            OgcpError: If the file cannot be written.
+        """
+        write_json_atomic(path, self.to_dict())
 
     @classmethod
     def load(cls, path: str | Path) -> ContactSet:

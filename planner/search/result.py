@@ -146,11 +146,6 @@ class SearchResult:
     contact_source: dict[str, Any] = field(default_factory=dict)
     tree: SearchTree | None = None
 
-    @property
-    def certified_gap(self) -> float:
-        """How far the optimum can be above the returned grasp [N]."""
-        return max(0.0, self.bound - self.q1)
-
     def to_dict(self, contact_set: dict[str, Any] | None = None) -> dict[str, Any]:
         """JSON form, schema ``ogcp.plan/1``.
 

@@ -3,9 +3,9 @@
 :func:`decompose` splits a mesh into convex parts with CoACD (or takes its convex hull) and
 caches the result by content: the key is the sha256 of the mesh arrays, the settings (except
 the timeout) and the CoACD version. An entry is a folder ``<key>/`` holding ``parts.npz``,
-``meta.json`` and CoACD's log. It is written in a temporary folder beside it and renamed into
-place, so readers see a whole entry or none; an unreadable entry is recomputed, and when two
-processes write the same entry the first rename wins and the other uses it.
+``meta.json`` and CoACD's log, stored and verified by :mod:`planner.infra.cache`: readers see a
+whole entry or none, a damaged entry is reported, discarded and recomputed, and when two
+processes write the same entry the first one wins and the other uses it.
 
 CoACD runs in a child Python process, so that a run past the timeout can be killed and a crash
 in its native code cannot take the caller down; arrays travel through ``.npz`` files.
@@ -27,14 +27,9 @@ import importlib.metadata
 import inspect
 import io
 import json
-import os
 import re
-import shutil
-import tempfile
 import time
-import uuid
 import warnings
-import zipfile
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
@@ -45,7 +40,7 @@ import trimesh
 from numpy.typing import NDArray
 from scipy.spatial import ConvexHull
 
-from planner.infra.cache import cache_dir
+from planner.infra.cache import cache_dir, read_entry, write_entry
 from planner.infra.errors import OgcpError
 from sim_eval.body import Part, hull_part, is_closed_manifold, object_inertia, surface_distance
 from sim_eval.decomposition.coacd_child import run_coacd_child
@@ -88,10 +83,6 @@ class Decomposition:
     parts: tuple[Part, ...]
     meta: dict[str, Any] = field(default_factory=dict)
     cache_path: Path | None = None
-
-    def meshes(self) -> list[trimesh.Trimesh]:
-        """The parts as trimesh meshes."""
-        return [trimesh.Trimesh(v, f, process=False) for v, f in self.parts]
 
 
 def coacd_version() -> str:
@@ -164,15 +155,17 @@ def _unpack(path: Path) -> list[tuple[NDArray[np.float64], NDArray[np.int64]]]:
     return parts
 
 
-def _load_entry(folder: Path, key: str) -> Decomposition | None:
-    """A complete, readable cache entry, or None for a missing, partial or corrupt one."""
-    try:
-        meta = json.loads((folder / "meta.json").read_text())
-        loaded = _unpack(folder / "parts.npz")
-    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile):
-        return None  # missing, truncated or garbled: recomputed
+def _read_entry(folder: Path, key: str) -> Decomposition:
+    """The decomposition a verified cache entry holds.
+
+    Raises:
+        ValueError: (or what numpy and json raise) for parts or metadata that fail their
+            checks: the entry is damaged and :func:`read_entry` discards it.
+    """
+    meta = json.loads((folder / "meta.json").read_text(encoding="utf-8"))
+    loaded = _unpack(folder / "parts.npz")
     if not isinstance(meta, dict) or meta.get("key") != key or meta.get("hull_count") != len(loaded):
-        return None
+        raise ValueError("meta.json does not describe these parts")
     parts = []
     for v, f in loaded:
         v.setflags(write=False)
@@ -181,56 +174,19 @@ def _load_entry(folder: Path, key: str) -> Decomposition | None:
     return Decomposition(tuple(parts), meta, folder)
 
 
-def _write_synced(path: Path, data: bytes) -> None:
-    with open(path, "wb") as handle:
-        handle.write(data)
-        handle.flush()
-        os.fsync(handle.fileno())
-
-
-def _discard(folder: Path) -> None:
-    """Move a corrupt entry aside (one atomic rename) and delete it; another process may beat us."""
-    trash = folder.with_name(f".{folder.name}.{uuid.uuid4().hex}.trash")
-    try:
-        os.rename(folder, trash)
-    except FileNotFoundError:
-        return
-    shutil.rmtree(trash, ignore_errors=True)
-
-
 def _store(root: Path, key: str, parts: tuple[Part, ...], meta: dict[str, Any], log: str) -> Path | None:
-    """Write an entry atomically; returns the entry folder (ours or a concurrent writer's)."""
-    final = root / key
+    """Write an entry; returns the entry folder (ours or a concurrent writer's), None if it cannot be written."""
+
+    def build(stage: Path) -> None:
+        (stage / "parts.npz").write_bytes(_pack(parts))
+        (stage / "coacd.log").write_bytes(log.encode())
+        (stage / "meta.json").write_bytes((json.dumps(meta, indent=1) + "\n").encode())
+
     try:
-        root.mkdir(parents=True, exist_ok=True)
-        tmp = Path(tempfile.mkdtemp(dir=root, prefix=f".{key}.", suffix=".tmp"))
-    except OSError as exc:
-        warnings.warn(
-            f"cannot write decomposition cache {root}: {exc.strerror or exc}", CacheWriteWarning, stacklevel=3
-        )
+        return write_entry(root / key, build)
+    except OgcpError as exc:
+        warnings.warn(f"decomposition not cached: {exc}", CacheWriteWarning, stacklevel=3)
         return None
-    try:
-        _write_synced(tmp / "parts.npz", _pack(parts))
-        _write_synced(tmp / "coacd.log", log.encode())
-        _write_synced(tmp / "meta.json", (json.dumps(meta, indent=1) + "\n").encode())
-        os.chmod(tmp, 0o755)  # mkdtemp makes it private; a cache entry is for every user of the folder
-        for _ in range(2):
-            try:
-                os.rename(tmp, final)  # fails when `final` exists and is not empty
-                return final
-            except OSError:
-                if _load_entry(final, key) is not None:
-                    return final  # a concurrent writer finished first: use its entry
-                _discard(final)
-        warnings.warn(f"cannot store decomposition in {final}", CacheWriteWarning, stacklevel=3)
-        return None
-    except OSError as exc:
-        warnings.warn(
-            f"cannot write decomposition cache {root}: {exc.strerror or exc}", CacheWriteWarning, stacklevel=3
-        )
-        return None
-    finally:
-        shutil.rmtree(tmp, ignore_errors=True)
 
 
 def _coacd_kwargs(settings: DecompositionSettings) -> dict[str, Any]:
@@ -297,7 +253,7 @@ def decompose(
     mesh_sha = mesh_sha256(mesh)
     name = name or str(mesh.metadata.get("name") or mesh.metadata.get("file_name") or f"mesh {mesh_sha[:12]}")
     root = Path(cache) if cache is not None else cache_dir("decompositions")
-    cached = _load_entry(root / key, key)
+    cached = read_entry(root / key, lambda folder: _read_entry(folder, key))
     if cached is not None:
         return cached
     manifold = is_closed_manifold(faces)
@@ -340,5 +296,5 @@ def decompose(
         "created": datetime.now(UTC).isoformat(timespec="seconds"),
     }
     stored = _store(root, key, parts, meta, log)
-    entry = _load_entry(stored, key) if stored is not None else None
+    entry = read_entry(stored, lambda folder: _read_entry(folder, key)) if stored is not None else None
     return entry or Decomposition(parts, meta, None)

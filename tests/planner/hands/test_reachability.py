@@ -13,6 +13,7 @@ from benchmarks.cli import main
 from planner.grasp.quality import q1
 from planner.hands.reachability import SDHReachability, finger_chain, pad_normals, self_collision_free
 from planner.hands.sdh import forward_kinematics, random_configurations
+from planner.infra.cache import CacheEntryWarning
 from planner.search.grasp_planner import GraspPlanner
 
 
@@ -41,13 +42,16 @@ def test_self_collision_rejects_crossed_fingers():
 
 def test_model_is_cached_and_survives_a_corrupt_entry(tmp_path):
     first = SDHReachability(samples=500, seed=2, cache_dir=tmp_path)
-    files = list(tmp_path.glob("sdh_reach_*.npz"))
-    assert len(files) == 1 and not list(tmp_path.glob("*.tmp*"))
+    files = list(tmp_path.glob("sdh_reach_*/model.npz"))
+    assert len(files) == 1 and [p.name for p in tmp_path.iterdir()] == [files[0].parent.name]
     again = SDHReachability(samples=500, seed=2, cache_dir=tmp_path)
     assert np.array_equal(first.q, again.q)
-    files[0].write_bytes(b"not an npz")
-    rebuilt = SDHReachability(samples=500, seed=2, cache_dir=tmp_path)
-    assert np.array_equal(first.q, rebuilt.q)
+    for damage in (b"not an npz", files[0].read_bytes()[:-10]):
+        files[0].write_bytes(damage)
+        with pytest.warns(CacheEntryWarning, match="is damaged"):
+            rebuilt = SDHReachability(samples=500, seed=2, cache_dir=tmp_path)
+        assert np.array_equal(first.q, rebuilt.q)
+        assert SDHReachability(samples=500, seed=2, cache_dir=tmp_path).q.shape == first.q.shape  # repaired
 
 
 def test_residual_ignores_contact_order_and_reports_a_configuration(hand, donut):

