@@ -231,8 +231,8 @@ class Comparison:
     def _optimality(self) -> list[Finding]:
         optimum: dict[tuple[Any, ...], float] = {}
         for record in self.run.records.values():
-            if record.method in EXHAUSTIVE_METHODS and _q1(record) is not None:
-                optimum.setdefault(_problem(record), _q1(record))
+            if record.method in EXHAUSTIVE_METHODS and (q1 := _q1(record)) is not None:
+                optimum.setdefault(_problem(record), q1)
         found = []
         for cell, record in self.run.records.items():
             value = _q1(record)
@@ -250,7 +250,7 @@ class Comparison:
                             f"Q1 {value:.12g} differs from the exhaustive optimum {reference:.12g}",
                         )
                     )
-            elif record.method == "wastar" and not symmetry:
+            elif record.method == "wastar" and not symmetry and record.plan is not None:
                 q_ows, eps = record.plan["q_ows"], record.variant["eps"]
                 guarantee = q_ows - (1 + eps) * (q_ows - reference)
                 if value < guarantee - self.tolerances.optimality:
@@ -278,11 +278,11 @@ class Comparison:
         for key in sorted(rows):
             pairs = rows[key]
             matched = [(n, b) for n, b in pairs if n is not None]
-            deltas = [_q1(n) - _q1(b) for n, b in matched if _q1(n) is not None and _q1(b) is not None]
+            deltas = [qn - qb for n, b in matched if (qn := _q1(n)) is not None and (qb := _q1(b)) is not None]
             ratios = [
-                max(_time(n, t.time_key), t.min_time) / max(_time(b, t.time_key), t.min_time)
+                max(tn, t.min_time) / max(tb, t.min_time)
                 for n, b in matched
-                if _time(n, t.time_key) is not None and _time(b, t.time_key) is not None
+                if (tn := _time(n, t.time_key)) is not None and (tb := _time(b, t.time_key)) is not None
             ]
             gates = (sum(len(invalid_grasps(n)) for n, _ in matched), sum(len(invalid_grasps(b)) for _, b in pairs))
             resist = [

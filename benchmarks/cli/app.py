@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+import warnings
 from collections.abc import Sequence
 
 from benchmarks.cli import assets, plan, plot, simulate, suite
@@ -29,8 +30,16 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _one_line_warning(message: Warning | str, category: type[Warning], *_: object, **__: object) -> str:
+    # A warning is a notice to the user (a cache entry rebuilt, a mesh not watertight): one line,
+    # like errors, not Python's file:line and source line.
+    first = (str(message).strip().splitlines() or [""])[0]
+    return f"ogcp: warning: {first}\n"
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``ogcp`` console script."""
+    warnings.formatwarning = _one_line_warning
     args = build_parser().parse_args(argv)
     try:
         return int(args.handler(args))

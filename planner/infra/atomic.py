@@ -41,7 +41,7 @@ def fsync_directory(directory: str | Path) -> None:
         os.close(fd)
 
 
-def write_atomic(path: str | Path, write: Callable[[BinaryIO], None]) -> None:
+def write_atomic(path: str | Path, write: Callable[[BinaryIO], object]) -> None:
     """Replace ``path`` with what ``write`` puts into a binary handle, atomically and durably.
 
     Args:
