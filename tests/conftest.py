@@ -7,11 +7,9 @@ import itertools
 import numpy as np
 import pytest
 
-from planner.grasp.contact_set import ContactSet, sample_contacts
-from planner.grasp.quality import q1
-from planner.grasp.support_bound import SupportBound
-from planner.infra.tolerance import TOL
-from planner.objects import builtin_mesh
+from planner import builtin_mesh
+from planner.grasp import ContactSet, SupportBound, q1, sample_contacts
+from planner.infra import TOL
 
 
 def q1_by_facet_enumeration(wrenches: np.ndarray, tol: float = 1e-10) -> float:

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from planner.infra.assets import asset_path
+from planner.infra import asset_path
 
 ROOT = Path(__file__).resolve().parent.parent
 SETUPTOOLS = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]

@@ -15,7 +15,7 @@ from benchmarks import cli
 from benchmarks.compare import Tolerances, compare_dirs
 from benchmarks.suite.config import parse_suite
 from benchmarks.suite.runner import SuiteRunner
-from planner.infra.errors import OgcpError
+from planner.infra import OgcpError
 
 SUITE = """
 schema_version = 1

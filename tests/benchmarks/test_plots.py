@@ -20,7 +20,7 @@ from benchmarks import cli, plots
 from benchmarks.plots.data import SkipFigure, load_run
 from benchmarks.suite.config import parse_suite
 from benchmarks.suite.runner import SuiteRunner
-from planner.infra.errors import OgcpError
+from planner.infra import OgcpError
 
 matplotlib.use("Agg")
 ROOT = Path(__file__).resolve().parents[2]

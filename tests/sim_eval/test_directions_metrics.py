@@ -11,9 +11,8 @@ import numpy as np
 import pytest
 from scipy.optimize import linprog
 
-from planner.grasp.quality import q1_certificate
-from planner.grasp.wrench import contact_wrenches
-from planner.infra.errors import OgcpError
+from planner.grasp import contact_wrenches, q1_certificate
+from planner.infra import OgcpError
 from sim_eval.directions import (
     DirectionSet,
     axis_directions,

@@ -17,8 +17,8 @@ import numpy as np
 import pytest
 from scipy.optimize import linprog
 
-from planner.grasp.wrench import contact_wrenches
-from planner.infra.errors import OgcpError
+from planner.grasp import contact_wrenches
+from planner.infra import OgcpError
 from sim_eval.predict import Prediction, ResistanceLP, physical_wrench, predicted_resistance
 
 HALF_WIDTH = 0.04  # a [m]

@@ -9,15 +9,14 @@ import numpy as np
 import pytest
 import trimesh
 
-from planner.grasp.contact_set import ContactSet
-from planner.infra.errors import OgcpError
+from planner.grasp import ContactSet
+from planner.infra import OgcpError
+from sim_eval import GraspEvaluator, SimSettings, evaluate_plan
 from sim_eval.body import object_inertia
-from sim_eval.decomposition.decompose import Decomposition, DecompositionSettings
-from sim_eval.evaluate import GraspEvaluator, evaluate_plan
+from sim_eval.decomposition import Decomposition, DecompositionSettings
 from sim_eval.predict import predicted_resistance
 from sim_eval.protocol import ramp_trials, serial_trials, settle
 from sim_eval.scene import build_scene
-from sim_eval.settings import SimSettings
 
 F_MAX = 10.0
 MU = 0.5

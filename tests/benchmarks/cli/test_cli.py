@@ -11,9 +11,8 @@ import numpy as np
 import pytest
 
 from benchmarks.cli import main
-from planner.grasp.contact_set import ContactSet, sample_contacts
-from planner.grasp.quality import q1
-from planner.objects import builtin_mesh
+from planner import builtin_mesh
+from planner.grasp import ContactSet, q1, sample_contacts
 
 STATS_KEYS = {
     "created",

@@ -15,7 +15,7 @@ from benchmarks.cli.method_options import config_from_args, declared_options, fl
 from benchmarks.suite.cells import contact_set, plan_record
 from benchmarks.suite.config import parse_suite
 from planner.config.methods import DEFAULT_FINGERS, DEFAULT_METHOD
-from planner.methods.registry import METHODS, method_spec
+from planner.methods import METHODS, method_spec
 
 
 def _plan_args(*argv: str):

@@ -9,7 +9,7 @@ import pytest
 from benchmarks.suite.cells import run_cell
 from benchmarks.suite.config import parse_suite
 from benchmarks.suite.record import CELL_SCHEMA, PROBLEM_FIELDS, TRACEBACK_LINES, CellError, CellRecord
-from planner.infra.errors import OgcpError
+from planner.infra import OgcpError
 
 SUITE = "schema_version = 1\nobjects = ['box']\ncontacts = 12\n[[methods]]\nmethod = 'astar'\nlabel = 'A*'\n"
 

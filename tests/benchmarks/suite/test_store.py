@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from benchmarks.suite.store import ResultStore, jsonable, read_results
-from planner.infra.errors import OgcpError
+from planner.infra import OgcpError
 
 
 def _records(k: int) -> list[dict]:

@@ -23,10 +23,9 @@ from benchmarks import cli
 from benchmarks.suite.config import builtin_suites, load_suite, parse_suite
 from benchmarks.suite.runner import SuiteRunner
 from benchmarks.suite.store import ResultStore
-from planner.grasp.contact_set import sample_contacts
-from planner.grasp.quality import q1
-from planner.infra.errors import OgcpError
-from planner.objects import builtin_mesh
+from planner import builtin_mesh
+from planner.grasp import q1, sample_contacts
+from planner.infra import OgcpError
 
 ROOT = Path(__file__).resolve().parents[3]
 TINY = """

@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 
 from benchmarks.cli import main
+from planner.baselines import ExhaustiveSearch
 from planner.baselines.combinations import combinations_range, count
-from planner.baselines.es import ExhaustiveSearch
-from planner.grasp.quality import q1
-from planner.infra.errors import OgcpError
+from planner.grasp import q1
+from planner.infra import OgcpError
 
 
 @pytest.fixture(scope="module")

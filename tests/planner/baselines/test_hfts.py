@@ -9,8 +9,8 @@ import pytest
 
 from benchmarks.cli import main
 from planner.baselines.hfts import HFTS, Hierarchy
-from planner.grasp.quality import q1
-from planner.infra.errors import OgcpError
+from planner.grasp import q1
+from planner.infra import OgcpError
 from tests.conftest import exhaustive_best
 
 

@@ -7,8 +7,8 @@ import inspect
 
 import pytest
 
-from planner.baselines.es import ExhaustiveSearch
-from planner.baselines.hfts import HFTS
+from planner.baselines import HFTS, ExhaustiveSearch
+from planner.config import ConfigError, Option, options_of
 from planner.config.methods import (
     DEFAULT_HAND_THRESHOLD,
     HANDS,
@@ -19,12 +19,11 @@ from planner.config.methods import (
     HFTSConfig,
     WAStarConfig,
 )
-from planner.config.options import ConfigError, Option, options_of
 from planner.hands.reachability import SDHReachability
-from planner.infra.errors import OgcpError
+from planner.infra import OgcpError
 from planner.methods.registry import EXHAUSTIVE_METHODS, METHODS, OPTIMAL_METHODS, SEARCH_METHODS, method_spec
 from planner.methods.runners import HAND_MODELS
-from planner.search.grasp_planner import GraspPlanner
+from planner.search import GraspPlanner
 
 INVALID = [
     (AStarConfig, {"successor": "xx"}, "unknown successor 'xx'; valid choices: fc, ru"),

@@ -7,12 +7,10 @@ import itertools
 import numpy as np
 import pytest
 
-from planner.grasp.constraints import DistinctContacts, MaxFingerSpread
-from planner.grasp.contact_set import ContactSet, sample_contacts
-from planner.grasp.quality import q1
-from planner.infra.errors import OgcpError
-from planner.objects import builtin_mesh
-from planner.search.grasp_planner import GraspPlanner
+from planner import builtin_mesh
+from planner.grasp import ContactSet, DistinctContacts, MaxFingerSpread, q1, sample_contacts
+from planner.infra import OgcpError
+from planner.search import GraspPlanner
 
 
 def _random_contacts(rng: np.random.Generator, n: int) -> ContactSet:

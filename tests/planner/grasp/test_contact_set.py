@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 import trimesh
 
+from planner import BUILTIN_OBJECTS, builtin_mesh, load_mesh, resolve_object
+from planner.grasp import cone_edges, contact_wrenches, tangent_basis
 from planner.grasp.contact_set import SCHEMA, ContactSet, NonWatertightWarning, mass_properties, sample_contacts
-from planner.grasp.wrench import cone_edges, contact_wrenches, tangent_basis
-from planner.infra.errors import OgcpError
-from planner.objects import BUILTIN_OBJECTS, builtin_mesh, load_mesh, resolve_object
+from planner.infra import OgcpError
 
 
 def winding_number(mesh: trimesh.Trimesh, points: np.ndarray) -> np.ndarray:

@@ -8,11 +8,8 @@ import numpy as np
 import pytest
 from scipy.spatial import ConvexHull, QhullError
 
-from planner.grasp.contact_set import ContactSet
+from planner.grasp import ContactSet, GraspQuality, SupportBound, contact_wrenches
 from planner.grasp.quality import q1, q1_certificate, q1_certificate_direct
-from planner.grasp.subset_quality import GraspQuality
-from planner.grasp.support_bound import SupportBound
-from planner.grasp.wrench import contact_wrenches
 from tests.conftest import q1_by_facet_enumeration
 
 OBJECTS = ("box", "sphere", "donut", "amphora")

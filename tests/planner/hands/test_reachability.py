@@ -10,11 +10,11 @@ import numpy as np
 import pytest
 
 from benchmarks.cli import main
-from planner.grasp.quality import q1
+from planner.grasp import q1
+from planner.hands import forward_kinematics, random_configurations
 from planner.hands.reachability import SDHReachability, finger_chain, pad_normals, self_collision_free
-from planner.hands.sdh import forward_kinematics, random_configurations
 from planner.infra.cache import CacheEntryWarning
-from planner.search.grasp_planner import GraspPlanner
+from planner.search import GraspPlanner
 
 
 @pytest.fixture(scope="module")

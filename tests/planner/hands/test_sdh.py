@@ -19,7 +19,7 @@ from planner.hands import (
     sdh,
     sdh_model_path,
 )
-from planner.infra.errors import OgcpError
+from planner.infra import OgcpError
 
 TIP_HEIGHT = 0.0745 + 0.0165 + 0.0865 + 0.0685
 

@@ -4,8 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from planner.infra import assets
-from planner.infra.errors import OgcpError
+from planner.infra import OgcpError, assets
 
 
 def test_finds_the_checkout_assets():

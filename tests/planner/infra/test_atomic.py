@@ -10,13 +10,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from planner.infra.atomic import (
+from planner.infra import (
+    OgcpError,
     write_atomic,
     write_bytes_atomic,
     write_json_atomic,
     write_text_atomic,
 )
-from planner.infra.errors import OgcpError
 
 
 def test_every_writer_replaces_the_target_and_leaves_no_temporary_file(tmp_path: Path) -> None:

@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from planner.infra import OgcpError
 from planner.infra.cache import (
     ENTRY_MANIFEST,
     ENTRY_SCHEMA,
@@ -17,7 +18,6 @@ from planner.infra.cache import (
     verify_entry,
     write_entry,
 )
-from planner.infra.errors import OgcpError
 
 
 def _build(value: float):

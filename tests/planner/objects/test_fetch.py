@@ -19,8 +19,8 @@ import pytest
 import trimesh
 
 from benchmarks import cli
-from planner.infra.errors import OgcpError
-from planner.objects import BUILTIN_OBJECTS, resolve_object
+from planner import BUILTIN_OBJECTS, resolve_object
+from planner.infra import OgcpError
 from planner.objects import fetch as assets
 from planner.objects import fetchable as asset_registry
 from planner.objects.fetchable import FETCH_GROUPS, FETCHABLE_OBJECTS, PAPER_OBJECTS, pip_target_args

@@ -7,8 +7,7 @@ import tomllib
 
 import pytest
 
-from planner.infra.assets import asset_path
-from planner.infra.errors import OgcpError
+from planner.infra import OgcpError, asset_path
 from planner.objects.fetchable import FETCHABLE_OBJECTS, PAPER_OBJECTS, parse_manifest
 
 SHIPPED = asset_path("objects.toml").read_text()

@@ -6,9 +6,9 @@ import json
 
 import pytest
 
-from planner.grasp.contact_set import DEFAULT_CONE_EDGES, DEFAULT_MU, sample_contacts
-from planner.infra.errors import OgcpError
-from planner.objects import builtin_mesh, resolve_object
+from planner import builtin_mesh, resolve_object
+from planner.grasp import DEFAULT_CONE_EDGES, DEFAULT_MU, sample_contacts
+from planner.infra import OgcpError
 from planner.records.plan import (
     PLAN_SCHEMA,
     contact_sampling,
@@ -17,7 +17,7 @@ from planner.records.plan import (
     plan_grasps,
     recorded_positions,
 )
-from planner.search.grasp_planner import GraspPlanner
+from planner.search import GraspPlanner
 
 
 @pytest.fixture(scope="module")

@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from planner.grasp.contact_set import ContactSet, sample_contacts
-from planner.infra.errors import OgcpError
-from planner.objects import builtin_mesh
-from planner.search.partitions import KMeansPartitioner, PartitionTree, RandomPartitioner, make_partitioner
+from planner import builtin_mesh
+from planner.grasp import ContactSet, sample_contacts
+from planner.infra import OgcpError
+from planner.search import KMeansPartitioner, PartitionTree, RandomPartitioner, make_partitioner
 
 N = 60
 

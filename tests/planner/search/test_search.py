@@ -9,11 +9,10 @@ import types
 import numpy as np
 import pytest
 
-from planner.grasp.quality import q1
-from planner.infra.errors import OgcpError, SearchTimeout
+from planner.grasp import q1
+from planner.infra import OgcpError, SearchTimeout
+from planner.search import GraspPlanner, effective_branching_factor
 from planner.search import best_first as search_run
-from planner.search.grasp_planner import GraspPlanner
-from planner.search.result import effective_branching_factor
 from tests.conftest import exhaustive_best
 
 OBJECTS = ("box", "sphere", "donut", "amphora")

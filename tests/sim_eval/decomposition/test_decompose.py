@@ -16,11 +16,11 @@ import trimesh
 from scipy.spatial import ConvexHull
 from scipy.spatial.transform import Rotation
 
-from planner.grasp.contact_set import NonWatertightWarning, mass_properties
+from planner.grasp import NonWatertightWarning, mass_properties
+from planner.infra import OgcpError
 from planner.infra.cache import ENTRY_MANIFEST, CacheEntryWarning
-from planner.infra.errors import OgcpError
 from sim_eval.body import hull_part, is_closed_manifold, object_inertia, surface_distance, triangle_distances
-from sim_eval.decomposition.decompose import Decomposition, DecompositionSettings, cache_key, decompose
+from sim_eval.decomposition import Decomposition, DecompositionSettings, cache_key, decompose
 
 # Monkeypatching needs the module objects themselves (``decompose`` is also a function name).
 dec = importlib.import_module("sim_eval.decomposition.decompose")
