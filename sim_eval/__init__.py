@@ -5,12 +5,35 @@ disturbance wrenches are ramped along many directions until the object moves, an
 measured resistance is compared with Q1 and with the analytic limit of the same actuation
 model. The package consumes plan results (schema ``ogcp.plan/1``) and the planner's value
 types; it never runs a search and never imports matplotlib.
+
+The names below load their modules on first use, so that reading a setting or a result
+record (``sim_eval.settings``, ``sim_eval.result``) never pays for importing MuJoCo.
 """
 
-from sim_eval.decomposition.decompose import Decomposition, DecompositionSettings
-from sim_eval.evaluate import GraspEvaluator, evaluate_plan
-from sim_eval.result import SIM_SCHEMA, GraspSimResult, SimGraspRecord, SimRecord, SimResult
-from sim_eval.settings import SimSettings
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from sim_eval.decomposition import Decomposition, DecompositionSettings
+    from sim_eval.evaluate import GraspEvaluator, evaluate_plan
+    from sim_eval.result import SIM_SCHEMA, GraspSimResult, SimGraspRecord, SimRecord, SimResult
+    from sim_eval.settings import SimSettings
+
+#: Public name -> the module that defines it.
+_EXPORTS = {
+    "SIM_SCHEMA": "sim_eval.result",
+    "Decomposition": "sim_eval.decomposition",
+    "DecompositionSettings": "sim_eval.decomposition",
+    "GraspEvaluator": "sim_eval.evaluate",
+    "GraspSimResult": "sim_eval.result",
+    "SimGraspRecord": "sim_eval.result",
+    "SimRecord": "sim_eval.result",
+    "SimResult": "sim_eval.result",
+    "SimSettings": "sim_eval.settings",
+    "evaluate_plan": "sim_eval.evaluate",
+}
 
 __all__ = [
     "SIM_SCHEMA",
@@ -24,3 +47,15 @@ __all__ = [
     "SimSettings",
     "evaluate_plan",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    if name not in _EXPORTS:
+        raise AttributeError(f"module 'sim_eval' has no attribute {name!r}")
+    value = getattr(importlib.import_module(_EXPORTS[name]), name)
+    globals()[name] = value  # later lookups skip this function
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted([*globals(), *_EXPORTS])

@@ -15,21 +15,36 @@ from benchmarks.cli.options import finite_number, nonnegative_int
 from planner.infra.atomic import write_json_atomic
 from planner.infra.errors import OgcpError
 from planner.records.plan import load_plan
+from sim_eval.decomposition.settings import METHODS as DECOMPOSITION_METHODS
+from sim_eval.decomposition.settings import DecompositionSettings
+from sim_eval.settings import PROTOCOLS, SimSettings
 
 AXIS_LABELS = ("+fx", "-fx", "+fy", "-fy", "+fz", "-fz", "+tx", "-tx", "+ty", "-ty", "+tz", "-tz", "q1-weakest")
+
+# Defaults are read from the settings themselves, so each is written once.
+_SIM = SimSettings()
+_DECOMPOSITION = DecompositionSettings()
 
 
 def _add_decomposition_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--decomposition",
-        choices=("coacd", "convex_hull"),
-        default="coacd",
-        help="convex decomposition of the object (default coacd)",
+        choices=DECOMPOSITION_METHODS,
+        default=_DECOMPOSITION.method,
+        help=f"convex decomposition of the object (default {_DECOMPOSITION.method})",
     )
     parser.add_argument(
-        "--threshold", type=finite_number, default=0.05, help="CoACD concavity threshold (default 0.05)"
+        "--threshold",
+        type=finite_number,
+        default=_DECOMPOSITION.threshold,
+        help=f"CoACD concavity threshold (default {_DECOMPOSITION.threshold:g})",
     )
-    parser.add_argument("--timeout", type=finite_number, default=300.0, help="CoACD time limit [s] (default 300)")
+    parser.add_argument(
+        "--timeout",
+        type=finite_number,
+        default=_DECOMPOSITION.timeout_s,
+        help=f"CoACD time limit [s] (default {_DECOMPOSITION.timeout_s:g})",
+    )
 
 
 def register(commands: Any) -> None:
@@ -39,23 +54,31 @@ def register(commands: Any) -> None:
     evaluate.add_argument(
         "--directions",
         type=nonnegative_int,
-        default=64,
-        help="quasi-uniform 6-D load directions besides the 12 axes and Q1's weakest (default 64)",
+        default=_SIM.directions,
+        help=f"quasi-uniform 6-D load directions besides the 12 axes and Q1's weakest (default {_SIM.directions})",
     )
-    evaluate.add_argument("--max-force", type=finite_number, default=10.0, help="per-finger normal-force cap F_max [N]")
+    evaluate.add_argument(
+        "--max-force",
+        type=finite_number,
+        default=_SIM.max_normal_force,
+        help=f"per-finger normal-force cap F_max [N] (default {_SIM.max_normal_force:g})",
+    )
     evaluate.add_argument(
         "--tip-radius",
         type=finite_number,
         default=None,
-        help="fingertip radius [m] (default 4%% of the object's diagonal)",
+        help=f"fingertip radius [m] (default {100 * _SIM.tip_radius_ratio:g}%% of the object's diagonal)",
     )
     evaluate.add_argument(
-        "--ramp-time", type=finite_number, default=4.0, help="seconds for a load to reach its prediction"
+        "--ramp-time",
+        type=finite_number,
+        default=_SIM.ramp_time,
+        help=f"seconds for a load to reach its prediction (default {_SIM.ramp_time:g})",
     )
     evaluate.add_argument(
         "--protocol",
-        choices=("resistance", "dexgraspbench"),
-        default="resistance",
+        choices=PROTOCOLS,
+        default=_SIM.protocol,
         help="ramp to failure (default) or DexGraspBench's fixed +-x,y,z load",
     )
     evaluate.add_argument("--weight-test", action="store_true", help="also hold m g along the six force axes")

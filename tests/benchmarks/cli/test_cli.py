@@ -6,6 +6,8 @@ import contextlib
 import io
 import itertools
 import json
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -214,3 +216,12 @@ def test_argparse_errors_exit_2(capsys, argv):
         main(argv)
     assert info.value.code == 2
     assert "error" in capsys.readouterr().err
+
+
+def test_building_the_parser_imports_neither_mujoco_nor_matplotlib():
+    code = (
+        "import sys; from benchmarks.cli import build_parser; build_parser();"
+        "loaded = [m for m in ('mujoco', 'matplotlib', 'coacd') if m in sys.modules];"
+        "assert not loaded, loaded"
+    )
+    subprocess.run([sys.executable, "-c", code], check=True, timeout=120)

@@ -459,10 +459,14 @@ def test_simulation_is_called_lazily_with_the_plan(tmp_path, monkeypatch):
     assert simulated["measured_min"] == 2 * record["plan"]["q1"]
     no_sim = SuiteRunner(parse_suite(text).without_simulation(), tmp_path / "b").run().records.popitem()[1]
     assert len(calls) == 1 and no_sim["simulation"] is None and no_sim["status"] == "ok"
-    monkeypatch.delattr(sim_eval, "evaluate_plan")
+
+    def broken(plan: dict, settings: dict, **options) -> SimpleNamespace:
+        raise RuntimeError("the simulator crashed")
+
+    monkeypatch.setattr(sim_eval, "evaluate_plan", broken)
     failed = SuiteRunner(parse_suite(text), tmp_path / "c").run().records.popitem()[1]
     assert failed["status"] == "error" and failed["plan"]["q1"] == record["plan"]["q1"]
-    assert failed["error"]["type"] == "ImportError" and "evaluate_plan" in failed["error"]["message"]
+    assert failed["error"]["type"] == "RuntimeError" and "the simulator crashed" in failed["error"]["message"]
 
 
 def test_record_tree_is_passed_through(tmp_path):
