@@ -144,15 +144,19 @@ def resistance_changes(new: CellRecord, base: CellRecord) -> dict[str, tuple[flo
 
 def _time(record: CellRecord, key: str) -> float | None:
     if key == "plan":
-        plan = record.plan
-        value = (plan.get("stats") or {}).get("cpu_seconds") if plan is not None else None
-    else:
-        value = record.cpu_seconds if key == "cpu" else record.wall_seconds
-    return float(value) if isinstance(value, (int, float)) else None
+        plan = record.plan_view
+        return plan.cpu_seconds if plan is not None else None
+    return record.cpu_seconds if key == "cpu" else record.wall_seconds
 
 
 def _q1(record: CellRecord) -> float | None:
-    return record.plan.get("q1") if record.ok and record.plan is not None else None
+    plan = record.plan_view
+    return plan.q1 if record.ok and plan is not None else None
+
+
+def _q_ows(record: CellRecord) -> float | None:
+    plan = record.plan_view
+    return plan.q_ows if plan is not None else None
 
 
 class Comparison:
@@ -250,8 +254,8 @@ class Comparison:
                             f"Q1 {value:.12g} differs from the exhaustive optimum {reference:.12g}",
                         )
                     )
-            elif record.method == "wastar" and not symmetry and record.plan is not None:
-                q_ows, eps = record.plan["q_ows"], record.variant["eps"]
+            elif record.method == "wastar" and not symmetry and (q_ows := _q_ows(record)) is not None:
+                eps = record.variant["eps"]
                 guarantee = q_ows - (1 + eps) * (q_ows - reference)
                 if value < guarantee - self.tolerances.optimality:
                     found.append(
@@ -339,10 +343,9 @@ def _problem(record: CellRecord) -> tuple[Any, ...]:
 
 
 def _row(record: CellRecord) -> tuple[str, str]:
-    return record.object, str(record.params.get("label"))
+    return record.object, str(record.label)
 
 
 def _finding(kind: str, record: CellRecord, cell: str, detail: str) -> Finding:
-    params = record.params
-    where = f"[n={params.get('contacts')} seed={params.get('contact_seed')} m={params.get('m')} id={cell}]"
+    where = f"[n={record.contacts} seed={record.contact_seed} m={record.m} id={cell}]"
     return Finding(kind, *_row(record), where, detail)

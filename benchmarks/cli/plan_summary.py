@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 
 from planner.baselines.es import ESResult
@@ -11,6 +9,7 @@ from planner.baselines.hfts import HFTSResult
 from planner.grasp.contact_set import ContactSet
 from planner.methods.registry import METHODS
 from planner.methods.runners import MethodRun
+from planner.records.plan import PlanHand, PlanOptimum, PlanView
 from planner.search.result import SearchResult
 
 
@@ -18,9 +17,10 @@ def describe(run: MethodRun, contacts: ContactSet) -> str:
     """Readable multi-line summary of any method's run."""
     if isinstance(run.result, ESResult):
         return es_summary(run.result, contacts)
+    plan = PlanView(run.record)
     if isinstance(run.result, HFTSResult):
-        return hfts_summary(run.result, contacts) + _optimum_text(run.result, run.record.get("optimum"))
-    return search_summary(run.result, contacts) + _hand_text(run.record.get("hand"))
+        return hfts_summary(run.result, contacts) + _optimum_text(run.result, plan.optimum)
+    return search_summary(run.result, contacts) + _hand_text(plan.hand)
 
 
 def search_summary(result: SearchResult, contacts: ContactSet) -> str:
@@ -110,21 +110,22 @@ def hfts_summary(result: HFTSResult, contacts: ContactSet) -> str:
     return "\n".join(lines)
 
 
-def _optimum_text(result: HFTSResult, optimum: dict[str, Any] | None) -> str:
-    if optimum is None:
+def _optimum_text(result: HFTSResult, optimum: PlanOptimum | None) -> str:
+    if optimum is None or optimum.q1 is None or optimum.grasp is None:
         return ""
-    gaps = optimum["q1"] - result.values
+    gaps = optimum.q1 - result.values
     return (
-        f"\nA* optimum: grasp {optimum['grasp']}   Q1 = {optimum['q1']:.6f}   "
+        f"\nA* optimum: grasp {list(optimum.grasp)}   Q1 = {optimum.q1:.6f}   "
         f"HFTS gap: best {gaps.min():.6f}, mean {gaps.mean():.6f}, "
         f"runs reaching it {int(np.sum(gaps <= 0))} of {len(gaps)}"
     )
 
 
-def _hand_text(hand: dict[str, Any] | None) -> str:
+def _hand_text(hand: PlanHand | None) -> str:
     if hand is None:
         return ""
+    residual = "n/a" if hand.residual is None else f"{hand.residual:.3f}"
     return (
-        f"\nhand: {hand['name']}, residual {hand['residual']:.3f}, fingers on contacts {hand['finger_contacts']}, "
-        f"joint angles [rad] {[round(a, 3) for a in hand['joint_angles']]}"
+        f"\nhand: {hand.name}, residual {residual}, fingers on contacts {list(hand.finger_contacts)}, "
+        f"joint angles [rad] {[round(a, 3) for a in hand.joint_angles]}"
     )

@@ -222,12 +222,11 @@ def run_decompose(args: argparse.Namespace) -> int:
 
     mesh, _ = resolve_object(args.object)
     result = decompose(mesh, _decomposition(args), progress=sys.stderr.isatty(), name=args.object)
-    meta = dict(result.meta)
     if args.json:
-        print(json.dumps({**meta, "cache_path": str(result.cache_path)}))
+        print(json.dumps({**result.meta, "cache_path": str(result.cache_path)}))
     else:
         print(
-            f"{args.object}: {meta.get('hull_count')} convex parts, volume ratio {meta.get('volume_ratio')}, "
-            f"{meta.get('compute_seconds', 0.0):.1f} s, cached at {result.cache_path}"
+            f"{args.object}: {result.hull_count} convex parts, volume ratio {result.volume_ratio}, "
+            f"{result.compute_seconds:.1f} s, cached at {result.cache_path}"
         )
     return 0

@@ -19,13 +19,14 @@ from benchmarks.suite.manifest import ManifestSuite
 from benchmarks.suite.record import PROBLEM_FIELDS, CellRecord, Problem
 from benchmarks.suite.store import MANIFEST, RESULTS, read_results
 from planner.infra.errors import OgcpError
+from planner.methods.registry import SEARCH_METHODS
+from planner.records.plan import PlanView
 from sim_eval.result import SimRecord
 
 from .style import METHOD_TITLES
 
 #: Search parameters at their suite defaults: the "plain" A*/WA*/Dijkstra of tables and Fig. 4.
 PLAIN_SEARCH = {"branching": 2, "successor": "fc", "symmetry": False, "ordered": False}
-SEARCH_METHODS = ("astar", "wastar", "dijkstra")
 DEFAULT_HEURISTIC = {"astar": "fc", "wastar": "fc", "dijkstra": "none"}
 #: Notes listing individual cells stop after this many.
 MAX_LISTED = 5
@@ -49,7 +50,7 @@ class CellData:
     Attributes:
         id: Cell id.
         params: The record's ``params`` block.
-        plan: The ``ogcp.plan/1`` record.
+        plan: The ``ogcp.plan/1`` record as written (read it through :attr:`plan_view`).
         simulation: The ``ogcp.sim/1`` record, or None.
         record: The whole cell record.
     """
@@ -61,8 +62,13 @@ class CellData:
     record: CellRecord
 
     @property
+    def plan_view(self) -> PlanView:
+        """Typed read access to the plan."""
+        return PlanView(self.plan)
+
+    @property
     def method(self) -> str:
-        return str(self.record.method or self.plan.get("method"))
+        return str(self.record.method or self.plan_view.method)
 
     @property
     def variant(self) -> dict[str, Any]:
@@ -82,7 +88,8 @@ class CellData:
 
     @property
     def eps(self) -> float | None:
-        return number(self.variant.get("eps", self.plan.get("eps")))
+        # The cell's own parameter wins; the plan's eps covers methods that do not take one.
+        return number(self.variant["eps"]) if "eps" in self.variant else self.plan_view.eps
 
     @property
     def constraint(self) -> str:
@@ -96,12 +103,11 @@ class CellData:
 
     @property
     def stats(self) -> dict[str, Any]:
-        stats = self.plan.get("stats")
-        return stats if isinstance(stats, dict) else {}
+        return self.plan_view.stats
 
     @property
     def q1(self) -> float | None:
-        return number(self.plan.get("q1"))
+        return self.plan_view.q1
 
     @property
     def plain(self) -> bool:
@@ -120,12 +126,12 @@ class CellData:
 
     def cpu_seconds(self) -> float | None:
         """The method's CPU time (summed over workers where the method records it)."""
-        value = number(self.stats.get("cpu_seconds"))
+        value = self.plan_view.cpu_seconds
         return value if value is not None else number(self.record.cpu_seconds)
 
     def wall_seconds(self) -> float | None:
         """The method's wall time."""
-        value = number(self.stats.get("wall_seconds"))
+        value = self.plan_view.wall_seconds
         return value if value is not None else number(self.record.wall_seconds)
 
 
@@ -230,8 +236,8 @@ def load_run(directory: str | Path) -> RunData:
 
 
 def _describe(record: CellRecord) -> str:
-    params, error = record.params, record.error
-    what = " ".join(str(params[k]) for k in ("object", "label") if params.get(k) is not None) or record.id
+    error = record.error
+    what = " ".join(v for v in (record.object, record.label) if v) or record.id
     return f"{what} ({error.type if error else 'error'}: {error.message if error else ''})"
 
 

@@ -12,6 +12,8 @@ from typing import TYPE_CHECKING, Any, TypeVar
 
 import numpy as np
 
+from planner.methods.registry import OPTIMAL_METHODS, SEARCH_METHODS
+
 from .data import CellData, RunData, SkipFigure, frozen, number
 from .style import (
     LEGEND_ROW,
@@ -34,7 +36,6 @@ MAX_PANELS = 12
 LOG_RATIO = 50.0
 #: Fraction of the Fig. 4 panel height the histogram bars may use.
 BAR_SHARE = 0.55
-OPTIMAL = ("astar", "dijkstra", "es", "es-pruned")
 #: Search parameters that define a successor/heuristic variant (Fig. 7).
 VARIANT_KEYS = ("branching", "successor", "heuristic", "heuristic_branching")
 #: Parameters that never split a series (they vary within one, or do not change the search).
@@ -50,20 +51,6 @@ def _cap(panels: list[Panel], notes: list[str] | None, what: str) -> list[Panel]
     return panels[:MAX_PANELS]
 
 
-def _histogram(cell: CellData) -> tuple[np.ndarray, np.ndarray, dict[str, Any]] | None:
-    hist = cell.plan.get("histogram")
-    if not isinstance(hist, dict):
-        return None
-    try:
-        edges = np.asarray(hist.get("bin_edges"), dtype=float)
-        counts = np.asarray(hist.get("counts"), dtype=float)
-    except (TypeError, ValueError):
-        return None
-    if edges.ndim != 1 or counts.ndim != 1 or len(edges) != len(counts) + 1 or len(counts) == 0:
-        return None
-    return edges, counts, hist
-
-
 # ---------------------------------------------------------------- Fig. 4
 @styled
 def fig4_q1_histograms(run: RunData, notes: list[str] | None = None) -> Figure:
@@ -75,7 +62,7 @@ def fig4_q1_histograms(run: RunData, notes: list[str] | None = None) -> Figure:
     names = run.problem_names()
     panels = []
     for problem, cells in run.by_problem().items():
-        for es in (c for c in cells if c.method == "es" and _histogram(c) is not None):
+        for es in (c for c in cells if c.method == "es" and c.plan_view.histogram is not None):
             others = [c for c in cells if c.constraint == es.constraint and c is not es]
             title = names[problem] + (f" ({es.constraint})" if es.constraint else "")
             panels.append((es, others, title))
@@ -90,7 +77,9 @@ def fig4_q1_histograms(run: RunData, notes: list[str] | None = None) -> Figure:
 
 
 def _histogram_panel(ax: Axes, es: CellData, others: list[CellData], title: str) -> None:
-    edges, counts, hist = _histogram(es)  # type: ignore[misc]
+    hist = es.plan_view.histogram
+    assert hist is not None  # fig4 draws a panel only for an ES cell with a histogram
+    edges, counts = hist.bin_edges, hist.counts
     wastar = _wastar_by_eps(others)
     ax.bar(
         edges[:-1],
@@ -109,10 +98,10 @@ def _histogram_panel(ax: Axes, es: CellData, others: list[CellData], title: str)
         ax.set_ylim(0.5, 0.5 * (2 * positive.max()) ** (1 / BAR_SHARE))
     elif len(positive):
         ax.set_ylim(0, positive.max() / BAR_SHARE)
-    fraction, zero = number(hist.get("force_closure_fraction")), hist.get("zero")
+    fraction, zero = hist.force_closure_fraction, hist.zero
     summary = [
         f"FC {100 * fraction:.2f} %" if fraction is not None else None,
-        f"Q1 = 0: {zero:,}" if isinstance(zero, int) else None,
+        f"Q1 = 0: {zero:,}" if zero is not None else None,
     ]
     ax.set_title("\n".join([title, ", ".join(s for s in summary if s)]))
     ax.set_xlabel("$Q_1$")
@@ -120,8 +109,8 @@ def _histogram_panel(ax: Axes, es: CellData, others: list[CellData], title: str)
     # Axis up to the highest bar or marker, not to Q_OWS (the histogram's range), which can
     # be several times the optimum and squeeze the distribution into a corner.
     reach = [float(edges[np.flatnonzero(counts)[-1] + 1])] if np.any(counts) else []
-    reach += [c.q1 for c in others if c.q1 is not None] + [number(c.plan.get("bound")) or 0.0 for c in others]
-    reach += [number(r.get("q1")) or 0.0 for c in others for r in c.plan.get("runs") or [] if isinstance(r, dict)]
+    reach += [c.q1 for c in others if c.q1 is not None] + [c.plan_view.bound or 0.0 for c in others]
+    reach += [q1 or 0.0 for c in others for q1 in c.plan_view.run_q1s]
     ax.set_xlim(0, min(edges[-1], max(reach, default=edges[-1])) * 1.08)
     # Markers sit in axes coordinates vertically, so a log count axis does not move them.
     across = ax.get_xaxis_transform()
@@ -138,8 +127,7 @@ def _histogram_panel(ax: Axes, es: CellData, others: list[CellData], title: str)
         ax.axvline(
             es.q1, color=method_colour("es", constraint=es.constraint), linestyle=":", linewidth=1.3, label="ES optimum"
         )
-    hfts = [r.get("q1") for c in others if c.method == "hfts" for r in c.plan.get("runs") or [] if isinstance(r, dict)]
-    values = np.array([v for v in (number(x) for x in hfts) if v is not None])
+    values = np.array([q1 for c in others if c.method == "hfts" for q1 in c.plan_view.run_q1s if q1 is not None])
     if len(values):
         colour = method_colour("hfts", constraint=es.constraint)
         ax.plot(
@@ -156,8 +144,8 @@ def _histogram_panel(ax: Axes, es: CellData, others: list[CellData], title: str)
     for i, cell in enumerate(wastar):
         q1 = cell.q1
         assert q1 is not None  # _wastar_by_eps keeps cells with a Q1
-        bound = number(cell.plan.get("bound"))
-        bound = bound if bound is not None else number(cell.plan.get("eps_bound"))
+        plan = cell.plan_view
+        bound = plan.bound if plan.bound is not None else plan.eps_bound
         y, colour = 0.95 - step * (i + 1), method_colour("wastar", cell.eps, cell.constraint)
         ends = [q1, bound if bound is not None else q1]
         ax.plot(
@@ -193,7 +181,7 @@ def fig6_states_per_level(run: RunData, notes: list[str] | None = None) -> Figur
     for problem, cells in run.by_problem().items():
         pairs: dict[Any, dict[bool, CellData]] = {}
         for cell in cells:
-            if cell.method in ("astar", "wastar", "dijkstra") and cell.stats.get("created_per_level"):
+            if cell.method in SEARCH_METHODS and cell.stats.get("created_per_level"):
                 key = (cell.method, frozen(cell.variant, ("symmetry", *NOT_A_SERIES)))
                 pairs.setdefault(key, {}).setdefault(bool(cell.variant.get("symmetry")), cell)
         for pair in pairs.values():
@@ -331,7 +319,7 @@ def fig8_wastar_tradeoff(run: RunData, notes: list[str] | None = None) -> Figure
                 optimal = [
                     c.q1
                     for c in cells
-                    if c.method in OPTIMAL
+                    if c.method in OPTIMAL_METHODS
                     and c.constraint == constraint
                     and not c.variant.get("symmetry")
                     and c.q1 is not None
@@ -356,7 +344,7 @@ def fig8_wastar_tradeoff(run: RunData, notes: list[str] | None = None) -> Figure
         axes[0].plot(eps, np.array(times, dtype=float), "o-", color=colour, label=label)
         axes[1].plot(eps, np.array(visited, dtype=float), "o-", color=colour, label=label)
         axes[2].plot(eps, q1 / optimum if optimum > 0 else q1, "o-", color=colour, label=label)
-        q_ows = number(by_eps[eps[-1]][0].plan.get("q_ows"))
+        q_ows = by_eps[eps[-1]][0].plan_view.q_ows
         if q_ows is not None and optimum > 0:
             guarantee = np.clip((q_ows - (1 + eps) * (q_ows - optimum)) / optimum, 0, None)
             axes[2].plot(

@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, ParamSpec, TypeVar
 
 from planner.infra.errors import OgcpError
+from planner.methods.registry import METHODS
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -67,14 +68,8 @@ METHOD_COLOURS: dict[str, str] = {
     "es-pruned": "#56B4E9",
     "hfts": "#E69F00",
 }
-METHOD_TITLES: dict[str, str] = {
-    "astar": "A*",
-    "wastar": "WA*",
-    "dijkstra": "Dijkstra",
-    "es": "ES",
-    "es-pruned": "ES (pruned)",
-    "hfts": "HFTS",
-}
+#: Method name -> its title in labels and legends (the registry's).
+METHOD_TITLES: dict[str, str] = {name: spec.title for name, spec in METHODS.items()}
 #: Qualitative colours for series that are not methods (objects, successor variants).
 SERIES_COLOURS = (
     "#0072B2",

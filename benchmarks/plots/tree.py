@@ -109,8 +109,8 @@ def fig5_search_tree(run: RunData, notes: list[str] | None = None) -> Figure:
     names = run.problem_names()
     trees: list[tuple[CellData, TreeLayout]] = []
     for cell in run.cells:
-        tree = cell.plan.get("tree")
-        if not isinstance(tree, dict):
+        tree = cell.plan_view.tree
+        if tree is None:
             continue
         try:
             trees.append((cell, layout_tree(tree)))

@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from benchmarks.suite.params import METHOD_PARAMS, complete, default_label, seed_values, values_of
+from benchmarks.suite.record import CellParams
 from planner.config.methods import DEFAULT_FINGERS, DEFAULT_SEED, HAND_FINGERS
 from planner.config.options import Option
 from planner.grasp.contact_set import DEFAULT_CONE_EDGES, DEFAULT_CONTACTS, DEFAULT_MU
@@ -125,18 +126,18 @@ class Cell:
 
     def params(self) -> dict[str, Any]:
         """The ``params`` block of the cell's result record."""
-        return {
-            "object": self.object.spec,
-            "contacts": self.contacts,
-            "contact_seed": self.contact_seed,
-            "m": self.m,
-            "mu": self.mu,
-            "cone_edges": self.cone_edges,
-            "diagonal": self.diagonal,
-            "method": self.method,
-            "variant": dict(self.variant),
-            "label": self.label,
-        }
+        return CellParams(
+            object=self.object.spec,
+            contacts=self.contacts,
+            contact_seed=self.contact_seed,
+            m=self.m,
+            mu=self.mu,
+            cone_edges=self.cone_edges,
+            diagonal=self.diagonal,
+            method=self.method,
+            variant=dict(self.variant),
+            label=self.label,
+        ).to_dict()
 
 
 @dataclasses.dataclass(frozen=True)

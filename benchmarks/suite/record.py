@@ -2,19 +2,22 @@
 
 :func:`benchmarks.suite.cells.run_cell` builds a :class:`CellRecord` and the runner appends its
 :meth:`~CellRecord.to_dict` to ``results.jsonl``; the runner, ``ogcp compare`` and ``ogcp plot``
-read lines back with :meth:`CellRecord.from_dict`. The record holds the cell's ``params`` block,
-its ``ogcp.plan/1`` record (owned by :mod:`planner.records.plan`) and its ``ogcp.sim/1`` record
-(owned by :mod:`sim_eval.result`) as they were written.
+read lines back with :meth:`CellRecord.from_dict`. The record holds the cell's ``params`` block
+(built by :class:`CellParams`, read through :class:`CellRecord`'s accessors), its ``ogcp.plan/1``
+record (owned by :mod:`planner.records.plan`, read through :attr:`CellRecord.plan_view`) and its
+``ogcp.sim/1`` record (owned by :mod:`sim_eval.result`) as they were written.
 """
 
 from __future__ import annotations
 
 import traceback
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, fields
 from typing import Any
 
 from benchmarks.suite.store import jsonable
 from planner.infra.errors import OgcpError
+from planner.records.plan import PlanView
 
 CELL_SCHEMA = "ogcp.cell/1"
 #: Lines of a failing cell's traceback kept in its record.
@@ -23,6 +26,39 @@ TRACEBACK_LINES = 15
 PROBLEM_FIELDS = ("object", "contacts", "contact_seed", "m", "mu", "cone_edges", "diagonal")
 
 Problem = tuple[Any, ...]
+
+
+@dataclass(frozen=True)
+class CellParams:
+    """The ``params`` block of a cell record: what the cell ran. Its keys are these field names.
+
+    Attributes:
+        object: The object as the suite names it (name or mesh path).
+        contacts: Number of contacts n.
+        contact_seed: Seed of the contact sampling.
+        m: Number of fingers.
+        mu: Friction coefficient.
+        cone_edges: Friction-cone edges k.
+        diagonal: Bounding-box diagonal of named objects [m] (None for mesh files).
+        method: Method name.
+        variant: The method's canonical parameters.
+        label: Label for tables and plots.
+    """
+
+    object: str
+    contacts: int
+    contact_seed: int
+    m: int
+    mu: float
+    cone_edges: int
+    diagonal: float | None
+    method: str
+    variant: Mapping[str, Any]
+    label: str
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON form (the record's ``params`` object), keys in field order."""
+        return {f.name: dict(self.variant) if f.name == "variant" else getattr(self, f.name) for f in fields(self)}
 
 
 @dataclass(frozen=True)
@@ -61,8 +97,7 @@ class CellRecord:
 
     Attributes:
         id: The cell id (stable hash of its parameters).
-        params: The cell's ``params`` block (object, contacts, contact_seed, m, mu,
-            cone_edges, diagonal, method, variant, label).
+        params: The cell's ``params`` block (:meth:`CellParams.to_dict`).
         groups: Names of the suite groups that list the cell.
         status: ``"ok"`` or ``"error"``.
         error: Why it failed (``status`` error), else None.
@@ -157,6 +192,21 @@ class CellRecord:
         return str(self.params.get("object"))
 
     @property
+    def contacts(self) -> int | None:
+        """The number of contacts of ``params`` (None when absent)."""
+        return _integer(self.params.get("contacts"))
+
+    @property
+    def contact_seed(self) -> int | None:
+        """The contact seed of ``params`` (None when absent)."""
+        return _integer(self.params.get("contact_seed"))
+
+    @property
+    def m(self) -> int | None:
+        """The number of fingers of ``params`` (None when absent)."""
+        return _integer(self.params.get("m"))
+
+    @property
     def label(self) -> str | None:
         """The method label of ``params`` (None when absent or empty)."""
         return str(self.params["label"]) if self.params.get("label") else None
@@ -172,10 +222,18 @@ class CellRecord:
         """The :data:`PROBLEM_FIELDS` of ``params``: the contact set and m the cell plans on."""
         return tuple(self.params.get(name) for name in PROBLEM_FIELDS)
 
+    @property
+    def plan_view(self) -> PlanView | None:
+        """Typed read access to the plan, None when planning failed."""
+        return None if self.plan is None else PlanView(self.plan)
+
     def describe(self) -> str:
         """``object n=|C| seed=s m=m label``, for one-line messages."""
-        p = self.params
-        return f"{p.get('object')} n={p.get('contacts')} seed={p.get('contact_seed')} m={p.get('m')} {p.get('label')}"
+        return f"{self.object} n={self.contacts} seed={self.contact_seed} m={self.m} {self.label}"
+
+
+def _integer(value: Any) -> int | None:
+    return value if isinstance(value, int) and not isinstance(value, bool) else None
 
 
 def _seconds(value: Any) -> float | None:

@@ -222,7 +222,8 @@ def summary_table(suite: Suite, records: dict[str, dict[str, Any]]) -> str:
     lines = [f"{'object':<12} {'method':<{width}} {'done':>9} {'errors':>6} {'best Q1':>10} {'wall s':>9}"]
     for (obj, label), done in rows.items():
         found = [r for r in map(_parsed, done) if r is not None]
-        values = [r.plan["q1"] for r in found if r.ok and r.plan]
+        views = [r.plan_view for r in found if r.ok]
+        values = [q1 for v in views if v is not None and (q1 := v.q1) is not None]
         best = f"{max(values):10.6f}" if values else f"{'-':>10}"
         errors = sum(1 for r in found if r.status == "error")
         wall = sum(r.wall_seconds or 0.0 for r in found)

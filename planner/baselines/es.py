@@ -38,7 +38,7 @@ from planner.infra.atomic import write_json_atomic
 from planner.infra.errors import OgcpError
 from planner.infra.parallel import DEFAULT_BACKEND, DEFAULT_JOBS, run_tasks, validate_backend
 from planner.infra.provenance import provenance
-from planner.records.plan import plan_record
+from planner.records.plan import histogram_record, plan_record
 
 from . import combinations
 
@@ -121,12 +121,7 @@ class ESResult:
         """JSON form, schema ``ogcp.plan/1`` (with ES statistics and the histogram)."""
         histogram = None
         if self.counts is not None:
-            histogram = {
-                "bin_edges": self.bin_edges.tolist(),
-                "counts": self.counts.tolist(),
-                "zero": self.zero,
-                "force_closure_fraction": self.force_closure_fraction,
-            }
+            histogram = histogram_record(self.bin_edges, self.counts, self.zero, self.force_closure_fraction)
         stats = {
             "grasps": self.grasps,
             "excluded_by_constraints": self.excluded,

@@ -29,7 +29,7 @@ from planner.grasp.contact_set import ContactSet
 from planner.hands.reachability import SDHReachability
 from planner.infra.errors import OgcpError
 from planner.infra.parallel import DEFAULT_BACKEND, DEFAULT_JOBS
-from planner.records.plan import contact_set_record, hand_record
+from planner.records.plan import add_hand, add_optimum, contact_set_record
 from planner.search.grasp_planner import GraspPlanner
 from planner.search.result import SearchResult
 
@@ -106,12 +106,6 @@ def engine_arguments(config: MethodConfig) -> dict[str, Any]:
     return {name: getattr(config, name) for name in options_of(config) if name not in constraint_fields}
 
 
-def _with_hand(record: dict[str, Any], hand: SDHReachability | None, contacts: ContactSet) -> dict[str, Any]:
-    if hand is not None:
-        record["hand"] = hand_record(hand, record["grasp"], contacts)
-    return record
-
-
 def run_search(config: AStarConfig, contacts: ContactSet, m: int, options: RunOptions) -> MethodRun:
     """A*, WA* or Dijkstra (by ``config.method``).
 
@@ -124,7 +118,7 @@ def run_search(config: AStarConfig, contacts: ContactSet, m: int, options: RunOp
         method=config.method, constraints=constraints, time_limit=options.time_limit, **engine_arguments(config)
     )
     result = planner.plan(contacts, m, progress=options.progress)
-    return MethodRun(result, _with_hand(result.to_dict(contact_set_record(contacts)), hand, contacts))
+    return MethodRun(result, add_hand(result.to_dict(contact_set_record(contacts)), hand, contacts))
 
 
 def run_exhaustive(config: ESConfig | ESPrunedConfig, contacts: ContactSet, m: int, options: RunOptions) -> MethodRun:
@@ -148,7 +142,7 @@ def run_exhaustive(config: ESConfig | ESPrunedConfig, contacts: ContactSet, m: i
     record = result.to_dict(contact_set_record(contacts))
     if options.contact_seed is not None:
         record["config"]["seed"] = options.contact_seed
-    return MethodRun(result, _with_hand(record, hand, contacts))
+    return MethodRun(result, add_hand(record, hand, contacts))
 
 
 def run_hfts(config: HFTSConfig, contacts: ContactSet, m: int, options: RunOptions) -> MethodRun:
@@ -162,8 +156,8 @@ def run_hfts(config: HFTSConfig, contacts: ContactSet, m: int, options: RunOptio
         jobs=options.jobs, backend=options.backend, address=options.address, hand=hand, **engine_arguments(config)
     )
     result = search.run(contacts, m)
-    record = _with_hand(result.to_dict(contact_set_record(contacts)), hand, contacts)
+    record = add_hand(result.to_dict(contact_set_record(contacts)), hand, contacts)
     if options.optimum:
         optimum = GraspPlanner(seed=config.seed, constraints=[hand] if hand else ()).plan(contacts, m)
-        record["optimum"] = {"method": optimum.method, "grasp": list(optimum.grasp), "q1": optimum.q1}
+        add_optimum(record, optimum.method, optimum.grasp, optimum.q1)
     return MethodRun(result, record)

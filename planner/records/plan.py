@@ -1,14 +1,16 @@
 """The ``ogcp.plan/1`` record: what every planning method writes and the simulation reads.
 
 This module owns the schema: it builds the record (:func:`plan_record` and its blocks)
-and reads it back (:func:`load_plan`, :func:`contact_sampling`, :func:`plan_grasps`).
-Later stages (simulation, suites) consume it: fields are only ever added.
+and reads it back (:func:`load_plan`, :func:`contact_sampling`, :func:`plan_grasps`,
+:class:`PlanView`). Later stages (simulation, suites, comparisons, figures) read it only
+through these, so every key is named here. Fields are only ever added.
 """
 
 from __future__ import annotations
 
 import json
-from collections.abc import Sequence
+import math
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -96,6 +98,38 @@ def hand_record(hand: SDHReachability, grasp: Sequence[int], contacts: ContactSe
         "residual": reach.residual,
         "reachable": reach.residual <= hand.threshold,
         "finger_contacts": [grasp[i] for i in reach.fingers],
+    }
+
+
+def add_hand(record: dict[str, Any], hand: SDHReachability | None, contacts: ContactSet) -> dict[str, Any]:
+    """``record`` with the :func:`hand_record` of its best grasp (unchanged without a hand)."""
+    if hand is not None:
+        record["hand"] = hand_record(hand, record["grasp"], contacts)
+    return record
+
+
+def add_optimum(record: dict[str, Any], method: str, grasp: Sequence[int], q1: float) -> dict[str, Any]:
+    """``record`` with the ``"optimum"`` block: grasp and Q1 [N] an exact ``method`` found (HFTS shows its gap)."""
+    record["optimum"] = {"method": method, "grasp": list(grasp), "q1": q1}
+    return record
+
+
+def histogram_record(
+    bin_edges: NDArray[np.float64], counts: NDArray[np.int64], zero: int | None, force_closure_fraction: float | None
+) -> dict[str, Any]:
+    """The ``"histogram"`` block of an exhaustive search: Q1 of every admissible grasp, binned.
+
+    Args:
+        bin_edges: Bin edges over (0, Q_OWS] [N], one more than ``counts``.
+        counts: Grasps per bin.
+        zero: Grasps with Q1 = 0 (not in force closure).
+        force_closure_fraction: Fraction of the admissible grasps in force closure.
+    """
+    return {
+        "bin_edges": bin_edges.tolist(),
+        "counts": counts.tolist(),
+        "zero": zero,
+        "force_closure_fraction": force_closure_fraction,
     }
 
 
@@ -196,3 +230,179 @@ def plan_grasps(record: dict[str, Any], n: int) -> tuple[tuple[tuple[int, ...], 
 def recorded_positions(record: dict[str, Any]) -> NDArray[np.float64]:
     """Contact points of the plan's best grasp as recorded, shape (m, 3) [m] (empty if none)."""
     return np.asarray((record.get("contacts") or {}).get("positions", []), dtype=float)
+
+
+@dataclass(frozen=True, eq=False)
+class PlanHistogram:
+    """The Q1 histogram of an exhaustive search read back (see :func:`histogram_record`); None: not recorded."""
+
+    bin_edges: NDArray[np.float64]
+    counts: NDArray[np.float64]
+    zero: int | None
+    force_closure_fraction: float | None
+
+
+@dataclass(frozen=True)
+class PlanHand:
+    """The ``"hand"`` block read back (see :func:`hand_record`): joint angles [rad], residual, contact per finger."""
+
+    name: str | None
+    joint_angles: tuple[float, ...]
+    residual: float | None
+    finger_contacts: tuple[int, ...]
+
+
+@dataclass(frozen=True)
+class PlanOptimum:
+    """The ``"optimum"`` block read back (see :func:`add_optimum`); None: not recorded."""
+
+    method: str | None
+    grasp: tuple[int, ...] | None
+    q1: float | None
+
+
+@dataclass(frozen=True, eq=False)
+class PlanView:
+    """Typed, lenient read access to an ``ogcp.plan/1`` record.
+
+    Comparisons and figures read records of any method and of partial or older runs, so
+    nothing here raises: a value that is missing or of the wrong type reads as None (or an
+    empty value), and the reader skips what the record lacks. NaN, written to JSON as null,
+    reads as None too.
+
+    Attributes:
+        record: The record as written (not copied).
+    """
+
+    record: Mapping[str, Any]
+
+    @property
+    def method(self) -> str | None:
+        """The method name."""
+        method = self.record.get("method")
+        return None if method is None else str(method)
+
+    @property
+    def grasp(self) -> tuple[int, ...] | None:
+        """The best grasp's contact indices."""
+        return _indices(self.record.get("grasp"))
+
+    @property
+    def q1(self) -> float | None:
+        """Q1 of the best grasp [N]."""
+        return _number(self.record.get("q1"))
+
+    @property
+    def q_ows(self) -> float | None:
+        """Q1 of the whole contact set [N]."""
+        return _number(self.record.get("q_ows"))
+
+    @property
+    def bound(self) -> float | None:
+        """Certified upper bound on the optimum [N]."""
+        return _number(self.record.get("bound"))
+
+    @property
+    def eps(self) -> float | None:
+        """The search's inflation eps (searches and exhaustive search)."""
+        return _number(self.record.get("eps"))
+
+    @property
+    def eps_bound(self) -> float | None:
+        """The bound that eps guarantees (searches)."""
+        return _number(self.record.get("eps_bound"))
+
+    @property
+    def stats(self) -> dict[str, Any]:
+        """The method's statistics (their keys are the method's own; empty when absent)."""
+        stats = self.record.get("stats")
+        return stats if isinstance(stats, dict) else {}
+
+    @property
+    def cpu_seconds(self) -> float | None:
+        """The method's CPU time, summed over workers where it records them [s]."""
+        return _number(self.stats.get("cpu_seconds"))
+
+    @property
+    def wall_seconds(self) -> float | None:
+        """The method's wall time [s]."""
+        return _number(self.stats.get("wall_seconds"))
+
+    @property
+    def histogram(self) -> PlanHistogram | None:
+        """The Q1 histogram (``es``), None when absent or its arrays do not fit together."""
+        block = self.record.get("histogram")
+        if not isinstance(block, dict):
+            return None
+        try:
+            edges = np.asarray(block.get("bin_edges"), dtype=float)
+            counts = np.asarray(block.get("counts"), dtype=float)
+        except (TypeError, ValueError):
+            return None
+        if edges.ndim != 1 or counts.ndim != 1 or len(edges) != len(counts) + 1 or len(counts) == 0:
+            return None
+        zero = block.get("zero")
+        return PlanHistogram(
+            edges,
+            counts,
+            zero if isinstance(zero, int) and not isinstance(zero, bool) else None,
+            _number(block.get("force_closure_fraction")),
+        )
+
+    @property
+    def run_q1s(self) -> tuple[float | None, ...]:
+        """Q1 of every recorded run (HFTS's ``runs``) [N]; empty for other methods."""
+        return tuple(_number(run.get("q1")) for run in _runs(self.record))
+
+    @property
+    def tree(self) -> dict[str, Any] | None:
+        """The recorded search tree (parallel lists; see ``SearchTree.to_dict``), None when not recorded."""
+        tree = self.record.get("tree")
+        return tree if isinstance(tree, dict) else None
+
+    @property
+    def hand(self) -> PlanHand | None:
+        """The hand's joint angles and finger assignment, None for a plan without a hand."""
+        block = self.record.get("hand")
+        if not isinstance(block, dict):
+            return None
+        name, angles = block.get("name"), block.get("joint_angles")
+        return PlanHand(
+            name=None if name is None else str(name),
+            joint_angles=tuple(float(a) for a in angles if _is_number(a)) if isinstance(angles, list) else (),
+            residual=_number(block.get("residual")),
+            finger_contacts=_indices(block.get("finger_contacts")) or (),
+        )
+
+    @property
+    def optimum(self) -> PlanOptimum | None:
+        """The optimum recorded next to an approximate method's result, None when not recorded."""
+        block = self.record.get("optimum")
+        if not isinstance(block, dict):
+            return None
+        method = block.get("method")
+        return PlanOptimum(
+            None if method is None else str(method), _indices(block.get("grasp")), _number(block.get("q1"))
+        )
+
+
+def _is_number(value: Any) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def _number(value: Any) -> float | None:
+    """A finite float, else None (JSON writes NaN as null; a bool is not a number)."""
+    return float(value) if _is_number(value) and math.isfinite(value) else None
+
+
+def _indices(value: Any) -> tuple[int, ...] | None:
+    """A JSON list of contact indices as a tuple, else None."""
+    if not isinstance(value, list) or not all(isinstance(i, int) and not isinstance(i, bool) for i in value):
+        return None
+    return tuple(value)
+
+
+def _runs(record: Mapping[str, Any]) -> list[dict[str, Any]]:
+    """The recorded runs (HFTS) that are JSON objects."""
+    runs = record.get("runs")
+    return [run for run in runs if isinstance(run, dict)] if isinstance(runs, list) else []

@@ -84,6 +84,24 @@ class Decomposition:
     meta: dict[str, Any] = field(default_factory=dict)
     cache_path: Path | None = None
 
+    @property
+    def hull_count(self) -> int | None:
+        """Number of convex parts as the metadata records it (None when absent)."""
+        count = self.meta.get("hull_count")
+        return count if isinstance(count, int) and not isinstance(count, bool) else None
+
+    @property
+    def volume_ratio(self) -> float | None:
+        """Sum of part volumes / mesh volume (None for an open mesh or when absent)."""
+        ratio = self.meta.get("volume_ratio")
+        return float(ratio) if isinstance(ratio, (int, float)) and not isinstance(ratio, bool) else None
+
+    @property
+    def compute_seconds(self) -> float:
+        """Time the decomposition took when it was computed [s] (0 when not recorded)."""
+        seconds = self.meta.get("compute_seconds")
+        return float(seconds) if isinstance(seconds, (int, float)) and not isinstance(seconds, bool) else 0.0
+
 
 def coacd_version() -> str:
     """Version of the installed CoACD ("missing" when it is not installed)."""

@@ -8,7 +8,7 @@ import pytest
 
 from benchmarks.suite.cells import run_cell
 from benchmarks.suite.config import parse_suite
-from benchmarks.suite.record import CELL_SCHEMA, PROBLEM_FIELDS, TRACEBACK_LINES, CellError, CellRecord
+from benchmarks.suite.record import CELL_SCHEMA, PROBLEM_FIELDS, TRACEBACK_LINES, CellError, CellParams, CellRecord
 from planner.infra import OgcpError
 
 SUITE = "schema_version = 1\nobjects = ['box']\ncontacts = 12\n[[methods]]\nmethod = 'astar'\nlabel = 'A*'\n"
@@ -42,6 +42,30 @@ def test_a_cell_record_round_trips_through_its_parser() -> None:
     assert (record.method, record.object, record.label) == ("astar", "box", "A*")
     assert record.problem == tuple(cell.params()[k] for k in PROBLEM_FIELDS)
     assert record.plan["schema"] == "ogcp.plan/1" and record.simulation is None
+    assert record.plan_view is not None and record.plan_view.q1 == record.plan["q1"]
+
+
+def test_the_params_block_is_written_by_cell_params_and_read_by_the_record() -> None:
+    (cell,) = parse_suite(SUITE).cells
+    params = cell.params()
+    assert params == CellParams(**{**params, "variant": dict(cell.variant)}).to_dict()
+    assert list(params) == [
+        "object",
+        "contacts",
+        "contact_seed",
+        "m",
+        "mu",
+        "cone_edges",
+        "diagonal",
+        "method",
+        "variant",
+        "label",
+    ]
+    assert list(params)[: len(PROBLEM_FIELDS)] == list(PROBLEM_FIELDS)
+    record = CellRecord(cell.id, params)
+    assert (record.contacts, record.contact_seed, record.m, record.variant) == (12, 0, 3, dict(cell.variant))
+    empty = CellRecord("x", {"m": True})
+    assert (empty.contacts, empty.contact_seed, empty.m, empty.method, empty.label, empty.plan_view) == (None,) * 6
 
 
 def test_a_failing_cell_records_its_error(monkeypatch: pytest.MonkeyPatch) -> None:

@@ -111,6 +111,13 @@ def test_convex_hull_of_a_box_is_one_part_with_the_box_volume(tmp_path: Path, mo
     assert result.cache_path == tmp_path / "decompositions" / result.meta["key"]
     assert {p.name for p in result.cache_path.iterdir()} >= {"parts.npz", "meta.json"}
     assert not result.parts[0][0].flags.writeable
+    assert (result.hull_count, result.volume_ratio) == (1, result.meta["volume_ratio"])
+    assert result.compute_seconds == result.meta["compute_seconds"]
+
+
+def test_metadata_not_recorded_reads_as_none() -> None:
+    bare = Decomposition((), {"hull_count": "2", "volume_ratio": None})
+    assert (bare.hull_count, bare.volume_ratio, bare.compute_seconds) == (None, None, 0.0)
 
 
 @pytest.mark.parametrize("damage", ["garbage_npz", "truncated_npz", "missing_meta", "wrong_count"])
