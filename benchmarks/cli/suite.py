@@ -106,7 +106,7 @@ def register(commands: Any) -> None:
 
 def run_suite(args: argparse.Namespace) -> int:
     """Handler of ``ogcp suite``."""
-    from benchmarks.suite.config import load_suite
+    from benchmarks.suite.parse import load_suite
     from benchmarks.suite.runner import SuiteRunner, summary_table  # lazy: ogcp plan never pays for it
 
     suite = load_suite(args.suite)

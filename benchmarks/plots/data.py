@@ -278,7 +278,7 @@ def _missing(manifest: dict[str, Any] | None, recorded: set[str]) -> str | None:
 
 def _suite_cells(suite: ManifestSuite) -> dict[str, str] | None:
     """id -> description of every cell of the manifest's suite, or None when it cannot be re-read."""
-    from benchmarks.suite.config import parse_suite
+    from benchmarks.suite.parse import parse_suite
 
     if suite.content is None:
         return None

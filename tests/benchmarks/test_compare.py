@@ -13,7 +13,7 @@ import pytest
 
 from benchmarks import cli
 from benchmarks.compare import Tolerances, compare_dirs
-from benchmarks.suite.config import parse_suite
+from benchmarks.suite.parse import parse_suite
 from benchmarks.suite.runner import SuiteRunner
 from planner.infra import OgcpError
 

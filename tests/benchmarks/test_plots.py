@@ -18,7 +18,7 @@ from matplotlib.figure import Figure
 
 from benchmarks import cli, plots
 from benchmarks.plots.data import SkipFigure, load_run
-from benchmarks.suite.config import parse_suite
+from benchmarks.suite.parse import parse_suite
 from benchmarks.suite.runner import SuiteRunner
 from planner.infra import OgcpError
 

@@ -13,7 +13,7 @@ import pytest
 from benchmarks.cli import build_parser, main
 from benchmarks.cli.method_options import config_from_args, declared_options, flag
 from benchmarks.suite.cells import contact_set, plan_record
-from benchmarks.suite.config import parse_suite
+from benchmarks.suite.parse import parse_suite
 from planner.config.methods import DEFAULT_FINGERS, DEFAULT_METHOD
 from planner.methods import METHODS, method_spec
 

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import json
 
-from benchmarks.suite.config import parse_suite
 from benchmarks.suite.manifest import (
     MANIFEST_SCHEMA,
     ManifestSuite,
@@ -14,6 +13,7 @@ from benchmarks.suite.manifest import (
     suite_hash,
     with_session,
 )
+from benchmarks.suite.parse import parse_suite
 
 SUITE = "schema_version = 1\nname = 'tiny'\nobjects = ['box']\ncontacts = 12\n[[methods]]\nmethod = 'astar'\n"
 

@@ -7,7 +7,7 @@ import json
 import pytest
 
 from benchmarks.suite.cells import run_cell
-from benchmarks.suite.config import parse_suite
+from benchmarks.suite.parse import parse_suite
 from benchmarks.suite.record import CELL_SCHEMA, PROBLEM_FIELDS, TRACEBACK_LINES, CellError, CellParams, CellRecord
 from planner.infra import OgcpError
 

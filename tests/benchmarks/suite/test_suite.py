@@ -20,7 +20,7 @@ import pytest
 
 import sim_eval
 from benchmarks import cli
-from benchmarks.suite.config import builtin_suites, load_suite, parse_suite
+from benchmarks.suite.parse import builtin_suites, load_suite, parse_suite
 from benchmarks.suite.runner import SuiteRunner
 from benchmarks.suite.store import ResultStore
 from planner import builtin_mesh
@@ -398,7 +398,7 @@ def test_resume_after_a_partial_run_and_a_torn_line(tiny_file, serial_run, tmp_p
 def test_resume_after_the_process_is_killed(tiny_file, serial_run, tmp_path):
     out = tmp_path / "killed"
     script = (
-        "import sys\nfrom benchmarks.suite.runner import SuiteRunner\nfrom benchmarks.suite.config import load_suite\n"
+        "import sys\nfrom benchmarks.suite.runner import SuiteRunner\nfrom benchmarks.suite.parse import load_suite\n"
         "SuiteRunner(load_suite(sys.argv[1]), sys.argv[2]).run()\n"
     )
     process = subprocess.Popen([sys.executable, "-c", script, str(tiny_file), str(out)], cwd=ROOT)

@@ -1,0 +1,283 @@
+"""Reading suites: built-in names and TOML files, validated into a :class:`~benchmarks.suite.config.Suite`.
+
+Every problem is reported as one ``OgcpError`` naming the suite, the key path and the valid
+values; nothing is run until the whole file is valid.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+import tomllib
+from pathlib import Path
+from typing import Any
+
+from benchmarks.suite.config import (
+    GROUP_KEYS,
+    SCHEMA_VERSION,
+    SUITES_FOLDER,
+    TOP_KEYS,
+    Cell,
+    ObjectSpec,
+    Suite,
+)
+from benchmarks.suite.params import METHOD_PARAMS, complete, default_label, seed_values, values_of
+from planner.config.methods import DEFAULT_FINGERS, DEFAULT_SEED, HAND_FINGERS
+from planner.config.options import Option
+from planner.grasp.contact_set import DEFAULT_CONE_EDGES, DEFAULT_CONTACTS, DEFAULT_MU
+from planner.infra.assets import asset_path, assets_dir
+from planner.infra.errors import OgcpError, choice_error
+from planner.objects import BUILTIN_OBJECTS, DEFAULT_DIAGONAL, MESH_SUFFIXES, file_sha256
+from planner.objects.fetchable import FETCHABLE_OBJECTS
+
+
+def builtin_suites() -> list[str]:
+    """Names of the suites shipped in ``assets/suites``."""
+    return sorted(p.stem for p in (assets_dir() / SUITES_FOLDER).glob("*.toml"))
+
+
+def load_suite(spec: str | Path) -> Suite:
+    """Read and validate a suite from a built-in name or a TOML file.
+
+    Raises:
+        OgcpError: For a missing file, invalid TOML or any invalid entry.
+    """
+    path = Path(spec)
+    if not path.is_file():
+        if str(spec) not in builtin_suites():
+            raise choice_error("suite", str(spec), [*builtin_suites(), "<path to a suite .toml file>"])
+        path = asset_path(f"{SUITES_FOLDER}/{spec}.toml")
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise OgcpError(f"cannot read suite {path}: {exc}") from exc
+    return parse_suite(text, source=str(spec), base=path.resolve().parent, default_name=path.stem)
+
+
+def parse_suite(text: str, source: str = "<string>", base: Path | None = None, default_name: str = "suite") -> Suite:
+    """Validate suite TOML text.
+
+    Args:
+        text: TOML content.
+        source: Where the text came from, for messages and the manifest.
+        base: Folder that relative mesh paths are relative to (default: the working directory).
+        default_name: Name when the suite sets none.
+
+    Raises:
+        OgcpError: ``suite SOURCE: KEY: problem; valid ...`` for the first problem found.
+    """
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise OgcpError(f"suite {source}: invalid TOML: {exc}") from exc
+    try:
+        return _Parser(base or Path.cwd()).suite(data, source, text, default_name)
+    except OgcpError as exc:
+        raise OgcpError(f"suite {source}: {exc}") from exc
+
+
+class _Parser:
+    """Validation of parsed TOML; every method raises OgcpError naming the key path."""
+
+    def __init__(self, base: Path) -> None:
+        self.base = base
+
+    def suite(self, data: dict[str, Any], source: str, text: str, default_name: str) -> Suite:
+        _no_unknown_keys("top level", data, TOP_KEYS)
+        if "schema_version" not in data:
+            raise OgcpError("schema_version: missing; valid values: 1")
+        if data["schema_version"] != SCHEMA_VERSION or isinstance(data["schema_version"], bool):
+            raise OgcpError(f"schema_version: unsupported value {data['schema_version']!r}; valid values: 1")
+        name = _string("name", data.get("name", default_name))
+        _string("description", data.get("description", ""))
+        defaults = {k: v for k, v in data.items() if k in GROUP_KEYS and k not in ("name", "description")}
+        groups = data.get("group")
+        if groups is None:
+            tables = [("top level", {"name": name, **defaults})]
+        elif not isinstance(groups, list) or not groups or not all(isinstance(g, dict) for g in groups):
+            raise OgcpError("group: expected one or more [[group]] tables")
+        else:
+            tables = [(f"group[{i}]", {**defaults, **g}) for i, g in enumerate(groups)]
+        cells: dict[str, Cell] = {}
+        names: set[str] = set()
+        for where, table in tables:
+            _no_unknown_keys(where, table, GROUP_KEYS)
+            group = _string(f"{where}.name", table.get("name", where))
+            if group in names:
+                raise OgcpError(f"{where}.name: group name {group!r} is used twice")
+            names.add(group)
+            for cell in self.group_cells(where, group, table):
+                _merge(cells, cell)
+        return Suite(name, source, text, tuple(cells.values()), self.simulation(data.get("simulation", {})))
+
+    def group_cells(self, where: str, group: str, table: dict[str, Any]) -> list[Cell]:
+        for key in ("objects", "methods"):
+            if key not in table:
+                raise OgcpError(f"{where}: missing key {key!r} (set it in the group or at the top level)")
+        objects = self.objects(f"{where}.objects", table["objects"])
+        contacts = values_of(
+            f"{where}.contacts", table.get("contacts", DEFAULT_CONTACTS), Option("int", DEFAULT_CONTACTS, minimum=2)
+        )
+        seeds = seed_values(f"{where}.contact_seeds", table.get("contact_seeds", DEFAULT_SEED))
+        ms = values_of(f"{where}.m", table.get("m", DEFAULT_FINGERS), Option("int", DEFAULT_FINGERS, minimum=2))
+        mu = Option("float", DEFAULT_MU, minimum=0, exclusive=True).check(f"{where}.mu", table.get("mu", DEFAULT_MU))
+        edges = Option("int", DEFAULT_CONE_EDGES, minimum=3).check(
+            f"{where}.cone_edges", table.get("cone_edges", DEFAULT_CONE_EDGES)
+        )
+        simulate = Option("bool", True).check(f"{where}.simulate", table.get("simulate", True))
+        diagonal = Option("float", DEFAULT_DIAGONAL, minimum=0, exclusive=True).check(
+            f"{where}.diagonal", table.get("diagonal", DEFAULT_DIAGONAL)
+        )
+        variants = self.methods(f"{where}.methods", table["methods"])
+        if max(ms) > min(contacts):
+            raise OgcpError(f"{where}.m: m = {max(ms)} exceeds the contact count {min(contacts)}")
+        cells = []
+        for obj, n, seed, m, (method, params, label, vwhere) in itertools.product(
+            objects, contacts, seeds, ms, variants
+        ):
+            if params.get("hand") is not None and m != HAND_FINGERS:
+                raise OgcpError(
+                    f"{vwhere}.hand: the {params['hand']} hand has {HAND_FINGERS} fingers; {where}.m includes {m}"
+                )
+            cells.append(
+                Cell(
+                    obj,
+                    n,
+                    seed,
+                    m,
+                    mu,
+                    edges,
+                    None if obj.path else diagonal,
+                    method,
+                    tuple(sorted(params.items())),
+                    label,
+                    (group,),
+                    simulate,
+                )
+            )
+        return cells
+
+    def objects(self, where: str, value: Any) -> list[ObjectSpec]:
+        if isinstance(value, str):
+            value = [value]
+        if not isinstance(value, list) or not value:
+            raise OgcpError(f"{where}: expected a non-empty list of object names or mesh paths")
+        specs = []
+        for i, spec in enumerate(value):
+            if not isinstance(spec, str) or not spec:
+                raise OgcpError(f"{where}[{i}]: expected an object name or a mesh path, got {spec!r}")
+            if "/" in spec or "\\" in spec or Path(spec).suffix.lower() in MESH_SUFFIXES:
+                path = (self.base / spec).resolve()
+                if not path.is_file():
+                    raise OgcpError(f"{where}[{i}]: mesh file not found: {path}")
+                if path.suffix.lower() not in MESH_SUFFIXES:
+                    raise OgcpError(
+                        f"{where}[{i}]: unsupported mesh format {path.suffix!r}; valid: {', '.join(MESH_SUFFIXES)}"
+                    )
+                specs.append(ObjectSpec(spec, str(path), file_sha256(path)))
+            elif spec not in BUILTIN_OBJECTS and spec not in FETCHABLE_OBJECTS:
+                raise choice_error(
+                    f"{where}[{i}] object", spec, [*BUILTIN_OBJECTS, *FETCHABLE_OBJECTS, "<path to a mesh file>"]
+                )
+            else:
+                specs.append(ObjectSpec(spec))
+        if len({s.key for s in specs}) != len(specs):
+            raise OgcpError(f"{where}: an object is listed twice")
+        return specs
+
+    def methods(self, where: str, value: Any) -> list[tuple[str, dict[str, Any], str, str]]:
+        if not isinstance(value, list) or not value or not all(isinstance(t, dict) for t in value):
+            raise OgcpError(f"{where}: expected one or more [[methods]] tables with a 'method' key")
+        variants = []
+        for i, table in enumerate(value):
+            variants.extend(self.variants(f"{where}[{i}]", table))
+        return variants
+
+    def variants(self, where: str, table: dict[str, Any]) -> list[tuple[str, dict[str, Any], str, str]]:
+        method = table.get("method")
+        if method not in METHOD_PARAMS:
+            raise choice_error(f"{where}.method", method, METHOD_PARAMS)
+        spec = METHOD_PARAMS[method]
+        _no_unknown_keys(f"{where} (method {method})", table, ("label", "method", *spec))
+        label = _string(f"{where}.label", table["label"]) if "label" in table else None
+        options = []
+        for key in sorted(k for k in table if k in spec):
+            check = seed_values if key == "seed" else lambda w, v, p=spec[key]: values_of(w, v, p)
+            options.append([(key, v) for v in check(f"{where}.{key}", table[key])])
+        variants = []
+        for chosen in itertools.product(*options):
+            params = complete(method, where, dict(chosen))
+            variants.append((method, params, _format_label(where, label, method, params), where))
+        return variants
+
+    def simulation(self, value: Any) -> dict[str, Any]:
+        if not isinstance(value, dict):
+            raise OgcpError("simulation: expected a [simulation] table")
+        if not isinstance(value.get("enabled", False), bool):
+            raise OgcpError(f"simulation.enabled: expected true or false, got {value['enabled']!r}")
+        if value.get("enabled"):
+            _check_simulation_settings(value)
+        return {"enabled": False, **value}
+
+
+def _check_simulation_settings(table: dict[str, Any]) -> None:
+    """Check the settings against the simulation's own validation, so a typo fails before any cell runs."""
+    settings = {k: v for k, v in table.items() if k not in ("enabled", "decomposition", "max_grasps")}
+    if "max_grasps" in table:
+        Option("int", None, minimum=1).check("simulation.max_grasps", table["max_grasps"])
+    try:
+        from sim_eval.decomposition.decompose import DecompositionSettings  # lazy: loads MuJoCo
+        from sim_eval.settings import SimSettings
+    except ImportError:
+        return  # without the simulation installed every simulated cell records that error
+    decomposition = table.get("decomposition", {})
+    if not isinstance(decomposition, dict):
+        raise OgcpError("simulation.decomposition: expected a [simulation.decomposition] table")
+    _no_unknown_keys(
+        "simulation.decomposition", decomposition, tuple(f.name for f in dataclasses.fields(DecompositionSettings))
+    )
+    try:
+        SimSettings.from_dict(settings)
+        DecompositionSettings(**decomposition)
+    except OgcpError as exc:
+        raise OgcpError(f"simulation: {exc}") from exc
+    except (TypeError, ValueError) as exc:
+        raise OgcpError(f"simulation: {str(exc).splitlines()[0]}") from exc
+
+
+def _format_label(where: str, label: str | None, method: str, params: dict[str, Any]) -> str:
+    if label is None:
+        return default_label(method, params)
+    try:
+        return label.format(**params)
+    except (KeyError, IndexError, ValueError) as exc:
+        raise OgcpError(
+            f"{where}.label: cannot fill {label!r} ({exc}); placeholders: {', '.join('{' + k + '}' for k in params)}"
+        ) from exc
+
+
+def _merge(cells: dict[str, Cell], cell: Cell) -> None:
+    """Add a cell, or the group name to the same cell listed earlier (labels must agree)."""
+    known = cells.get(cell.id)
+    if known is None:
+        cells[cell.id] = cell
+        return
+    if known.label != cell.label:
+        raise OgcpError(
+            f"the same run ({cell.object.spec}, n={cell.contacts}, m={cell.m}, {cell.method}) is "
+            f"labelled both {known.label!r} and {cell.label!r}; give it one label"
+        )
+    groups = known.groups + tuple(g for g in cell.groups if g not in known.groups)
+    cells[cell.id] = dataclasses.replace(known, groups=groups, simulate=known.simulate or cell.simulate)
+
+
+def _no_unknown_keys(where: str, table: dict[str, Any], valid: tuple[str, ...]) -> None:
+    unknown = sorted(set(table) - set(valid))
+    if unknown:
+        raise OgcpError(f"{where}: unknown key {unknown[0]!r}; valid keys: {', '.join(sorted(valid))}")
+
+
+def _string(where: str, value: Any) -> str:
+    if not isinstance(value, str):
+        raise OgcpError(f"{where}: expected a string, got {value!r}")
+    return value
