@@ -14,6 +14,7 @@ from planner.grasp.contact_set import (
     mass_properties,
     sample_contacts,
 )
+from planner.grasp.mesh_distance import Nearest, SurfaceIndex
 from planner.grasp.quality import Q1Certificate, exact_q1_batch, q1, q1_certificate, signed_q1
 from planner.grasp.subset_quality import GraspQuality
 from planner.grasp.support_bound import SupportBound
@@ -27,9 +28,11 @@ __all__ = [
     "DistinctContacts",
     "GraspQuality",
     "MaxFingerSpread",
+    "Nearest",
     "NonWatertightWarning",
     "Q1Certificate",
     "SupportBound",
+    "SurfaceIndex",
     "accepts_many",
     "cone_edges",
     "contact_wrenches",
