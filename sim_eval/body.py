@@ -1,8 +1,9 @@
 """The object as a rigid body for simulation: convex parts, mass properties, surface distance.
 
 Mass and inertia come from the watertight mesh, never from the union of convex parts, whose
-overlaps would count some volume twice. Distances are exact point-triangle distances in numpy
-(no spatial index), which suits parts of tens to hundreds of faces.
+overlaps would count some volume twice. Distances to the parts are the planner's exact
+point-triangle distances (:func:`planner.grasp.mesh_distance.triangle_distances`), all pairs
+and no spatial index, which suits parts of tens to hundreds of faces.
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import ConvexHull, QhullError
 
 from planner.grasp.contact_set import NonWatertightWarning, mass_properties
+from planner.grasp.mesh_distance import triangle_distances
 from planner.infra.errors import OgcpError
 
 Part = tuple[NDArray[np.float64], NDArray[np.int64]]
@@ -114,41 +116,6 @@ def object_inertia(mesh: trimesh.Trimesh, mass: float = 0.1) -> tuple[NDArray[np
         )
         inertia = np.array(hull.moment_inertia, dtype=float) * (mass / float(hull.volume))
     return np.asarray(com, dtype=float), 0.5 * (inertia + inertia.T)
-
-
-def _segment_distance(p: NDArray[np.float64], a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Distance from points p (n, 1, 3) to segments a-b (1, f, 3), shape (n, f)."""
-    ab = b - a
-    length2 = np.einsum("...k,...k->...", ab, ab)
-    t = np.einsum("...k,...k->...", p - a, ab) / np.where(length2 > 0, length2, 1.0)
-    t = np.clip(t, 0.0, 1.0)[..., None]
-    return np.linalg.norm(p - (a + t * ab), axis=-1)
-
-
-def triangle_distances(points: NDArray[np.float64], triangles: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Exact Euclidean distance of every point to every triangle.
-
-    The nearest point of a triangle is the foot of the perpendicular when that foot lies in
-    the triangle, else it lies on one of the three edges.
-
-    Args:
-        points: Query points, shape (n, 3) [m].
-        triangles: Triangle corners, shape (f, 3, 3) [m].
-
-    Returns:
-        Distances, shape (n, f) [m].
-    """
-    p = points[:, None, :]
-    a, b, c = (triangles[None, :, i, :] for i in range(3))
-    normal = np.cross(b - a, c - a)
-    area2 = np.linalg.norm(normal, axis=-1)
-    # The foot is inside when it lies left of every edge, seen along the normal.
-    inside = area2 > 0
-    for start, end in ((a, b), (b, c), (c, a)):
-        inside = inside & (np.einsum("...k,...k->...", np.cross(end - start, p - start), normal) >= 0)
-    plane = np.abs(np.einsum("...k,...k->...", p - a, normal)) / np.where(area2 > 0, area2, 1.0)
-    edges = np.minimum(np.minimum(_segment_distance(p, a, b), _segment_distance(p, b, c)), _segment_distance(p, c, a))
-    return np.where(inside, plane, edges)
 
 
 def surface_distance(parts: Sequence[Part], points: ArrayLike) -> NDArray[np.float64]:

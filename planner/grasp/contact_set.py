@@ -21,6 +21,7 @@ import numpy as np
 import trimesh
 from numpy.typing import NDArray
 
+from planner.grasp.reach import fill_reachable, reach_settings
 from planner.grasp.wrench import contact_wrenches
 from planner.infra.atomic import write_json_atomic
 from planner.infra.errors import OgcpError
@@ -216,12 +217,21 @@ def sample_contacts(
     mu: float = DEFAULT_MU,
     cone_edges: int = DEFAULT_CONE_EDGES,
     source: dict[str, Any] | None = None,
+    *,
+    tip_radius: float | None = None,
+    reach_tolerance: float | None = None,
 ) -> ContactSet:
     """Sample exactly ``n`` contacts evenly over a mesh surface.
 
     Even (Poisson-disk-like) sampling may return fewer than ``n`` points; the remainder
     is filled with area-weighted random samples from a seed derived from ``seed``, so the
     result is deterministic and always has ``n`` contacts.
+
+    With a tip radius r > 0, only contacts a fingertip sphere of radius r can touch
+    without cutting the object are kept (:func:`planner.grasp.reach.reachable`); the
+    others are replaced, in order, by reachable area-weighted samples from further seeds
+    derived from ``seed`` (:func:`planner.grasp.reach.fill_reachable`). Where every contact
+    is reachable (a convex object) the set equals the one sampled without r.
 
     Args:
         mesh: Object surface.
@@ -230,15 +240,24 @@ def sample_contacts(
         mu: Friction coefficient.
         cone_edges: Number of cone edges k.
         source: Provenance of the mesh, recorded in the set's ``source``.
+        tip_radius: Fingertip sphere radius r [m]; None or 0 samples the whole surface.
+            A positive r is recorded in ``source["tip_radius"]``.
+        reach_tolerance: Cut depth a kept contact's sphere may have [m]; None = 1 % of r
+            (:data:`planner.grasp.reach.REACH_TOLERANCE`). Recorded with r.
 
     Returns:
         The contact set; normals are the inward face normals at the samples.
+
+    Raises:
+        OgcpError: For a bad n, seed, radius or tolerance, or when too little of the
+            surface is reachable by the tip to give n contacts.
     """
     if int(n) != n or n < 1:
         raise OgcpError(f"number of contacts must be a positive integer, got {n!r}")
     if int(seed) != seed or seed < 0:
         raise OgcpError(f"seed must be a non-negative integer, got {seed!r}")
     n, seed = int(n), int(seed)
+    reach = reach_settings(tip_radius, reach_tolerance)
     # trimesh logs a warning when even sampling falls short; the shortfall is filled below.
     trimesh_log = logging.getLogger("trimesh")
     level = trimesh_log.level
@@ -252,7 +271,12 @@ def sample_contacts(
         extra_p, extra_f = trimesh.sample.sample_surface(mesh, n - len(points), seed=np.random.default_rng([seed, 1]))
         points = np.vstack([points, extra_p])
         faces = np.concatenate([faces, extra_f])
+    if reach is not None:
+        points, faces = fill_reachable(mesh, points, faces, seed, *reach)
     com, rho = mass_properties(mesh)
     record = dict(source or {})
     record.update({"sampling": EVEN_SAMPLING, "n": n, "seed": seed})
+    if reach is not None:
+        # Only reach-aware sets carry these keys, so records of plain sets are unchanged.
+        record.update({"tip_radius": reach[0], "reach_tolerance": reach[1]})
     return ContactSet(points, -mesh.face_normals[faces], com, rho, mu, cone_edges, record)

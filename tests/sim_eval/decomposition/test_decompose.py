@@ -19,7 +19,7 @@ from scipy.spatial.transform import Rotation
 from planner.grasp import NonWatertightWarning, mass_properties
 from planner.infra import OgcpError
 from planner.infra.cache import ENTRY_MANIFEST, CacheEntryWarning
-from sim_eval.body import hull_part, is_closed_manifold, object_inertia, surface_distance, triangle_distances
+from sim_eval.body import hull_part, is_closed_manifold, object_inertia, surface_distance
 from sim_eval.decomposition import Decomposition, DecompositionSettings, cache_key, decompose
 
 # Monkeypatching needs the module objects themselves (``decompose`` is also a function name).
@@ -348,25 +348,6 @@ def test_distance_to_a_union_of_overlapping_parts() -> None:
     )
     expected = [0.1, 0.1, np.hypot(0.05, 0.05), -0.025, -0.03]
     np.testing.assert_allclose(surface_distance(parts, queries), expected, atol=1e-12)
-
-
-def test_triangle_distances_in_every_region() -> None:
-    a, b, c = np.array([0.0, 0.0, 0.0]), np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0])
-    rotation = Rotation.from_euler("zyx", [0.4, 0.2, -0.9]).as_matrix()
-    shift = np.array([0.3, -0.2, 0.5])
-    local = np.array(
-        [
-            [0.2, 0.2, 0.7],  # above the interior: height
-            [-0.3, -0.4, 0.0],  # beyond corner a
-            [0.5, -0.2, 0.1],  # beyond edge ab
-            [1.0, 1.0, 0.0],  # beyond edge bc (its midpoint is nearest)
-            [2.0, -1.0, 0.0],  # beyond corner b
-        ]
-    )
-    expected = [0.7, 0.5, np.hypot(0.2, 0.1), np.sqrt(0.5), np.sqrt(2.0)]
-    triangle = (np.stack([a, b, c]) @ rotation.T + shift)[None]
-    got = triangle_distances(local @ rotation.T + shift, triangle)[:, 0]
-    np.testing.assert_allclose(got, expected, atol=1e-12)
 
 
 def test_distance_refuses_bad_input() -> None:
