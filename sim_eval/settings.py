@@ -6,6 +6,7 @@ import math
 from dataclasses import asdict, dataclass, fields, replace
 from typing import Any
 
+from planner.grasp.reach import DEFAULT_TIP_RADIUS_RATIO
 from planner.infra.errors import OgcpError, choice_error
 
 PROTOCOLS = ("resistance", "dexgraspbench")
@@ -69,7 +70,7 @@ class SimSettings:
 
     max_normal_force: float = 10.0
     tip_radius: float | None = None
-    tip_radius_ratio: float = 0.04
+    tip_radius_ratio: float = DEFAULT_TIP_RADIUS_RATIO
     tip_mass: float = 0.05
     slide_armature: float = 0.5
     servo_compliance: float = 2e-4

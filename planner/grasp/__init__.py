@@ -19,7 +19,7 @@ from planner.grasp.contact_set import (
 )
 from planner.grasp.mesh_distance import Nearest, SurfaceIndex
 from planner.grasp.quality import Q1Certificate, exact_q1_batch, q1, q1_certificate, signed_q1
-from planner.grasp.reach import REACH_TOLERANCE, reachable
+from planner.grasp.reach import DEFAULT_TIP_RADIUS_RATIO, REACH_TOLERANCE, default_tip_radius, reachable
 from planner.grasp.subset_quality import GraspQuality
 from planner.grasp.support_bound import SupportBound
 from planner.grasp.wrench import cone_edges, contact_wrenches, tangent_basis
@@ -27,6 +27,7 @@ from planner.grasp.wrench import cone_edges, contact_wrenches, tangent_basis
 __all__ = [
     "DEFAULT_CONE_EDGES",
     "DEFAULT_MU",
+    "DEFAULT_TIP_RADIUS_RATIO",
     "REACH_TOLERANCE",
     "Constraint",
     "ContactSet",
@@ -41,6 +42,7 @@ __all__ = [
     "accepts_many",
     "cone_edges",
     "contact_wrenches",
+    "default_tip_radius",
     "exact_q1_batch",
     "mass_properties",
     "q1",

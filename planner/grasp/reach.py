@@ -25,10 +25,27 @@ from planner.infra.errors import OgcpError
 #: clearance is r, while still removing every concavity that is really narrower than the tip.
 #: At the simulation's default tip (4 % of the diagonal) it is 0.04 % of the diagonal.
 REACH_TOLERANCE = 0.01
+#: Default fingertip radius as a fraction of the object's bounding-box diagonal: the one
+#: default of both the contact sampling and the simulation, so that a plan made with the
+#: defaults only holds contacts the simulated fingertip can touch.
+DEFAULT_TIP_RADIUS_RATIO = 0.04
 #: Area-weighted batches drawn to replace unreachable contacts before giving up; batch k
 #: draws ``max(2 * missing, 64) * 2**k`` points, so up to ~128x the shortfall are tried.
 FILL_BATCHES = 6
 _FIRST_FILL_STREAM = 2  # rng streams [seed, 0] and [seed, 1] belong to the plain sample
+
+
+def default_tip_radius(mesh: trimesh.Trimesh, ratio: float = DEFAULT_TIP_RADIUS_RATIO) -> float:
+    """The default fingertip radius of an object: ``ratio`` x its bounding-box diagonal.
+
+    Args:
+        mesh: Object surface [m].
+        ratio: Fraction of the diagonal (default :data:`DEFAULT_TIP_RADIUS_RATIO`).
+
+    Returns:
+        The tip radius [m].
+    """
+    return ratio * float(np.linalg.norm(np.ptp(np.asarray(mesh.vertices), axis=0)))
 
 
 def check_tip_radius(tip_radius: float, tolerance: float | None = None) -> tuple[float, float]:
