@@ -1,6 +1,7 @@
 """Turn an ``ogcp.plan/1`` record back into what the simulation needs: mesh, contact set, grasps.
 
-A plan records how its contact set was made (object and sampling seed), not the set itself,
+A plan records how its contact set was made (object, sampling seed and, for reach-aware
+sampling, the fingertip radius and tolerance), not the set itself,
 so the set is sampled again and checked against the contacts the plan recorded: a plan whose
 contacts are not reproduced exactly (another mesh, another ogcp version) is refused. Reading
 the record itself (file, schema, grasps, sampling) is :mod:`planner.records.plan`'s job.
@@ -70,7 +71,16 @@ def plan_input(record: dict[str, Any]) -> PlanInput:
     """
     sampling = contact_sampling(record)
     mesh = _mesh(sampling.object)
-    contacts = sample_contacts(mesh, sampling.n, sampling.seed, sampling.mu, sampling.cone_edges, sampling.object)
+    contacts = sample_contacts(
+        mesh,
+        sampling.n,
+        sampling.seed,
+        sampling.mu,
+        sampling.cone_edges,
+        sampling.object,
+        tip_radius=sampling.tip_radius,
+        reach_tolerance=sampling.reach_tolerance,
+    )
     grasps, labels = plan_grasps(record, len(contacts))
     recorded = recorded_positions(record)
     best = np.asarray(grasps[0], dtype=np.intp)

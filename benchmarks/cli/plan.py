@@ -9,15 +9,19 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 from pathlib import Path
 from typing import Any
+
+import trimesh
 
 from benchmarks.cli.method_options import GROUPS, add_method_options, config_from_args, not_applicable
 from benchmarks.cli.options import integer, number, positive_int
 from benchmarks.cli.plan_summary import describe
 from planner.config.methods import DEFAULT_FINGERS, DEFAULT_METHOD, DEFAULT_SEED
 from planner.grasp.contact_set import DEFAULT_CONE_EDGES, DEFAULT_CONTACTS, DEFAULT_MU, ContactSet, sample_contacts
+from planner.grasp.reach import DEFAULT_TIP_RADIUS_RATIO, default_tip_radius
 from planner.infra.atomic import write_json_atomic
 from planner.infra.errors import OgcpError
 from planner.infra.parallel import BACKENDS, DEFAULT_BACKEND, DEFAULT_JOBS
@@ -56,11 +60,37 @@ def _add_contact_options(parser: argparse.ArgumentParser, n_default: int | None)
         help=f"friction-cone edges k (default {DEFAULT_CONE_EDGES})",
     )
     parser.add_argument(
+        "--tip-radius",
+        type=tip_radius,
+        default=None,
+        metavar="METRES",
+        help="fingertip radius r [m]: keep only contacts a sphere of radius r touches without cutting the object "
+        f"(default: the simulation's fingertip, {100 * DEFAULT_TIP_RADIUS_RATIO:g}%% of the object's bounding-box "
+        "diagonal; 0 = the paper's plain sampling of the whole surface)",
+    )
+    parser.add_argument(
         "--diagonal",
         type=number,
         default=DEFAULT_DIAGONAL,
         help=f"bounding-box diagonal of built-in objects [m] (default {DEFAULT_DIAGONAL})",
     )
+
+
+def tip_radius(text: str) -> float:
+    """A fingertip radius [m]: a finite number >= 0."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan  # reported below, with the valid values
+    if not (math.isfinite(value) and value >= 0):
+        raise argparse.ArgumentTypeError(f"expected a finite number of metres >= 0 (0 = plain sampling), got {text!r}")
+    return value
+
+
+def sample_from_args(mesh: trimesh.Trimesh, source: dict[str, Any], n: int, args: argparse.Namespace) -> ContactSet:
+    """Sample ``n`` contacts with the contact flags; no ``--tip-radius`` means the default fingertip."""
+    radius = default_tip_radius(mesh) if args.tip_radius is None else args.tip_radius
+    return sample_contacts(mesh, n, args.seed, args.mu, args.cone_edges, source, tip_radius=radius)
 
 
 def register(commands: Any) -> None:
@@ -126,10 +156,12 @@ def load_contact_set(spec: str, args: argparse.Namespace) -> ContactSet:
     if spec.lower().endswith(".json"):
         if args.contacts is not None:
             raise OgcpError("-n/--contacts does not apply to a contact file (its contacts are fixed)")
+        if args.tip_radius is not None:
+            raise OgcpError("--tip-radius does not apply to a contact file (its contacts are fixed)")
         return ContactSet.load(spec)
     mesh, source = resolve_object(spec, args.diagonal)
     n = args.contacts if args.contacts is not None else DEFAULT_CONTACTS
-    return sample_contacts(mesh, n, args.seed, args.mu, args.cone_edges, source)
+    return sample_from_args(mesh, source, n, args)
 
 
 def run_options_from_args(spec: MethodSpec, args: argparse.Namespace) -> RunOptions:
@@ -156,7 +188,7 @@ def run_options_from_args(spec: MethodSpec, args: argparse.Namespace) -> RunOpti
 
 def run_contacts(args: argparse.Namespace) -> int:
     mesh, source = resolve_object(args.object, args.diagonal)
-    contacts = sample_contacts(mesh, args.contacts, args.seed, args.mu, args.cone_edges, source)
+    contacts = sample_from_args(mesh, source, args.contacts, args)
     write_json_atomic(args.output, contacts.to_dict())
     print(f"wrote {len(contacts)} contacts to {args.output}", file=sys.stderr)
     return 0

@@ -26,8 +26,6 @@ def describe(run: MethodRun, contacts: ContactSet) -> str:
 def search_summary(result: SearchResult, contacts: ContactSet) -> str:
     """Readable multi-line summary of an A*, WA* or Dijkstra plan."""
     s, c = result.stats, result.config
-    source = contacts.source
-    what = source.get("name") or source.get("path") or "contact file"
     heuristic = f"Γh={c['heuristic']} b={c['heuristic_branching']}" if c["heuristic"] != "none" else "no heuristic"
     method = METHODS[result.method].title + (f" (eps={result.eps:g})" if result.method == "wastar" else "")
     if result.method == "wastar":
@@ -37,7 +35,7 @@ def search_summary(result: SearchResult, contacts: ContactSet) -> str:
     else:
         certificate = "optimal (certified)"
     lines = [
-        f"object: {what}   |C| = {len(contacts)}   mu = {contacts.mu:g}   k = {contacts.cone_edges}   seed = {c['seed']}",
+        f"{_object_text(contacts)}   mu = {contacts.mu:g}   k = {contacts.cone_edges}   seed = {c['seed']}",
         f"search: {method}, m = {c['m']}, Γ={c['successor']} b={c['branching']}, {heuristic}"
         + (", symmetry removal" if c["symmetry"] else ""),
         f"grasp: {list(result.grasp)}   Q1 = {result.q1:.6f}   Q_OWS = {result.q_ows:.6f}",
@@ -63,7 +61,7 @@ def search_summary(result: SearchResult, contacts: ContactSet) -> str:
 def es_summary(result: ESResult, contacts: ContactSet) -> str:
     """Readable summary of an exhaustive search."""
     lines = [
-        f"object: {contacts.source.get('name') or contacts.source.get('path') or 'contact file'}   |C| = {len(contacts)}",
+        _object_text(contacts),
         (
             f"search: {result.method}, m = {result.config['m']}, {result.grasps} grasps in {result.chunks} chunks "
             f"({result.resumed} resumed), backend {result.config['backend']}"
@@ -94,7 +92,7 @@ def hfts_summary(result: HFTSResult, contacts: ContactSet) -> str:
     """Readable summary of the HFTS runs."""
     s = result.summary()
     lines = [
-        f"object: {contacts.source.get('name') or contacts.source.get('path') or 'contact file'}   |C| = {len(contacts)}",
+        _object_text(contacts),
         (
             f"search: HFTS, m = {result.config['m']}, {s['runs']} runs (seeds {result.config['seed']}.."
             f"{result.config['seed'] + s['runs'] - 1}), {result.config['levels']} cluster levels"
@@ -108,6 +106,15 @@ def hfts_summary(result: HFTSResult, contacts: ContactSet) -> str:
         "runs (seed: Q1):  " + "  ".join(f"{r.seed}: {r.q1:.4f}" for r in result.runs),
     ]
     return "\n".join(lines)
+
+
+def _object_text(contacts: ContactSet) -> str:
+    """``object: NAME   |C| = n``, with the fingertip radius the contacts were kept for when there is one."""
+    source = contacts.source
+    what = source.get("name") or source.get("path") or "contact file"
+    tip = source.get("tip_radius")
+    reach = f"   tip r = {tip:.4g} m" if isinstance(tip, int | float) and tip > 0 else ""
+    return f"object: {what}   |C| = {len(contacts)}{reach}"
 
 
 def _optimum_text(result: HFTSResult, optimum: PlanOptimum | None) -> str:

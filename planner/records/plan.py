@@ -28,7 +28,7 @@ if TYPE_CHECKING:
 
 PLAN_SCHEMA = "ogcp.plan/1"
 #: Keys of a contact set's ``source`` that say how it was sampled (the rest describe the object).
-SAMPLING_KEYS = ("sampling", "n", "seed")
+SAMPLING_KEYS = ("sampling", "n", "seed", "tip_radius", "reach_tolerance")
 
 
 def plan_record(
@@ -147,6 +147,9 @@ class ContactSampling:
         mu: Friction coefficient.
         cone_edges: Friction-cone edges k.
         com: Recorded centre of mass [m], None if the plan has none.
+        tip_radius: Fingertip radius the contacts were kept for [m]; None = plain sampling
+            (plans made before reach-aware sampling, or with tip radius 0).
+        reach_tolerance: Cut depth allowed with it [m]; None with ``tip_radius``.
     """
 
     object: dict[str, Any]
@@ -155,6 +158,8 @@ class ContactSampling:
     mu: float
     cone_edges: int
     com: tuple[float, ...] | None
+    tip_radius: float | None = None
+    reach_tolerance: float | None = None
 
 
 def load_plan(path: str | Path) -> dict[str, Any]:
@@ -189,6 +194,7 @@ def contact_sampling(record: dict[str, Any]) -> ContactSampling:
     if source.get("sampling") != EVEN_SAMPLING or "n" not in source or "seed" not in source:
         raise OgcpError("the plan does not record how its contacts were sampled (object, n, seed): cannot rebuild them")
     com = block.get("com")
+    tip, tolerance = source.get("tip_radius"), source.get("reach_tolerance")
     return ContactSampling(
         object={k: v for k, v in source.items() if k not in SAMPLING_KEYS},
         n=int(source["n"]),
@@ -196,6 +202,9 @@ def contact_sampling(record: dict[str, Any]) -> ContactSampling:
         mu=float(block.get("mu", DEFAULT_MU)),
         cone_edges=int(block.get("cone_edges", DEFAULT_CONE_EDGES)),
         com=None if com is None else tuple(float(c) for c in com),
+        # Absent in plain-sampled sets: they are sampled again without a tip, as before.
+        tip_radius=None if tip is None else float(tip),
+        reach_tolerance=None if tip is None or tolerance is None else float(tolerance),
     )
 
 
