@@ -180,6 +180,7 @@ def problem_names(problems: Iterable[Problem]) -> dict[Problem, str]:
         "mu": "mu={}",
         "cone_edges": "k={}",
         "diagonal": "d={}",
+        "tip_radius": "r={}",
     }
     for problem in unique:
         siblings = [p for p in unique if p[0] == problem[0]]

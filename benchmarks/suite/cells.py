@@ -16,6 +16,7 @@ from typing import Any
 from benchmarks.suite.config import Cell
 from benchmarks.suite.record import CellError, CellRecord
 from planner.grasp.contact_set import ContactSet, sample_contacts
+from planner.grasp.reach import default_tip_radius
 from planner.methods.registry import method_spec
 from planner.methods.runners import RunOptions
 from planner.objects import resolve_object
@@ -65,14 +66,24 @@ def run_cell(cell: Cell, simulation: dict[str, Any] | None = None, time_limit: f
 def contact_set(cell: Cell) -> ContactSet:
     """The cell's contact set (cached per process)."""
     return _contacts(
-        cell.object.path or cell.object.spec, cell.diagonal, cell.contacts, cell.contact_seed, cell.mu, cell.cone_edges
+        cell.object.path or cell.object.spec,
+        cell.diagonal,
+        cell.contacts,
+        cell.contact_seed,
+        cell.mu,
+        cell.cone_edges,
+        cell.tip_radius,
     )
 
 
 @lru_cache(maxsize=8)
-def _contacts(spec: str, diagonal: float | None, n: int, seed: int, mu: float, cone_edges: int) -> ContactSet:
+def _contacts(
+    spec: str, diagonal: float | None, n: int, seed: int, mu: float, cone_edges: int, tip_radius: float | None
+) -> ContactSet:
+    """Sample a cell's contacts; ``tip_radius`` None is the object's default fingertip, 0 plain sampling [m]."""
     mesh, source = resolve_object(spec) if diagonal is None else resolve_object(spec, diagonal)
-    return sample_contacts(mesh, n, seed, mu, cone_edges, source)
+    radius = default_tip_radius(mesh) if tip_radius is None else tip_radius
+    return sample_contacts(mesh, n, seed, mu, cone_edges, source, tip_radius=radius)
 
 
 def plan_record(cell: Cell, contacts: ContactSet, time_limit: float | None = None) -> dict[str, Any]:

@@ -34,8 +34,11 @@ GROUP_KEYS = (
     "name",
     "objects",
     "simulate",
+    "tip_radius",
 )
 TOP_KEYS = (*GROUP_KEYS, "group", "schema_version", "simulation")
+#: ``tip_radius`` of a cell's id and params when the contacts are kept for the default fingertip.
+DEFAULT_TIP = "default"
 #: Version of the canonical cell form; part of every id so a change of form never matches old ids.
 CELL_FORM = 1
 
@@ -78,6 +81,9 @@ class Cell:
         groups: Names of the suite groups that list this cell (not part of the id).
         simulate: Whether the cell is simulated when the suite's simulation is enabled
             (not part of the id).
+        tip_radius: Fingertip radius the contacts are sampled for [m]: 0 = the paper's plain
+            sampling of the whole surface, None = the simulation's default fingertip
+            (:func:`planner.grasp.reach.default_tip_radius` of the object, resolved when sampling).
     """
 
     object: ObjectSpec
@@ -92,10 +98,23 @@ class Cell:
     label: str
     groups: tuple[str, ...] = ()
     simulate: bool = True
+    tip_radius: float | None = None
+
+    @property
+    def tip_radius_key(self) -> float | str | None:
+        """The tip radius in ids and records: ``"default"``, a radius > 0 [m], or None for plain sampling."""
+        if self.tip_radius is None:
+            return DEFAULT_TIP
+        return self.tip_radius if self.tip_radius > 0 else None
 
     def canonical(self) -> dict[str, Any]:
-        """The parameters that define the cell's result (hashed into the id)."""
-        return {
+        """The parameters that define the cell's result (hashed into the id).
+
+        The tip radius is included only for reach-aware sampling, so cells with the paper's
+        plain sampling keep the ids they had before contacts knew the fingertip, and every
+        cell whose contacts may differ from those gets a new id.
+        """
+        form = {
             "form": CELL_FORM,
             "object": self.object.key,
             "contacts": self.contacts,
@@ -107,6 +126,9 @@ class Cell:
             "method": self.method,
             "variant": dict(self.variant),
         }
+        if self.tip_radius_key is not None:
+            form["tip_radius"] = self.tip_radius_key
+        return form
 
     @property
     def id(self) -> str:
@@ -127,6 +149,7 @@ class Cell:
             method=self.method,
             variant=dict(self.variant),
             label=self.label,
+            tip_radius=self.tip_radius_key,
         ).to_dict()
 
 

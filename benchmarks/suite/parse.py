@@ -30,6 +30,9 @@ from planner.infra.errors import OgcpError, choice_error
 from planner.objects import BUILTIN_OBJECTS, DEFAULT_DIAGONAL, MESH_SUFFIXES, file_sha256
 from planner.objects.fetchable import FETCHABLE_OBJECTS
 
+#: A suite's ``tip_radius`` [m]: 0 = the paper's plain sampling, > 0 = contacts a tip this size reaches.
+TIP_RADIUS = Option("float", None, minimum=0)
+
 
 def builtin_suites() -> list[str]:
     """Names of the suites shipped in ``assets/suites``."""
@@ -81,6 +84,7 @@ class _Parser:
 
     def __init__(self, base: Path) -> None:
         self.base = base
+        self.default_tip: float | None = None
 
     def suite(self, data: dict[str, Any], source: str, text: str, default_name: str) -> Suite:
         _no_unknown_keys("top level", data, TOP_KEYS)
@@ -98,6 +102,13 @@ class _Parser:
             raise OgcpError("group: expected one or more [[group]] tables")
         else:
             tables = [(f"group[{i}]", {**defaults, **g}) for i, g in enumerate(groups)]
+        simulation = self.simulation(data.get("simulation", {}))
+        # The [simulation] table's fingertip is the one the contacts are kept for by default.
+        self.default_tip = simulation.get("tip_radius")
+        if self.default_tip is not None:
+            self.default_tip = TIP_RADIUS.check("simulation.tip_radius", self.default_tip)
+            if self.default_tip == 0:
+                raise OgcpError("simulation.tip_radius: expected a number > 0 [m] (or leave it unset), got 0")
         cells: dict[str, Cell] = {}
         names: set[str] = set()
         for where, table in tables:
@@ -108,7 +119,7 @@ class _Parser:
             names.add(group)
             for cell in self.group_cells(where, group, table):
                 _merge(cells, cell)
-        return Suite(name, source, text, tuple(cells.values()), self.simulation(data.get("simulation", {})))
+        return Suite(name, source, text, tuple(cells.values()), simulation)
 
     def group_cells(self, where: str, group: str, table: dict[str, Any]) -> list[Cell]:
         for key in ("objects", "methods"):
@@ -128,12 +139,18 @@ class _Parser:
         diagonal = Option("float", DEFAULT_DIAGONAL, minimum=0, exclusive=True).check(
             f"{where}.diagonal", table.get("diagonal", DEFAULT_DIAGONAL)
         )
+        # Absent: None, the default fingertip of each object (resolved when sampling).
+        tips: list[float | None] = (
+            values_of(f"{where}.tip_radius", table["tip_radius"], TIP_RADIUS)
+            if "tip_radius" in table
+            else [self.default_tip]
+        )
         variants = self.methods(f"{where}.methods", table["methods"])
         if max(ms) > min(contacts):
             raise OgcpError(f"{where}.m: m = {max(ms)} exceeds the contact count {min(contacts)}")
         cells = []
-        for obj, n, seed, m, (method, params, label, vwhere) in itertools.product(
-            objects, contacts, seeds, ms, variants
+        for obj, n, seed, m, tip, (method, params, label, vwhere) in itertools.product(
+            objects, contacts, seeds, ms, tips, variants
         ):
             if params.get("hand") is not None and m != HAND_FINGERS:
                 raise OgcpError(
@@ -153,6 +170,7 @@ class _Parser:
                     label,
                     (group,),
                     simulate,
+                    tip,
                 )
             )
         return cells

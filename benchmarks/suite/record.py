@@ -22,8 +22,9 @@ from planner.records.plan import PlanView
 CELL_SCHEMA = "ogcp.cell/1"
 #: Lines of a failing cell's traceback kept in its record.
 TRACEBACK_LINES = 15
-#: Params that make two cells plan on the same contact set: object, |C|, contact seed, m, mu, k, diagonal.
-PROBLEM_FIELDS = ("object", "contacts", "contact_seed", "m", "mu", "cone_edges", "diagonal")
+#: Params that make two cells plan on the same contact set: object, |C|, contact seed, m, mu, k, diagonal
+#: and the fingertip radius the contacts were kept for (absent, so None, for plain sampling).
+PROBLEM_FIELDS = ("object", "contacts", "contact_seed", "m", "mu", "cone_edges", "diagonal", "tip_radius")
 
 Problem = tuple[Any, ...]
 
@@ -43,6 +44,9 @@ class CellParams:
         method: Method name.
         variant: The method's canonical parameters.
         label: Label for tables and plots.
+        tip_radius: Fingertip radius the contacts were kept for: ``"default"`` (the
+            simulation's default fingertip of the object), a radius [m], or None for the
+            paper's plain sampling (then the key is left out, as in records made before it).
     """
 
     object: str
@@ -55,10 +59,15 @@ class CellParams:
     method: str
     variant: Mapping[str, Any]
     label: str
+    tip_radius: float | str | None = None
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON form (the record's ``params`` object), keys in field order."""
-        return {f.name: dict(self.variant) if f.name == "variant" else getattr(self, f.name) for f in fields(self)}
+        """JSON form (the record's ``params`` object): the :data:`PROBLEM_FIELDS` first, then the rest in field order."""
+        values = {f.name: dict(self.variant) if f.name == "variant" else getattr(self, f.name) for f in fields(self)}
+        if self.tip_radius is None:
+            del values["tip_radius"]  # plain sampling: the params of plain cells are unchanged
+        order = [name for name in PROBLEM_FIELDS if name in values]
+        return {name: values[name] for name in [*order, *(k for k in values if k not in order)]}
 
 
 @dataclass(frozen=True)

@@ -57,10 +57,12 @@ def test_the_params_block_is_written_by_cell_params_and_read_by_the_record() -> 
         "mu",
         "cone_edges",
         "diagonal",
+        "tip_radius",
         "method",
         "variant",
         "label",
     ]
+    assert params["tip_radius"] == "default"
     assert list(params)[: len(PROBLEM_FIELDS)] == list(PROBLEM_FIELDS)
     record = CellRecord(cell.id, params)
     assert (record.contacts, record.contact_seed, record.m, record.variant) == (12, 0, 3, dict(cell.variant))

@@ -351,6 +351,7 @@ def test_tiny_suite_end_to_end(serial_run):
         "mu",
         "cone_edges",
         "diagonal",
+        "tip_radius",
         "method",
         "variant",
         "label",
