@@ -13,6 +13,7 @@ Typical use::
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 import traceback
@@ -27,6 +28,7 @@ from tqdm.auto import tqdm
 
 from planner.grasp.contact_set import ContactSet
 from planner.grasp.quality import q1_certificate
+from planner.grasp.reach import REACH_TOLERANCE, default_tip_radius, reachable
 from planner.infra.errors import OgcpError
 from planner.infra.provenance import provenance
 from sim_eval.body import object_inertia, surface_distance
@@ -94,7 +96,10 @@ class GraspEvaluator:
 
         Returns:
             Per-grasp results and set-level metrics. A grasp that cannot be simulated gets its
-            error recorded; the others go on.
+            error recorded; the others go on. A grasp with a contact the fingertip cannot
+            touch without cutting the object (contacts sampled without a tip, or for a
+            smaller one) is reported as unreachable and not simulated: the tip would start
+            inside the object, so the simulation would test another grasp.
         """
         settings = self.settings or SimSettings()
         start = time.perf_counter()
@@ -108,9 +113,16 @@ class GraspEvaluator:
         if parts is None:
             parts = decompose(mesh, self.decomposition, cache=self.cache, progress=self.progress)
         com, inertia = object_inertia(mesh, settings.object_mass)
+        radius = tip_radius(mesh, settings)
+        unreachable = _unreachable_contacts(mesh, contacts, chosen, radius)
         results = []
         bar = tqdm(total=len(chosen), desc="simulate", unit="grasp", disable=not self.progress)
         for grasp, label in zip(chosen, labels, strict=True):
+            fingers = tuple(f for f, i in enumerate(grasp) if i in unreachable)
+            if fingers:
+                results.append(_unreachable(contacts, grasp, label, fingers, radius))
+                bar.update()
+                continue
             try:
                 results.append(self._grasp(mesh, contacts, grasp, label, parts, com, inertia, settings))
             except Exception as exc:  # noqa: BLE001 - one bad grasp must not sink the batch
@@ -158,7 +170,7 @@ class GraspEvaluator:
             settings.max_normal_force,
             dirs.vectors,
         ).resistance
-        radius = settings.tip_radius or settings.tip_radius_ratio * float(np.linalg.norm(np.ptp(mesh.vertices, axis=0)))
+        radius = tip_radius(mesh, settings)
         scene = build_scene(parts.parts, com, inertia, positions, normals, settings, mu, radius)
         settled = settle(scene, settings)
         distance = surface_distance(parts.parts, positions)
@@ -263,6 +275,46 @@ class GraspEvaluator:
         }
 
 
+def tip_radius(mesh: trimesh.Trimesh, settings: SimSettings) -> float:
+    """The simulated fingertip radius [m]: ``settings.tip_radius``, else the ratio x the object's diagonal."""
+    return settings.tip_radius or default_tip_radius(mesh, settings.tip_radius_ratio)
+
+
+def _unreachable_contacts(
+    mesh: trimesh.Trimesh, contacts: ContactSet, grasps: Sequence[tuple[int, ...]], radius: float
+) -> set[int]:
+    """Contacts of the grasps that a fingertip of ``radius`` [m] cannot touch without cutting the object.
+
+    A set sampled for this very tip and tolerance is reachable by construction, so it is not
+    tested again; any other set (plain sampling, another tip, a contact file) is.
+    """
+    tolerance = REACH_TOLERANCE * radius
+    if contacts.source.get("tip_radius") == radius and contacts.source.get("reach_tolerance") == tolerance:
+        return set()
+    used = np.array(sorted({i for g in grasps for i in g}), dtype=np.intp)
+    if not len(used):
+        return set()
+    ok = reachable(mesh, contacts.positions[used], contacts.normals[used], radius, tolerance)
+    return {int(i) for i in used[~ok]}
+
+
+def _unreachable(
+    contacts: ContactSet, grasp: tuple[int, ...], label: str, fingers: tuple[int, ...], radius: float
+) -> GraspSimResult:
+    """The result of a grasp that is not simulated because some of its contacts are unreachable."""
+    where = "; ".join(
+        f"finger {f} on contact {grasp[f]} at [{', '.join(f'{x:.4g}' for x in contacts.positions[grasp[f]])}] m"
+        for f in fingers
+    )
+    reason = (
+        f"unreachable contact: {where}: a fingertip of radius {radius:.4g} m touching there cuts the object; "
+        f"re-plan with --tip-radius {radius:.4g} (the default), or evaluate with a smaller --tip-radius"
+    )
+    result = _failed(contacts, grasp, label, reason, "")
+    gates = {"valid": False, "reachable": False, "tip_radius": radius}
+    return dataclasses.replace(result, gates=gates, unreachable=fingers)
+
+
 def _failed(contacts: ContactSet, grasp: tuple[int, ...], label: str, error: str, trace: str) -> GraspSimResult:
     empty = np.zeros(0)
     q1 = q1_certificate(contacts.subset_wrenches(np.asarray(grasp, dtype=np.intp))).q1
@@ -291,6 +343,7 @@ def _set_level(results: Sequence[GraspSimResult], settings: SimSettings) -> dict
         "n_simulated": len(results),
         "n_valid": len(valid),
         "n_errors": sum(r.error is not None for r in results),
+        "n_unreachable": sum(bool(r.unreachable) for r in results),
         "holding_load": settings.holding_load,
     }
     if valid:

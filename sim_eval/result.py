@@ -56,6 +56,8 @@ class GraspSimResult:
         surface_distance: Distance of each planned contact from the decomposed surface, shape (m,) [m].
         hold_tests: Pass/fail of constant-load tests (weight test, DexGraspBench mode).
         error: Why the grasp could not be simulated, if it could not.
+        unreachable: Fingers (positions in ``grasp``) whose contact the simulated fingertip
+            cannot touch without cutting the object; such a grasp is not simulated.
     """
 
     grasp: tuple[int, ...]
@@ -72,6 +74,7 @@ class GraspSimResult:
     surface_distance: NDArray[np.float64]
     hold_tests: dict[str, Any] = field(default_factory=dict)
     error: str | None = None
+    unreachable: tuple[int, ...] = ()
 
     @property
     def valid(self) -> bool:
@@ -118,6 +121,7 @@ class GraspSimResult:
                 "measured_min": self.measured_min,
                 "median_fidelity": self.median_fidelity,
                 "hold_tests": self.hold_tests,
+                "unreachable": list(self.unreachable),
             }
         )
 
@@ -202,6 +206,8 @@ class SimGraspRecord:
         measured_min: Smallest measured resistance [N], None unless every direction was measured.
         median_fidelity: Median per-direction fidelity, None when undefined.
         hold_tests: Pass/fail of the constant-load tests.
+        unreachable: Fingers whose contact the fingertip cannot touch (empty in records
+            made before this key).
     """
 
     label: str
@@ -222,12 +228,13 @@ class SimGraspRecord:
     measured_min: float | None
     median_fidelity: float | None
     hold_tests: dict[str, Any]
+    unreachable: tuple[int, ...] = ()
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> SimGraspRecord:
         """Read one entry of an ``ogcp.sim/1`` record's ``grasps`` list (never raises for missing keys)."""
         grasp, labels, censored = data.get("grasp"), data.get("directions"), data.get("censored")
-        valid, error = data.get("valid"), data.get("error")
+        valid, error, unreachable = data.get("valid"), data.get("error"), data.get("unreachable")
         try:
             directions = np.array(data.get("direction_vectors"), dtype=float).reshape(-1, 6)
         except (TypeError, ValueError):
@@ -251,6 +258,9 @@ class SimGraspRecord:
             measured_min=_number(data.get("measured_min")),
             median_fidelity=_number(data.get("median_fidelity")),
             hold_tests=_mapping(data.get("hold_tests")),
+            unreachable=tuple(int(i) for i in unreachable if _number(i) is not None)
+            if isinstance(unreachable, list)
+            else (),
         )
 
 

@@ -150,7 +150,7 @@ def sim_summary(record: dict[str, Any]) -> str:
     for g in sim.grasps:
         head = f"\n{g.label} {list(g.grasp or ())}: Q1 {_fmt(g.q1, 4)} N"
         if g.error:
-            lines.append(f"{head}  ERROR {g.error}")
+            lines.append(f"{head}  {'UNREACHABLE' if g.unreachable else 'ERROR'} {g.error}")
             continue
         gates = g.gates
         lines.append(
@@ -172,7 +172,11 @@ def sim_summary(record: dict[str, Any]) -> str:
             f"median fidelity over {len(g.direction_labels)} directions: {_fmt(g.median_fidelity)}"
         )
     m = sim.set_metrics
-    lines.append(f"\nset: {m['n_valid']} valid of {m['n_simulated']}, median fidelity {_fmt(m.get('median_fidelity'))}")
+    unreachable = f" ({m['n_unreachable']} unreachable, not simulated)" if m.get("n_unreachable") else ""
+    lines.append(
+        f"\nset: {m['n_valid']} valid of {m['n_simulated']}{unreachable}, "
+        f"median fidelity {_fmt(m.get('median_fidelity'))}"
+    )
     if "q1_vs_measured" in m:
         q, p = m["q1_vs_measured"], m["predicted_vs_measured"]
         lines.append(
