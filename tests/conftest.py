@@ -6,6 +6,7 @@ import itertools
 
 import numpy as np
 import pytest
+import trimesh
 
 from planner import builtin_mesh
 from planner.grasp import ContactSet, SupportBound, q1, sample_contacts
@@ -54,6 +55,24 @@ def exhaustive_best(contacts: ContactSet, m: int, prefilter: bool = True) -> flo
             break
         best = max(best, q1(contacts.subset_wrenches(grasps[i])))
     return best
+
+
+def winding_number(mesh: trimesh.Trimesh, points: np.ndarray) -> np.ndarray:
+    """Generalised winding number (1 inside, 0 outside a watertight mesh), no spatial index.
+
+    Sum of the triangles' signed solid angles (Van Oosterom-Strackee) over 4 pi.
+    """
+    tri = mesh.triangles[None, :, :, :] - points[:, None, None, :]  # (p, t, 3, 3)
+    a, b, c = tri[..., 0, :], tri[..., 1, :], tri[..., 2, :]
+    la, lb, lc = (np.linalg.norm(v, axis=-1) for v in (a, b, c))
+    numerator = np.einsum("ptk,ptk->pt", a, np.cross(b, c))
+    denominator = (
+        la * lb * lc
+        + np.einsum("ptk,ptk->pt", a, b) * lc
+        + np.einsum("ptk,ptk->pt", b, c) * la
+        + np.einsum("ptk,ptk->pt", c, a) * lb
+    )
+    return 2.0 * np.arctan2(numerator, denominator).sum(axis=1) / (4.0 * np.pi)
 
 
 @pytest.fixture(scope="session")

@@ -13,25 +13,7 @@ from planner import BUILTIN_OBJECTS, builtin_mesh, load_mesh, resolve_object
 from planner.grasp import cone_edges, contact_wrenches, tangent_basis
 from planner.grasp.contact_set import SCHEMA, ContactSet, NonWatertightWarning, mass_properties, sample_contacts
 from planner.infra import OgcpError
-
-
-def winding_number(mesh: trimesh.Trimesh, points: np.ndarray) -> np.ndarray:
-    """Generalised winding number (1 inside, 0 outside a watertight mesh), no spatial index.
-
-    Sum of the triangles' signed solid angles (Van Oosterom-Strackee) over 4 pi.
-    """
-    tri = mesh.triangles[None, :, :, :] - points[:, None, None, :]  # (p, t, 3, 3)
-    a, b, c = tri[..., 0, :], tri[..., 1, :], tri[..., 2, :]
-    la, lb, lc = (np.linalg.norm(v, axis=-1) for v in (a, b, c))
-    numerator = np.einsum("ptk,ptk->pt", a, np.cross(b, c))
-    denominator = (
-        la * lb * lc
-        + np.einsum("ptk,ptk->pt", a, b) * lc
-        + np.einsum("ptk,ptk->pt", b, c) * la
-        + np.einsum("ptk,ptk->pt", c, a) * lb
-    )
-    return 2.0 * np.arctan2(numerator, denominator).sum(axis=1) / (4.0 * np.pi)
-
+from tests.conftest import winding_number
 
 # ---------------------------------------------------------------- built-in objects
 

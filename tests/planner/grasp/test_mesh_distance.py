@@ -19,6 +19,7 @@ from planner.grasp.mesh_distance import (
     triangle_distances,
 )
 from planner.infra import OgcpError
+from tests.conftest import winding_number
 
 
 def brute_force(mesh: trimesh.Trimesh, points: np.ndarray) -> np.ndarray:
@@ -26,21 +27,6 @@ def brute_force(mesh: trimesh.Trimesh, points: np.ndarray) -> np.ndarray:
     return np.concatenate(
         [triangle_distances(points[i : i + 50], mesh.triangles).min(axis=1) for i in range(0, len(points), 50)]
     )
-
-
-def winding_number(mesh: trimesh.Trimesh, points: np.ndarray) -> np.ndarray:
-    """Generalised winding number (1 inside, 0 outside a closed mesh): signed solid angles / 4 pi."""
-    tri = mesh.triangles[None, :, :, :] - points[:, None, None, :]
-    a, b, c = tri[..., 0, :], tri[..., 1, :], tri[..., 2, :]
-    la, lb, lc = (np.linalg.norm(v, axis=-1) for v in (a, b, c))
-    numerator = np.einsum("ptk,ptk->pt", a, np.cross(b, c))
-    denominator = (
-        la * lb * lc
-        + np.einsum("ptk,ptk->pt", a, b) * lc
-        + np.einsum("ptk,ptk->pt", b, c) * la
-        + np.einsum("ptk,ptk->pt", c, a) * lb
-    )
-    return 2.0 * np.arctan2(numerator, denominator).sum(axis=1) / (4.0 * np.pi)
 
 
 def triangle_soup(rng: np.random.Generator) -> trimesh.Trimesh:
