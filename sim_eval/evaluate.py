@@ -34,6 +34,7 @@ from planner.infra.provenance import provenance
 from sim_eval.body import object_inertia, surface_distance
 from sim_eval.decomposition.decompose import Decomposition, DecompositionSettings, decompose
 from sim_eval.directions import direction_set
+from sim_eval.gates import gate_failures
 from sim_eval.metrics import fidelity, set_metrics
 from sim_eval.predict import predicted_resistance
 from sim_eval.protocol import hold_trials, ramp_trials, settle
@@ -202,6 +203,7 @@ class GraspEvaluator:
             settled.normal_forces,
             distance,
             holds,
+            invalid_reasons=tuple(f.to_dict() for f in gate_failures(settled.gates, settled.normal_forces, settings)),
         )
 
     @staticmethod

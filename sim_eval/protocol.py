@@ -35,14 +35,15 @@ class Settled:
     Attributes:
         state: Full physics state, shape (nstate,).
         pose: Object position [m] and quaternion, shape (7,).
-        gates: Validity gates: ``initial_penetration`` [m], ``tips_in_contact`` (count),
+        gates: Validity gates: ``initial_penetration`` [m] (deepest contact), ``tip_penetration``
+            (per tip, shape (m,) [m]), ``tips_in_contact`` (count),
             ``creep`` [m], ``diverged`` (bool), and ``valid`` (all passed).
         normal_forces: Normal force of each tip on the object after settling, shape (m,) [N].
     """
 
     state: NDArray[np.float64]
     pose: NDArray[np.float64]
-    gates: dict[str, float | int | bool]
+    gates: dict[str, float | int | bool | list[float]]
     normal_forces: NDArray[np.float64]
 
 
@@ -79,11 +80,17 @@ def tip_normal_forces(scene: GraspScene, data: mujoco.MjData) -> NDArray[np.floa
     return forces
 
 
-def _penetration(scene: GraspScene, data: mujoco.MjData) -> float:
-    depth = 0.0
+def _penetration(scene: GraspScene, data: mujoco.MjData) -> tuple[float, NDArray[np.float64]]:
+    """Deepest penetration of any contact, and of each tip's contacts, shape (m,) [m]."""
+    depth, tips = 0.0, np.zeros(scene.fingers)
+    tip_index = {int(g): i for i, g in enumerate(scene.tip_geoms)}
     for c in range(data.ncon):
-        depth = max(depth, -float(data.contact[c].dist))
-    return depth
+        contact = data.contact[c]
+        depth = max(depth, -float(contact.dist))
+        for geom in (contact.geom1, contact.geom2):
+            if geom in tip_index:
+                tips[tip_index[geom]] = max(tips[tip_index[geom]], -float(contact.dist))
+    return depth, tips
 
 
 def _displacement(pose: NDArray[np.float64], reference: NDArray[np.float64]) -> tuple[NDArray, NDArray]:
@@ -108,7 +115,7 @@ def settle(scene: GraspScene, settings: SimSettings) -> Settled:
     data = mujoco.MjData(model)
     data.ctrl[:] = scene.preload_ctrl
     mujoco.mj_forward(model, data)
-    penetration = _penetration(scene, data)
+    penetration, tip_penetration = _penetration(scene, data)
     steps = max(1, round(settings.settle_time / model.opt.timestep))
     window = min(steps, max(1, round(CREEP_WINDOW / model.opt.timestep)))
     q = slice(scene.object_qpos, scene.object_qpos + 7)
@@ -131,8 +138,9 @@ def settle(scene: GraspScene, settings: SimSettings) -> Settled:
     shift, _ = _displacement(pose, window_start) if not diverged else (np.inf, np.inf)
     forces = tip_normal_forces(scene, data) if not diverged else np.zeros(scene.fingers)
     touching = int(np.sum(forces > CONTACT_FRACTION * settings.max_normal_force))
-    gates: dict[str, float | int | bool] = {
+    gates: dict[str, float | int | bool | list[float]] = {
         "initial_penetration": penetration,
+        "tip_penetration": tip_penetration.tolist(),
         "tips_in_contact": touching,
         "creep": float(shift),
         "diverged": diverged,

@@ -58,6 +58,8 @@ class GraspSimResult:
         error: Why the grasp could not be simulated, if it could not.
         unreachable: Fingers (positions in ``grasp``) whose contact the simulated fingertip
             cannot touch without cutting the object; such a grasp is not simulated.
+        invalid_reasons: Each failed validity gate in JSON form (gate, finger, value, limit,
+            unit, message; see :mod:`sim_eval.gates`); empty for a valid grasp.
     """
 
     grasp: tuple[int, ...]
@@ -75,6 +77,7 @@ class GraspSimResult:
     hold_tests: dict[str, Any] = field(default_factory=dict)
     error: str | None = None
     unreachable: tuple[int, ...] = ()
+    invalid_reasons: tuple[dict[str, Any], ...] = ()
 
     @property
     def valid(self) -> bool:
@@ -122,6 +125,7 @@ class GraspSimResult:
                 "median_fidelity": self.median_fidelity,
                 "hold_tests": self.hold_tests,
                 "unreachable": list(self.unreachable),
+                "invalid_reasons": list(self.invalid_reasons),
             }
         )
 
@@ -208,6 +212,8 @@ class SimGraspRecord:
         hold_tests: Pass/fail of the constant-load tests.
         unreachable: Fingers whose contact the fingertip cannot touch (empty in records
             made before this key).
+        invalid_reasons: One line per failed validity gate: which finger, by how much, and
+            what to change (empty for valid grasps and in records made before this key).
     """
 
     label: str
@@ -229,6 +235,7 @@ class SimGraspRecord:
     median_fidelity: float | None
     hold_tests: dict[str, Any]
     unreachable: tuple[int, ...] = ()
+    invalid_reasons: tuple[str, ...] = ()
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> SimGraspRecord:
@@ -261,6 +268,7 @@ class SimGraspRecord:
             unreachable=tuple(int(i) for i in unreachable if _number(i) is not None)
             if isinstance(unreachable, list)
             else (),
+            invalid_reasons=_messages(data.get("invalid_reasons")),
         )
 
 
@@ -306,3 +314,10 @@ class SimRecord:
             wall_seconds=_number(data.get("wall_seconds")),
             provenance=_mapping(data.get("provenance")),
         )
+
+
+def _messages(value: Any) -> tuple[str, ...]:
+    """The ``message`` of each ``invalid_reasons`` entry that has one."""
+    if not isinstance(value, list):
+        return ()
+    return tuple(str(v["message"]) for v in value if isinstance(v, dict) and isinstance(v.get("message"), str))

@@ -157,6 +157,7 @@ def sim_summary(record: dict[str, Any]) -> str:
             f"{head}  valid {g.valid} (penetration {gates['initial_penetration'] * 1e3:.3f} mm, "
             f"tips in contact {gates['tips_in_contact']}, creep {gates['creep'] * 1e6:.2f} um)"
         )
+        lines.extend(f"  invalid: {reason}" for reason in g.invalid_reasons)
         for name, test in g.hold_tests.items():
             lines.append(
                 f"  {name} test: {'pass' if test['success'] else 'FAIL'} {dict(zip(test['axes'], test['passed']))}"

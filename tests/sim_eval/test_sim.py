@@ -114,6 +114,7 @@ def box_grasp_result():
 def test_force_closure_box_grasp_matches_its_prediction(box_grasp_result):
     best = box_grasp_result.grasps[0]
     assert best.q1 > 0 and best.valid
+    assert best.invalid_reasons == () and len(best.gates["tip_penetration"]) == 3
     assert len(best.measured) == 12 + 24 + 1  # axes, sphere directions, Q1's weakest
     assert best.median_fidelity <= 0.10
     ok = np.isfinite(best.fidelity)
