@@ -85,7 +85,13 @@ def register(commands: Any) -> None:
     evaluate.add_argument("--weight-test", action="store_true", help="also hold m g along the six force axes")
     evaluate.add_argument("--max-grasps", type=nonnegative_int, default=None, help="simulate at most this many grasps")
     evaluate.add_argument("--threads", type=nonnegative_int, default=None, help="rollout threads (default: all cores)")
-    evaluate.add_argument("--settings", type=Path, default=None, help="JSON file of further simulation settings")
+    evaluate.add_argument(
+        "--settings",
+        type=Path,
+        default=None,
+        help="JSON file of further simulation settings (lengths at a 0.2 m diagonal, scaled with the object; "
+        '"scale_lengths": false makes them absolute)',
+    )
     _add_decomposition_options(evaluate)
     evaluate.add_argument(
         "--render",
