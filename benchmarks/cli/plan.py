@@ -153,6 +153,8 @@ def load_contact_set(spec: str, args: argparse.Namespace) -> ContactSet:
             raise OgcpError("-n/--contacts does not apply to a contact file (its contacts are fixed)")
         if args.tip_radius is not None:
             raise OgcpError("--tip-radius does not apply to a contact file (its contacts are fixed)")
+        if args.diagonal is not None:
+            raise OgcpError("--diagonal does not apply to a contact file (its contacts are fixed)")
         return ContactSet.load(spec)
     mesh, source = resolve_object(spec, args.diagonal)
     n = args.contacts if args.contacts is not None else DEFAULT_CONTACTS

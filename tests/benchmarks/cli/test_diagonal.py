@@ -72,6 +72,14 @@ def test_a_plan_on_a_scaled_mesh_file_rebuilds_in_evaluate(box_mm):
     assert rebuilt.grasps[0] == builtin.grasps[0]
 
 
+def test_diagonal_does_not_apply_to_a_contact_file(tmp_path):
+    path = tmp_path / "c.json"
+    assert _run(["contacts", "box", "-n", "10", "-o", str(path)])[0] == 0
+    status, out, err = _run(["plan", str(path), "--diagonal", "0.1"])
+    assert status == 2 and out == ""
+    assert err.strip() == "ogcp: error: --diagonal does not apply to a contact file (its contacts are fixed)"
+
+
 def test_decompose_takes_a_diagonal():
     from benchmarks.cli.app import build_parser
 
