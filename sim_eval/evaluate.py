@@ -40,7 +40,7 @@ from sim_eval.predict import predicted_resistance
 from sim_eval.protocol import hold_trials, ramp_trials, settle
 from sim_eval.result import GraspSimResult, SimResult
 from sim_eval.scene import GRAVITY, GraspScene, build_scene
-from sim_eval.settings import SimSettings
+from sim_eval.settings import SimSettings, scaled_lengths
 
 DEXGRASPBENCH = {"load_per_kg": 10.0, "duration": 2.0, "move_limit": 0.05, "rotation_limit": 15.0, "mu": 0.6}
 WEIGHT_TEST_DURATION = 2.0  # [s]
@@ -102,7 +102,10 @@ class GraspEvaluator:
             smaller one) is reported as unreachable and not simulated: the tip would start
             inside the object, so the simulation would test another grasp.
         """
-        settings = self.settings or SimSettings()
+        given = self.settings or SimSettings()
+        # One absolute value for everything below: the lengths scaled to this object's size.
+        scale = given.length_scale(object_diagonal(mesh))
+        settings = given.scaled(object_diagonal(mesh))
         start = time.perf_counter()
         chosen = [tuple(int(i) for i in g) for g in grasps]
         labels = list(labels) if labels is not None else [f"grasp-{i}" for i in range(len(chosen))]
@@ -136,7 +139,13 @@ class GraspEvaluator:
             object=dict(contacts.source),
             grasps=tuple(results),
             set_metrics=_set_level(results, settings),
-            settings={**settings.to_dict(), "decomposition": (self.decomposition or DecompositionSettings()).to_dict()},
+            settings={
+                **given.to_dict(),
+                # The scale and the absolute lengths it gave (given x length_scale).
+                "length_scale": scale,
+                "scaled_lengths": scaled_lengths(settings),
+                "decomposition": (self.decomposition or DecompositionSettings()).to_dict(),
+            },
             decomposition=dict(parts.meta),
             wall_seconds=time.perf_counter() - start,
             provenance=provenance(),
@@ -275,6 +284,11 @@ class GraspEvaluator:
             "success": bool(passed.all()),
             "load": settings.object_mass * GRAVITY,
         }
+
+
+def object_diagonal(mesh: trimesh.Trimesh) -> float:
+    """The object's bounding-box diagonal [m]: the size the simulation's lengths scale with."""
+    return float(np.linalg.norm(np.ptp(np.asarray(mesh.vertices), axis=0)))
 
 
 def tip_radius(mesh: trimesh.Trimesh, settings: SimSettings) -> float:

@@ -54,7 +54,9 @@ def _mesh(source: dict[str, Any]) -> trimesh.Trimesh:
             raise OgcpError(f"the plan's mesh {path} does not exist (run from the folder the plan was made in)")
         if source.get("sha256") and file_sha256(path) != source["sha256"]:
             raise OgcpError(f"the plan's mesh {path} has changed since planning (sha256 differs)")
-        mesh, _ = resolve_object(str(path))
+        # A mesh file planned with --diagonal was normalised to it; without, it keeps its size.
+        diagonal = source.get("diagonal")
+        mesh, _ = resolve_object(str(path), None if diagonal is None else float(diagonal))
         return mesh
     raise OgcpError(
         f"cannot tell which object the plan was made on (contact-set source kind {kind!r}); "

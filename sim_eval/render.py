@@ -75,8 +75,8 @@ def render_plan(
     """Picture of one grasp of an ``ogcp.plan/1`` record after settling (default: the best grasp)."""
     from sim_eval.plan_input import plan_input
 
-    settings = settings or SimSettings()
     plan = plan_input(record)
+    settings = (settings or SimSettings()).scaled(float(np.linalg.norm(np.ptp(plan.mesh.vertices, axis=0))))
     if not 0 <= grasp_index < len(plan.grasps):
         raise OgcpError(f"grasp index {grasp_index} outside the plan's {len(plan.grasps)} grasps")
     idx = np.asarray(plan.grasps[grasp_index], dtype=np.intp)

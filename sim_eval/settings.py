@@ -8,6 +8,21 @@ from typing import Any
 
 from planner.grasp.reach import DEFAULT_TIP_RADIUS_RATIO
 from planner.infra.errors import OgcpError, choice_error
+from planner.objects.builtin import DEFAULT_DIAGONAL
+
+#: The bounding-box diagonal [m] at which the length settings are given (the built-ins' size, so
+#: 0.2 m objects are simulated with exactly these values).
+REFERENCE_DIAGONAL = DEFAULT_DIAGONAL
+#: The settings that are lengths [m] and scale with the object (besides ``contact_solimp``'s width).
+LENGTH_SETTINGS = (
+    "servo_compliance",
+    "tangential_compliance",
+    "creep_tolerance",
+    "penetration_tolerance",
+    "move_threshold",
+)
+#: The fingertip slides' masses [kg], divided by the length scale (see :meth:`SimSettings.scaled`).
+SERVO_MASSES = ("tip_mass", "slide_armature")
 
 PROTOCOLS = ("resistance", "dexgraspbench")
 INTEGRATORS = ("implicitfast", "implicit", "euler", "rk4")
@@ -26,15 +41,25 @@ class SimSettings:
     up to F_max and can trade normal force within [0, F_max] over ``servo_compliance`` of
     travel. The tangential slides are stiff position servos holding the tip in place.
 
+    Scale: the lengths (:data:`LENGTH_SETTINGS` and ``contact_solimp``'s width) are given at
+    the :data:`REFERENCE_DIAGONAL` of 0.2 m and :meth:`scaled` multiplies them by the object's
+    diagonal / 0.2 m, so a grasp is gated and failed alike at any size: the servo keeps its
+    force-travel curve relative to the object (kp = F_max / compliance) and the gates their
+    fraction of it. The fingertip slides' masses (:data:`SERVO_MASSES`) are divided by the same
+    factor, so that each servo's natural frequency sqrt(kp / m) is the same at every size.
+    Forces, times and the object's mass are not scaled. ``scale_lengths = false`` uses every
+    setting as given (absolute metres and kilograms) at every size.
+
     Attributes:
         max_normal_force: Per-finger normal-force cap F_max [N].
         tip_radius: Fingertip sphere radius [m]; None = ``tip_radius_ratio`` x the object's
             bounding-box diagonal.
         tip_radius_ratio: Default tip radius as a fraction of the bounding-box diagonal.
-        tip_mass: Mass of each fingertip body [kg].
-        slide_armature: Armature of every slide [kg]; keeps stiff servos stable at ``timestep``.
-        servo_compliance: F_max / kp of the normal servo [m].
-        tangential_compliance: F_max / kp of the tangential servos [m].
+        tip_mass: Mass of each fingertip body [kg at the reference diagonal].
+        slide_armature: Armature of every slide [kg at the reference diagonal]; keeps stiff
+            servos stable at ``timestep``.
+        servo_compliance: F_max / kp of the normal servo [m at the reference diagonal].
+        tangential_compliance: F_max / kp of the tangential servos [m at the reference diagonal].
         target_factor: Normal servo target depth in units of F_max / kp (> 1 saturates the preload).
         object_mass: Object mass [kg]; inertia comes from the watertight mesh.
         mu: Friction coefficient; None = the plan's contact-set mu.
@@ -46,14 +71,16 @@ class SimSettings:
         solver: Constraint solver.
         solver_iterations: Maximum solver iterations per step.
         contact_solref: Contact solref (time constant [s], damping ratio).
-        contact_solimp: Contact solimp (dmin, dmax, width [m]).
+        contact_solimp: Contact solimp (dmin, dmax, width [m at the reference diagonal]).
         gravity: Whether gravity acts during the resistance protocol.
         settle_time: Duration of the preload phase before loading [s].
-        creep_tolerance: Largest object drift over the last 0.1 s of settling [m].
-        penetration_tolerance: Largest initial tip penetration accepted [m].
+        creep_tolerance: Largest object drift over the last 0.1 s of settling [m at the
+            reference diagonal].
+        penetration_tolerance: Largest initial tip penetration accepted [m at the reference
+            diagonal].
         directions: Number of quasi-uniform 6-D directions besides the 12 axes and Q1's weakest.
         direction_seed: Seed of those directions.
-        move_threshold: Object displacement that counts as failure [m].
+        move_threshold: Object displacement that counts as failure [m at the reference diagonal].
         rotation_threshold: Object rotation that counts as failure [deg].
         ramp_time: Time for the load to reach the predicted resistance [s].
         ramp_extent: Ramp end as a multiple of the predicted resistance.
@@ -66,6 +93,8 @@ class SimSettings:
         weight_test: Also hold the object's weight m g along the six force axes for 2 s.
         protocol: "resistance" (ramp to failure) or "dexgraspbench" (fixed load, pass/fail).
         threads: Rollout threads; None = all cores.
+        scale_lengths: Scale the lengths (and the slides' masses) with the object, or use every
+            setting as given.
     """
 
     max_normal_force: float = 10.0
@@ -103,6 +132,7 @@ class SimSettings:
     weight_test: bool = False
     protocol: str = "resistance"
     threads: int | None = None
+    scale_lengths: bool = True
 
     def __post_init__(self) -> None:
         positive = (
@@ -145,8 +175,9 @@ class SimSettings:
             value = getattr(self, name)
             if not isinstance(value, int) or isinstance(value, bool) or value < low:
                 raise OgcpError(f"simulation setting {name} must be an integer >= {low}, got {value!r}")
-        if not isinstance(self.gravity, bool) or not isinstance(self.weight_test, bool):
-            raise OgcpError("simulation settings gravity and weight_test must be true or false")
+        for name in ("gravity", "weight_test", "scale_lengths"):
+            if not isinstance(getattr(self, name), bool):
+                raise OgcpError(f"simulation setting {name} must be true or false, got {getattr(self, name)!r}")
         if self.threads is not None and (not isinstance(self.threads, int) or self.threads < 1):
             raise OgcpError(f"simulation setting threads must be an integer >= 1 or unset, got {self.threads!r}")
         for name, choices in (
@@ -169,6 +200,41 @@ class SimSettings:
     def tangential_stiffness(self) -> float:
         """kp of the tangential servos [N/m]."""
         return self.max_normal_force / self.tangential_compliance
+
+    def length_scale(self, diagonal: float) -> float:
+        """The factor the lengths are multiplied by for an object: diagonal / 0.2 m, or 1 if not scaled.
+
+        Args:
+            diagonal: The object's bounding-box diagonal [m].
+        """
+        if not (math.isfinite(diagonal) and diagonal > 0):
+            raise OgcpError(f"object diagonal must be a positive number of metres, got {diagonal!r}")
+        if not self.scale_lengths:
+            return 1.0
+        factor = diagonal / REFERENCE_DIAGONAL
+        # A mesh normalised to 0.2 m measures it only to rounding: keep today's values bit for bit.
+        return 1.0 if math.isclose(factor, 1.0, rel_tol=1e-9) else factor
+
+    def scaled(self, diagonal: float) -> SimSettings:
+        """The settings for an object of this size, every length in absolute metres.
+
+        The scene and the protocol read lengths as given, so they are handed this value. At
+        the reference diagonal the lengths are returned unchanged (bit for bit), and the result
+        has ``scale_lengths = False``, so scaling it again changes nothing.
+
+        Args:
+            diagonal: The object's bounding-box diagonal [m].
+        """
+        factor = self.length_scale(diagonal)
+        if factor == 1.0:
+            return replace(self, scale_lengths=False)
+        lengths = {name: getattr(self, name) * factor for name in LENGTH_SETTINGS}
+        # kp = F_max / compliance grows as 1 / factor; the slides' masses follow it so that each
+        # servo keeps its natural frequency, hence its accuracy at the fixed step (masses fixed,
+        # a 5 cm object's servos ring near the step's limit and resist ~20 % less).
+        masses = {name: getattr(self, name) / factor for name in SERVO_MASSES}
+        dmin, dmax, width = self.contact_solimp
+        return replace(self, **lengths, **masses, contact_solimp=(dmin, dmax, width * factor), scale_lengths=False)
 
     def with_updates(self, **changes: Any) -> SimSettings:
         """A copy with some settings changed (validated)."""
@@ -193,3 +259,11 @@ class SimSettings:
             if key in data:
                 data[key] = tuple(float(v) for v in data[key])
         return cls(**data)
+
+
+def scaled_lengths(settings: SimSettings) -> dict[str, float]:
+    """The length settings of (scaled) settings [m], as recorded next to the given ones."""
+    return {
+        **{name: getattr(settings, name) for name in LENGTH_SETTINGS},
+        "contact_solimp_width": settings.contact_solimp[2],
+    }

@@ -44,3 +44,20 @@ def finite_number(text: str) -> float:
     if not math.isfinite(value):
         raise argparse.ArgumentTypeError(f"expected a finite number, got {text!r}")
     return value
+
+
+def add_diagonal_option(parser: argparse.ArgumentParser, default: float) -> None:
+    """``--diagonal``: the object's bounding-box diagonal [m], for named objects and mesh files alike.
+
+    Args:
+        parser: The sub-command's parser.
+        default: The named objects' diagonal [m] (``planner.objects.DEFAULT_DIAGONAL``), for the help.
+    """
+    parser.add_argument(
+        "--diagonal",
+        type=number,
+        default=None,
+        metavar="METRES",
+        help=f"scale the object to this bounding-box diagonal [m] (default {default:g} for built-in and fetched "
+        "objects; mesh files keep their size unless given)",
+    )

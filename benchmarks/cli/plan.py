@@ -17,7 +17,7 @@ from typing import Any
 import trimesh
 
 from benchmarks.cli.method_options import GROUPS, add_method_options, config_from_args, not_applicable
-from benchmarks.cli.options import integer, number, positive_int
+from benchmarks.cli.options import add_diagonal_option, integer, number, positive_int
 from benchmarks.cli.plan_summary import describe
 from planner.config.methods import DEFAULT_FINGERS, DEFAULT_METHOD, DEFAULT_SEED
 from planner.grasp.contact_set import DEFAULT_CONE_EDGES, DEFAULT_CONTACTS, DEFAULT_MU, ContactSet, sample_contacts
@@ -68,12 +68,7 @@ def _add_contact_options(parser: argparse.ArgumentParser, n_default: int | None)
         f"(default: the simulation's fingertip, {100 * DEFAULT_TIP_RADIUS_RATIO:g}%% of the object's bounding-box "
         "diagonal; 0 = the paper's plain sampling of the whole surface)",
     )
-    parser.add_argument(
-        "--diagonal",
-        type=number,
-        default=DEFAULT_DIAGONAL,
-        help=f"bounding-box diagonal of built-in objects [m] (default {DEFAULT_DIAGONAL})",
-    )
+    add_diagonal_option(parser, DEFAULT_DIAGONAL)
 
 
 def tip_radius(text: str) -> float:
@@ -158,6 +153,8 @@ def load_contact_set(spec: str, args: argparse.Namespace) -> ContactSet:
             raise OgcpError("-n/--contacts does not apply to a contact file (its contacts are fixed)")
         if args.tip_radius is not None:
             raise OgcpError("--tip-radius does not apply to a contact file (its contacts are fixed)")
+        if args.diagonal is not None:
+            raise OgcpError("--diagonal does not apply to a contact file (its contacts are fixed)")
         return ContactSet.load(spec)
     mesh, source = resolve_object(spec, args.diagonal)
     n = args.contacts if args.contacts is not None else DEFAULT_CONTACTS

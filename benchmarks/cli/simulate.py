@@ -11,9 +11,10 @@ from typing import Any
 
 import numpy as np
 
-from benchmarks.cli.options import finite_number, nonnegative_int
+from benchmarks.cli.options import add_diagonal_option, finite_number, nonnegative_int
 from planner.infra.atomic import write_json_atomic
 from planner.infra.errors import OgcpError
+from planner.objects.builtin import DEFAULT_DIAGONAL
 from planner.records.plan import load_plan
 from sim_eval.decomposition.settings import METHODS as DECOMPOSITION_METHODS
 from sim_eval.decomposition.settings import DecompositionSettings
@@ -84,7 +85,13 @@ def register(commands: Any) -> None:
     evaluate.add_argument("--weight-test", action="store_true", help="also hold m g along the six force axes")
     evaluate.add_argument("--max-grasps", type=nonnegative_int, default=None, help="simulate at most this many grasps")
     evaluate.add_argument("--threads", type=nonnegative_int, default=None, help="rollout threads (default: all cores)")
-    evaluate.add_argument("--settings", type=Path, default=None, help="JSON file of further simulation settings")
+    evaluate.add_argument(
+        "--settings",
+        type=Path,
+        default=None,
+        help="JSON file of further simulation settings (lengths at a 0.2 m diagonal, scaled with the object; "
+        '"scale_lengths": false makes them absolute)',
+    )
     _add_decomposition_options(evaluate)
     evaluate.add_argument(
         "--render",
@@ -99,6 +106,7 @@ def register(commands: Any) -> None:
 
     decompose = commands.add_parser("decompose", help="fill the convex-decomposition cache for an object")
     decompose.add_argument("object", metavar="MESH_OR_NAME", help="mesh file or object name")
+    add_diagonal_option(decompose, DEFAULT_DIAGONAL)
     _add_decomposition_options(decompose)
     decompose.add_argument("--json", action="store_true", help="print the decomposition metadata as JSON")
     decompose.set_defaults(handler=run_decompose)
@@ -225,7 +233,7 @@ def run_decompose(args: argparse.Namespace) -> int:
     from planner.objects import resolve_object
     from sim_eval.decomposition.decompose import decompose
 
-    mesh, _ = resolve_object(args.object)
+    mesh, _ = resolve_object(args.object, args.diagonal)
     result = decompose(mesh, _decomposition(args), progress=sys.stderr.isatty(), name=args.object)
     if args.json:
         print(json.dumps({**result.meta, "cache_path": str(result.cache_path)}))

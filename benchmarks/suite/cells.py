@@ -81,7 +81,7 @@ def _contacts(
     spec: str, diagonal: float | None, n: int, seed: int, mu: float, cone_edges: int, tip_radius: float | None
 ) -> ContactSet:
     """Sample a cell's contacts; ``tip_radius`` None is the object's default fingertip, 0 plain sampling [m]."""
-    mesh, source = resolve_object(spec) if diagonal is None else resolve_object(spec, diagonal)
+    mesh, source = resolve_object(spec, diagonal)
     radius = default_tip_radius(mesh) if tip_radius is None else tip_radius
     return sample_contacts(mesh, n, seed, mu, cone_edges, source, tip_radius=radius)
 

@@ -74,7 +74,7 @@ class Cell:
         m: Number of fingers.
         mu: Friction coefficient.
         cone_edges: Friction-cone edges k.
-        diagonal: Bounding-box diagonal of named objects [m] (None for mesh files).
+        diagonal: Bounding-box diagonal [m] (None for a mesh file at its own size).
         method: Method name.
         variant: Canonical method parameters, sorted by name.
         label: Label for plots (not part of the id).

@@ -139,6 +139,9 @@ class _Parser:
         diagonal = Option("float", DEFAULT_DIAGONAL, minimum=0, exclusive=True).check(
             f"{where}.diagonal", table.get("diagonal", DEFAULT_DIAGONAL)
         )
+        # Mesh files keep their own size (diagonal None, so their cell ids are unchanged) unless
+        # the suite gives a diagonal, which then scales them as it does named objects.
+        mesh_diagonal = diagonal if "diagonal" in table else None
         # Absent: None, the default fingertip of each object (resolved when sampling).
         tips: list[float | None] = (
             values_of(f"{where}.tip_radius", table["tip_radius"], TIP_RADIUS)
@@ -164,7 +167,7 @@ class _Parser:
                     m,
                     mu,
                     edges,
-                    None if obj.path else diagonal,
+                    mesh_diagonal if obj.path else diagonal,
                     method,
                     tuple(sorted(params.items())),
                     label,

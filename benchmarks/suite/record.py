@@ -40,7 +40,7 @@ class CellParams:
         m: Number of fingers.
         mu: Friction coefficient.
         cone_edges: Friction-cone edges k.
-        diagonal: Bounding-box diagonal of named objects [m] (None for mesh files).
+        diagonal: Bounding-box diagonal [m] (None for a mesh file at its own size).
         method: Method name.
         variant: The method's canonical parameters.
         label: Label for tables and plots.

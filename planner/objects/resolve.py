@@ -4,16 +4,17 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import trimesh
 
 from planner.infra.errors import OgcpError
-from planner.objects.builtin import BUILTIN_OBJECTS, DEFAULT_DIAGONAL, builtin_mesh
+from planner.objects.builtin import BUILTIN_OBJECTS, DEFAULT_DIAGONAL, builtin_mesh, normalise_scale
 from planner.objects.fetch import load_fetched
 from planner.objects.fetchable import FETCHABLE_OBJECTS
 from planner.objects.loading import file_sha256, load_mesh
 
 
-def resolve_object(spec: str, diagonal: float = DEFAULT_DIAGONAL) -> tuple[trimesh.Trimesh, dict[str, object]]:
+def resolve_object(spec: str, diagonal: float | None = None) -> tuple[trimesh.Trimesh, dict[str, object]]:
     """Turn a user's object argument (a built-in name, a fetched name or a mesh path) into a mesh.
 
     Fetched objects (``planner.objects.fetchable.FETCHABLE_OBJECTS``) come from the cache only;
@@ -21,18 +22,25 @@ def resolve_object(spec: str, diagonal: float = DEFAULT_DIAGONAL) -> tuple[trime
 
     Args:
         spec: Built-in object name, fetched object name, or path to a mesh file.
-        diagonal: Bounding-box diagonal for built-in and fetched objects [m].
+        diagonal: Bounding-box diagonal [m]. None: :data:`DEFAULT_DIAGONAL` for built-in and
+            fetched objects, the file's own size for a mesh file. Given for a mesh file, the mesh
+            is centred on its bounding-box centre and scaled uniformly to it (the built-ins'
+            normalisation, so one frame convention), and the source records it.
 
     Returns:
         ``(mesh, source)`` where ``source`` describes the object for provenance records.
 
     Raises:
-        OgcpError: If ``spec`` is none of these, or names a fetched object that is not cached.
+        OgcpError: If ``spec`` is none of these, names a fetched object that is not cached, or
+            ``diagonal`` is not a positive number.
     """
+    if diagonal is not None and not (np.isfinite(diagonal) and diagonal > 0):
+        raise OgcpError(f"object diagonal must be a positive number of metres, got {diagonal!r}")
     if spec in BUILTIN_OBJECTS:
+        diagonal = DEFAULT_DIAGONAL if diagonal is None else diagonal
         return builtin_mesh(spec, diagonal), {"kind": "builtin", "name": spec, "diagonal": diagonal}
     if spec in FETCHABLE_OBJECTS:
-        return load_fetched(spec, diagonal)
+        return load_fetched(spec, DEFAULT_DIAGONAL if diagonal is None else diagonal)
     path = Path(spec)
     if path.suffix == "" and not path.exists():
         # Grouped rather than one sorted list, so that the user sees which names need a fetch first.
@@ -42,4 +50,9 @@ def resolve_object(spec: str, diagonal: float = DEFAULT_DIAGONAL) -> tuple[trime
             "or a path to a mesh file"
         )
     mesh = load_mesh(path)
-    return mesh, {"kind": "mesh", "path": str(path), "sha256": file_sha256(path)}
+    source: dict[str, object] = {"kind": "mesh", "path": str(path), "sha256": file_sha256(path)}
+    if diagonal is not None:
+        # Recorded only when given, so that records of mesh files at their own size are unchanged.
+        mesh = normalise_scale(mesh, diagonal)
+        source["diagonal"] = diagonal
+    return mesh, source
