@@ -9,6 +9,7 @@ from numpy.typing import NDArray
 from planner.infra.errors import OgcpError
 from sim_eval.body import object_inertia
 from sim_eval.decomposition.decompose import DecompositionSettings, decompose
+from sim_eval.evaluate import object_diagonal, tip_radius
 from sim_eval.protocol import FULL_STATE, Settled, settle
 from sim_eval.scene import GraspScene, build_scene
 from sim_eval.settings import SimSettings
@@ -76,16 +77,14 @@ def render_plan(
     from sim_eval.plan_input import plan_input
 
     plan = plan_input(record)
-    settings = (settings or SimSettings()).scaled(float(np.linalg.norm(np.ptp(plan.mesh.vertices, axis=0))))
+    settings = (settings or SimSettings()).scaled(object_diagonal(plan.mesh))
     if not 0 <= grasp_index < len(plan.grasps):
         raise OgcpError(f"grasp index {grasp_index} outside the plan's {len(plan.grasps)} grasps")
     idx = np.asarray(plan.grasps[grasp_index], dtype=np.intp)
     parts = decompose(plan.mesh, decomposition)
     com, inertia = object_inertia(plan.mesh, settings.object_mass)
     mu = settings.mu if settings.mu is not None else plan.contacts.mu
-    radius = settings.tip_radius or settings.tip_radius_ratio * float(
-        np.linalg.norm(np.ptp(plan.mesh.vertices, axis=0))
-    )
+    radius = tip_radius(plan.mesh, settings)
     scene = build_scene(
         parts.parts, com, inertia, plan.contacts.positions[idx], plan.contacts.normals[idx], settings, mu, radius
     )
