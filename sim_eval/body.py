@@ -1,9 +1,8 @@
 """The object as a rigid body for simulation: convex parts, mass properties, surface distance.
 
 Mass and inertia come from the watertight mesh, never from the union of convex parts, whose
-overlaps would count some volume twice. Distances to the parts are the planner's exact
-point-triangle distances (:func:`planner.grasp.mesh_distance.triangle_distances`), all pairs
-and no spatial index, which suits parts of tens to hundreds of faces.
+overlaps would count some volume twice. Distances to the parts are exact
+(:class:`sim_eval.collision.CollisionSurface`).
 """
 
 from __future__ import annotations
@@ -14,14 +13,13 @@ from collections.abc import Sequence
 import numpy as np
 import trimesh
 from numpy.typing import ArrayLike, NDArray
-from scipy.spatial import ConvexHull, QhullError
+from scipy.spatial import QhullError
 
 from planner.grasp.contact_set import NonWatertightWarning, mass_properties
-from planner.grasp.mesh_distance import triangle_distances
 from planner.infra.errors import OgcpError
+from sim_eval.collision import CollisionSurface
 
 Part = tuple[NDArray[np.float64], NDArray[np.int64]]
-_PAIRS_PER_BLOCK = 200_000  # point-triangle pairs per vectorised block: bounds memory to a few tens of MB
 
 
 def is_closed_manifold(faces: NDArray[np.int64]) -> bool:
@@ -135,26 +133,9 @@ def surface_distance(parts: Sequence[Part], points: ArrayLike) -> NDArray[np.flo
         Signed distances, shape (n,) [m]: positive outside, negative inside.
 
     Raises:
-        OgcpError: For no parts, a flat part or points that are not (n, 3).
+        OgcpError: For no parts or points that are not (n, 3).
     """
     points = np.asarray(points, dtype=np.float64)
     if points.ndim != 2 or points.shape[1] != 3 or not np.all(np.isfinite(points)):
         raise OgcpError(f"query points must be finite with shape (n, 3), got {points.shape}")
-    if len(parts) == 0:
-        raise OgcpError("cannot measure distance to an empty set of parts")
-    outside = np.full(len(points), np.inf)
-    depth = np.zeros(len(points))
-    for k, (vertices, faces) in enumerate(parts):
-        vertices = np.array(vertices, dtype=np.float64)
-        triangles = vertices[np.asarray(faces, dtype=np.int64)]
-        block = max(1, _PAIRS_PER_BLOCK // len(triangles))
-        for start in range(0, len(points), block):
-            chunk = slice(start, start + block)
-            outside[chunk] = np.minimum(outside[chunk], triangle_distances(points[chunk], triangles).min(axis=1))
-        try:
-            planes = ConvexHull(vertices).equations  # outward unit normals and offsets
-        except QhullError as exc:
-            raise OgcpError(f"part {k} is flat: it has no inside") from exc
-        # Inside a convex part the distance to its boundary is the distance to the nearest facet plane.
-        depth = np.maximum(depth, -(points @ planes[:, :3].T + planes[:, 3]).max(axis=1))
-    return np.where(depth > 0, -depth, outside)
+    return CollisionSurface.from_parts(parts).signed_distance(points, nearest=False)[0]

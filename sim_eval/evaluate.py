@@ -23,37 +23,19 @@ from typing import Any
 
 import numpy as np
 import trimesh
-from numpy.typing import NDArray
 from tqdm.auto import tqdm
 
 from planner.grasp.contact_set import ContactSet
-from planner.grasp.quality import q1_certificate
 from planner.grasp.reach import REACH_TOLERANCE, default_tip_radius, reachable
 from planner.infra.errors import OgcpError
 from planner.infra.provenance import provenance
-from sim_eval.body import object_inertia, surface_distance
+from sim_eval.body import object_inertia
+from sim_eval.collision_fit import DecompositionLadder
 from sim_eval.decomposition.decompose import Decomposition, DecompositionSettings, decompose
-from sim_eval.directions import direction_set
-from sim_eval.gates import gate_failures
-from sim_eval.metrics import fidelity, set_metrics
-from sim_eval.predict import predicted_resistance
-from sim_eval.protocol import hold_trials, ramp_trials, settle
+from sim_eval.metrics import set_metrics
 from sim_eval.result import GraspSimResult, SimResult
-from sim_eval.scene import GRAVITY, GraspScene, build_scene
 from sim_eval.settings import SimSettings, scaled_lengths
-
-DEXGRASPBENCH = {"load_per_kg": 10.0, "duration": 2.0, "move_limit": 0.05, "rotation_limit": 15.0, "mu": 0.6}
-WEIGHT_TEST_DURATION = 2.0  # [s]
-FIDELITY_FLOOR = 1e-3  # predictions below this fraction of F_max have no fidelity
-
-
-def _axis_loads(magnitude: float) -> tuple[NDArray[np.float64], list[str]]:
-    loads = np.zeros((6, 6))
-    labels = []
-    for k, (axis, sign) in enumerate((a, s) for a in range(3) for s in (1.0, -1.0)):
-        loads[k, axis] = sign * magnitude
-        labels.append(f"{'+' if sign > 0 else '-'}{'xyz'[axis]}")
-    return loads, labels
+from sim_eval.trial import ObjectBody, failed_result, simulate_grasp
 
 
 class GraspEvaluator:
@@ -114,10 +96,14 @@ class GraspEvaluator:
         for g in chosen:
             if len(g) < 2 or min(g) < 0 or max(g) >= len(contacts) or len(set(g)) != len(g):
                 raise OgcpError(f"grasp {list(g)} must hold >= 2 distinct indices in 0..{len(contacts) - 1}")
+        diagonal = object_diagonal(mesh)
+        decomposition = self.decomposition or DecompositionSettings()
         if parts is None:
-            parts = decompose(mesh, self.decomposition, cache=self.cache, progress=self.progress)
+            parts = decompose(mesh, decomposition, cache=self.cache, progress=self.progress)
         com, inertia = object_inertia(mesh, settings.object_mass)
         radius = tip_radius(mesh, settings)
+        body = ObjectBody(com, inertia, radius, diagonal)
+        ladder = DecompositionLadder(mesh, decomposition, diagonal, radius, self.cache, self.progress, first=parts)
         unreachable = _unreachable_contacts(mesh, contacts, chosen, radius)
         results = []
         bar = tqdm(total=len(chosen), desc="simulate", unit="grasp", disable=not self.progress)
@@ -128,162 +114,30 @@ class GraspEvaluator:
                 bar.update()
                 continue
             try:
-                results.append(self._grasp(mesh, contacts, grasp, label, parts, com, inertia, settings))
+                idx = np.asarray(grasp, dtype=np.intp)
+                fit = ladder.fit(contacts.positions[idx], contacts.normals[idx])
+                results.append(simulate_grasp(contacts, grasp, label, fit, body, settings))
             except Exception as exc:  # noqa: BLE001 - one bad grasp must not sink the batch
-                results.append(
-                    _failed(contacts, grasp, label, f"{type(exc).__name__}: {exc}", traceback.format_exc(limit=3))
-                )
+                reason = f"{type(exc).__name__}: {exc}"
+                results.append(failed_result(contacts, grasp, label, reason, traceback.format_exc(limit=3)))
             bar.update()
         bar.close()
         return SimResult(
             object=dict(contacts.source),
             grasps=tuple(results),
-            set_metrics=_set_level(results, settings),
+            set_metrics=_set_level(results, settings, diagonal),
             settings={
                 **given.to_dict(),
                 # The scale and the absolute lengths it gave (given x length_scale).
                 "length_scale": scale,
+                "object_diagonal": diagonal,
                 "scaled_lengths": scaled_lengths(settings),
-                "decomposition": (self.decomposition or DecompositionSettings()).to_dict(),
+                "decomposition": decomposition.to_dict(),
             },
-            decomposition=dict(parts.meta),
+            decomposition=_decomposition_meta(parts, ladder),
             wall_seconds=time.perf_counter() - start,
             provenance=provenance(),
         )
-
-    def _grasp(
-        self,
-        mesh: trimesh.Trimesh,
-        contacts: ContactSet,
-        grasp: tuple[int, ...],
-        label: str,
-        parts: Decomposition,
-        com: NDArray[np.float64],
-        inertia: NDArray[np.float64],
-        settings: SimSettings,
-    ) -> GraspSimResult:
-        idx = np.asarray(grasp, dtype=np.intp)
-        positions, normals = contacts.positions[idx], contacts.normals[idx]
-        compat = settings.protocol == "dexgraspbench"
-        mu = settings.mu if settings.mu is not None else (DEXGRASPBENCH["mu"] if compat else contacts.mu)
-        cert = q1_certificate(contacts.subset_wrenches(idx))
-        dirs = direction_set(
-            settings.directions, settings.direction_seed, cert.direction if cert.force_closure else None
-        )
-        predicted = predicted_resistance(
-            positions,
-            normals,
-            contacts.com,
-            contacts.torque_scale,
-            mu,
-            settings.prediction_cone_edges,
-            settings.max_normal_force,
-            dirs.vectors,
-        ).resistance
-        radius = tip_radius(mesh, settings)
-        scene = build_scene(parts.parts, com, inertia, positions, normals, settings, mu, radius)
-        settled = settle(scene, settings)
-        distance = surface_distance(parts.parts, positions)
-        nan = np.full(len(predicted), math.nan)
-        measured, censored, fid = nan.copy(), np.zeros(len(predicted), dtype=bool), nan.copy()
-        holds: dict[str, Any] = {}
-        if not settled.gates["diverged"]:
-            if compat:
-                holds["dexgraspbench"] = self._dexgraspbench(scene, settled, settings)
-            else:
-                measured, censored = self._ramp(
-                    scene, settled, dirs.vectors, predicted, contacts.torque_scale, settings
-                )
-                fid = fidelity(measured, predicted, FIDELITY_FLOOR * settings.max_normal_force)
-                fid[censored] = math.nan
-            if settings.weight_test:
-                holds["weight"] = self._weight(parts, com, inertia, positions, normals, settings, mu, radius)
-        return GraspSimResult(
-            grasp,
-            label,
-            cert.q1,
-            dirs.vectors,
-            tuple(dirs.labels),
-            predicted,
-            measured,
-            censored,
-            fid,
-            dict(settled.gates),
-            settled.normal_forces,
-            distance,
-            holds,
-            invalid_reasons=tuple(f.to_dict() for f in gate_failures(settled.gates, settled.normal_forces, settings)),
-        )
-
-    @staticmethod
-    def _ramp(
-        scene: GraspScene,
-        settled: Any,
-        directions: NDArray[np.float64],
-        predicted: NDArray[np.float64],
-        torque_scale: float,
-        settings: SimSettings,
-    ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
-        """Each direction's ramp reaches its prediction after ``ramp_time`` (a floor keeps ~0 ones moving)."""
-        finite = np.where(np.isfinite(predicted), predicted, 0.0)
-        floor = settings.min_ramp_fraction * max(float(finite.max()), settings.holding_load)
-        targets = np.maximum(finite, floor)
-        trials = ramp_trials(
-            scene,
-            settled,
-            directions,
-            targets / settings.ramp_time,
-            settings.ramp_extent * settings.ramp_time,
-            torque_scale,
-            settings,
-        )
-        measured = np.where(trials.diverged, math.nan, trials.failure_load)
-        return measured, ~trials.failed
-
-    @staticmethod
-    def _dexgraspbench(scene: GraspScene, settled: Any, settings: SimSettings) -> dict[str, Any]:
-        loads, labels = _axis_loads(DEXGRASPBENCH["load_per_kg"] * settings.object_mass)
-        passed = hold_trials(
-            scene,
-            settled,
-            loads,
-            DEXGRASPBENCH["duration"],
-            DEXGRASPBENCH["move_limit"],
-            DEXGRASPBENCH["rotation_limit"],
-            settings,
-        )
-        return {
-            "axes": labels,
-            "passed": passed.tolist(),
-            "success": bool(passed.all()),
-            "load": DEXGRASPBENCH["load_per_kg"] * settings.object_mass,
-            **DEXGRASPBENCH,
-        }
-
-    @staticmethod
-    def _weight(
-        parts: Decomposition,
-        com: NDArray[np.float64],
-        inertia: NDArray[np.float64],
-        positions: NDArray[np.float64],
-        normals: NDArray[np.float64],
-        settings: SimSettings,
-        mu: float,
-        radius: float,
-    ) -> dict[str, Any]:
-        """Weight m g along the six force axes: gravity off, the weight applied as an external force."""
-        scene = build_scene(parts.parts, com, inertia, positions, normals, settings, mu, radius, gravity=False)
-        settled = settle(scene, settings)
-        loads, labels = _axis_loads(settings.object_mass * GRAVITY)
-        passed = hold_trials(
-            scene, settled, loads, WEIGHT_TEST_DURATION, settings.move_threshold, settings.rotation_threshold, settings
-        )
-        return {
-            "axes": labels,
-            "passed": passed.tolist(),
-            "success": bool(passed.all()),
-            "load": settings.object_mass * GRAVITY,
-        }
 
 
 def object_diagonal(mesh: trimesh.Trimesh) -> float:
@@ -294,6 +148,12 @@ def object_diagonal(mesh: trimesh.Trimesh) -> float:
 def tip_radius(mesh: trimesh.Trimesh, settings: SimSettings) -> float:
     """The simulated fingertip radius [m]: ``settings.tip_radius``, else the ratio x the object's diagonal."""
     return settings.tip_radius or default_tip_radius(mesh, settings.tip_radius_ratio)
+
+
+def _decomposition_meta(first: Decomposition, ladder: DecompositionLadder) -> dict[str, Any]:
+    """The coarsest decomposition's metadata, plus that of each finer level some grasp needed."""
+    finer = [dict(parts.meta) for threshold, parts in sorted(ladder.used.items(), reverse=True) if parts is not first]
+    return {**dict(first.meta), "refined": finer}
 
 
 def _unreachable_contacts(
@@ -326,40 +186,21 @@ def _unreachable(
         f"unreachable contact: {where}: a fingertip of radius {radius:.4g} m touching there cuts the object; "
         f"re-plan with --tip-radius {radius:.4g} (the default), or evaluate with a smaller --tip-radius"
     )
-    result = _failed(contacts, grasp, label, reason, "")
+    result = failed_result(contacts, grasp, label, reason, "")
     gates = {"valid": False, "reachable": False, "tip_radius": radius}
     return dataclasses.replace(result, gates=gates, unreachable=fingers)
 
 
-def _failed(contacts: ContactSet, grasp: tuple[int, ...], label: str, error: str, trace: str) -> GraspSimResult:
-    empty = np.zeros(0)
-    q1 = q1_certificate(contacts.subset_wrenches(np.asarray(grasp, dtype=np.intp))).q1
-    return GraspSimResult(
-        grasp,
-        label,
-        q1,
-        np.zeros((0, 6)),
-        (),
-        empty,
-        empty,
-        np.zeros(0, dtype=bool),
-        empty,
-        {"valid": False, "traceback": trace},
-        empty,
-        empty,
-        {},
-        error,
-    )
-
-
-def _set_level(results: Sequence[GraspSimResult], settings: SimSettings) -> dict[str, Any]:
+def _set_level(results: Sequence[GraspSimResult], settings: SimSettings, diagonal: float) -> dict[str, Any]:
     valid = [r for r in results if r.valid and np.all(np.isfinite(r.measured)) and len(r.measured)]
+    simulated = [r for r in results if r.error is None]
     fidelities = [r.median_fidelity for r in valid if math.isfinite(r.median_fidelity)]
     metrics: dict[str, Any] = {
         "n_simulated": len(results),
         "n_valid": len(valid),
         "n_errors": sum(r.error is not None for r in results),
         "n_unreachable": sum(bool(r.unreachable) for r in results),
+        "n_outside_collision_tolerance": sum(r.collision.get("within_tolerance") is False for r in results),
         "holding_load": settings.holding_load,
     }
     if valid:
@@ -370,6 +211,13 @@ def _set_level(results: Sequence[GraspSimResult], settings: SimSettings) -> dict
             )
         )
     metrics["median_fidelity"] = float(np.median(fidelities)) if fidelities else None
+    depths = [float(r.gates["initial_penetration"]) for r in simulated if "initial_penetration" in r.gates]
+    metrics["max_initial_penetration"] = max(depths) if depths else None
+    metrics["max_initial_penetration_ratio"] = max(depths) / diagonal if depths else None
+    changes = [r.realized["q1_change"] for r in simulated if r.realized.get("q1_change") is not None]
+    metrics["median_q1_change"] = float(np.median(changes)) if changes else None
+    offsets = [o for r in simulated for o in r.realized.get("offsets", [])]
+    metrics["median_realized_offset_ratio"] = float(np.median(offsets)) / diagonal if offsets else None
     return metrics
 
 

@@ -1,9 +1,16 @@
-"""Simulation results and their versioned JSON form (schema ``ogcp.sim/1``), written and read here.
+"""Simulation results and their versioned JSON form (schema ``ogcp.sim/2``), written and read here.
 
 :class:`SimResult` and :class:`GraspSimResult` build the record; :class:`SimRecord` and
 :class:`SimGraspRecord` read it back (a suite's ``results.jsonl``, ``ogcp evaluate -o``), so
 no other module spells its keys. Reading is lenient: a key that is missing or of the wrong
 type reads as None, an empty value or NaN, so partial and hand-written records still read.
+
+``ogcp.sim/2`` differs from ``ogcp.sim/1`` in one meaning: the tips start on the simulated
+collision surface, so ``predicted`` (and ``fidelity``, measured against it) is the analytic
+limit of the *realized* contacts; the planned contacts' prediction is ``predicted_planned``.
+Added: ``realized`` (per finger point, normal, offset; realized Q1 and its change) and
+``collision`` (the collision surface's offset from the mesh at each contact). In a
+``/1`` record the tips started at the planned contacts, so ``predicted`` there is both.
 """
 
 from __future__ import annotations
@@ -15,7 +22,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-SIM_SCHEMA = "ogcp.sim/1"
+SIM_SCHEMA = "ogcp.sim/2"
+#: The schemas :class:`SimRecord` reads.
+SIM_SCHEMAS = ("ogcp.sim/1", SIM_SCHEMA)
 
 
 def _json(value: Any) -> Any:
@@ -45,7 +54,8 @@ class GraspSimResult:
         q1: Ferrari-Canny Q1 of the grasp [N].
         directions: Disturbance directions (scaled wrench space), shape (D, 6).
         direction_labels: Their labels, length D.
-        predicted: Analytic resistance of the same actuation model, shape (D,) [N].
+        predicted: Analytic resistance of the same actuation model at the realized contacts,
+            shape (D,) [N].
         measured: Load at which the object moved beyond the thresholds, shape (D,) [N]; for
             censored directions the ramp's final load (a lower bound); NaN when not simulated.
         censored: Directions where the object never moved before the ramp ended, shape (D,).
@@ -60,6 +70,13 @@ class GraspSimResult:
             cannot touch without cutting the object; such a grasp is not simulated.
         invalid_reasons: Each failed validity gate in JSON form (gate, finger, value, limit,
             unit, message; see :mod:`sim_eval.gates`); empty for a valid grasp.
+        predicted_planned: Analytic resistance at the planned contacts, shape (D,) [N].
+        realized: The contacts the tips start on (``points``, ``normals``, ``offsets`` [m] from
+            the plan, ``normal_angles`` [deg], ``travel`` [m]) and their ``q1`` and ``q1_change``
+            (relative to the planned Q1); empty when not simulated.
+        collision: The decomposition the grasp ran on (``threshold``, ``hull_count``) and the
+            collision surface's ``offsets`` [m] from the mesh along each contact normal,
+            ``tolerance``, ``within_tolerance``, ``tried`` and a ``note`` when it was not met.
     """
 
     grasp: tuple[int, ...]
@@ -78,6 +95,9 @@ class GraspSimResult:
     error: str | None = None
     unreachable: tuple[int, ...] = ()
     invalid_reasons: tuple[dict[str, Any], ...] = ()
+    predicted_planned: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
+    realized: dict[str, Any] = field(default_factory=dict)
+    collision: dict[str, Any] = field(default_factory=dict)
 
     @property
     def valid(self) -> bool:
@@ -126,6 +146,9 @@ class GraspSimResult:
                 "hold_tests": self.hold_tests,
                 "unreachable": list(self.unreachable),
                 "invalid_reasons": list(self.invalid_reasons),
+                "predicted_planned": self.predicted_planned,
+                "realized": self.realized,
+                "collision": self.collision,
             }
         )
 
@@ -153,7 +176,7 @@ class SimResult:
     provenance: dict[str, Any]
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON form, schema ``ogcp.sim/1``."""
+        """JSON form, schema ``ogcp.sim/2``."""
         return _json(
             {
                 "schema": SIM_SCHEMA,
@@ -189,7 +212,7 @@ def _mapping(value: Any) -> dict[str, Any]:
 
 @dataclass(frozen=True, eq=False)
 class SimGraspRecord:
-    """One grasp of an ``ogcp.sim/1`` record, as read back; see :class:`GraspSimResult`.
+    """One grasp of an ``ogcp.sim/1`` or ``/2`` record, as read back; see :class:`GraspSimResult`.
 
     Attributes:
         label: Where the grasp came from (``"None"`` when the record has no label).
@@ -214,6 +237,10 @@ class SimGraspRecord:
             made before this key).
         invalid_reasons: One line per failed validity gate: which finger, by how much, and
             what to change (empty for valid grasps and in records made before this key).
+        predicted_planned: Analytic resistance at the planned contacts, shape (D,) [N]; in a
+            ``/1`` record the tips started there, so it is ``predicted``.
+        realized: Realized contacts and Q1 (empty in ``/1`` records).
+        collision: Collision-surface offsets at the contacts (empty in ``/1`` records).
     """
 
     label: str
@@ -236,10 +263,23 @@ class SimGraspRecord:
     hold_tests: dict[str, Any]
     unreachable: tuple[int, ...] = ()
     invalid_reasons: tuple[str, ...] = ()
+    predicted_planned: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
+    realized: dict[str, Any] = field(default_factory=dict)
+    collision: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def q1_realized(self) -> float | None:
+        """Q1 of the realized contacts [N] (None when not recorded)."""
+        return _number(self.realized.get("q1"))
+
+    @property
+    def q1_change(self) -> float | None:
+        """Relative change of Q1 from the planned to the realized contacts (None when not recorded)."""
+        return _number(self.realized.get("q1_change"))
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> SimGraspRecord:
-        """Read one entry of an ``ogcp.sim/1`` record's ``grasps`` list (never raises for missing keys)."""
+        """Read one entry of a record's ``grasps`` list (never raises for missing keys)."""
         grasp, labels, censored = data.get("grasp"), data.get("directions"), data.get("censored")
         valid, error, unreachable = data.get("valid"), data.get("error"), data.get("unreachable")
         try:
@@ -269,12 +309,15 @@ class SimGraspRecord:
             if isinstance(unreachable, list)
             else (),
             invalid_reasons=_messages(data.get("invalid_reasons")),
+            predicted_planned=_floats(data.get("predicted_planned", data.get("predicted"))),
+            realized=_mapping(data.get("realized")),
+            collision=_mapping(data.get("collision")),
         )
 
 
 @dataclass(frozen=True, eq=False)
 class SimRecord:
-    """An ``ogcp.sim/1`` record, as read back; see :class:`SimResult`.
+    """An ``ogcp.sim/1`` or ``ogcp.sim/2`` record, as read back; see :class:`SimResult`.
 
     Attributes:
         schema: The record's ``schema`` (None when absent; not checked, so that partial
@@ -299,7 +342,7 @@ class SimRecord:
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> SimRecord:
-        """Read an ``ogcp.sim/1`` record (never raises for missing keys)."""
+        """Read an ``ogcp.sim/1`` or ``/2`` record (never raises for missing keys)."""
         grasps = data.get("grasps")
         schema = data.get("schema")
         return cls(

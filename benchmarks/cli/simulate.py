@@ -100,8 +100,8 @@ def register(commands: Any) -> None:
         metavar="PNG",
         help="also save a picture of the best grasp after settling (needs MUJOCO_GL=egl/osmesa)",
     )
-    evaluate.add_argument("--json", action="store_true", help="print the ogcp.sim/1 record instead of a table")
-    evaluate.add_argument("-o", "--output", type=Path, default=None, help="also write the ogcp.sim/1 record here")
+    evaluate.add_argument("--json", action="store_true", help="print the ogcp.sim/2 record instead of a table")
+    evaluate.add_argument("-o", "--output", type=Path, default=None, help="also write the ogcp.sim/2 record here")
     evaluate.set_defaults(handler=run_evaluate)
 
     decompose = commands.add_parser("decompose", help="fill the convex-decomposition cache for an object")
@@ -148,8 +148,35 @@ def _fmt(value: float | None, digits: int = 3) -> str:
     return "-" if value is None or not math.isfinite(value) else f"{value:.{digits}f}"
 
 
+def _millimetres(values: Any) -> str:
+    return "/".join("-" if v is None else f"{1e3 * v:.2f}" for v in values)
+
+
+def _realized_lines(grasp: Any) -> list[str]:
+    """Where the tips really started and how far the collision surface is from the mesh (sim/2 records)."""
+    lines = []
+    realized, collision = grasp.realized, grasp.collision
+    if realized:
+        change = grasp.q1_change
+        lines.append(
+            f"  realized contacts: {_millimetres(realized.get('offsets', []))} mm from the plan, normals "
+            f"{'/'.join(f'{a:.1f}' for a in realized.get('normal_angles', []))} deg off; Q1 "
+            f"{_fmt(grasp.q1, 4)} -> {_fmt(grasp.q1_realized, 4)} N"
+            + ("" if change is None else f" ({100 * change:+.1f} %)")
+        )
+    if collision:
+        lines.append(
+            f"  collision surface: {_millimetres(collision.get('offsets', []))} mm from the mesh along the normals "
+            f"(tolerance {_fmt(1e3 * collision.get('tolerance', math.nan), 2)} mm, CoACD threshold "
+            f"{collision.get('threshold')})"
+        )
+        if collision.get("note"):
+            lines.append(f"  note: {collision['note']}")
+    return lines
+
+
 def sim_summary(record: dict[str, Any]) -> str:
-    """Human-readable table of an ``ogcp.sim/1`` record."""
+    """Human-readable table of an ``ogcp.sim/1`` or ``/2`` record."""
     from sim_eval.result import SimRecord
 
     sim = SimRecord.from_dict(record)
@@ -166,6 +193,7 @@ def sim_summary(record: dict[str, Any]) -> str:
             f"tips in contact {gates['tips_in_contact']}, creep {gates['creep'] * 1e6:.2f} um)"
         )
         lines.extend(f"  invalid: {reason}" for reason in g.invalid_reasons)
+        lines.extend(_realized_lines(g))
         for name, test in g.hold_tests.items():
             lines.append(
                 f"  {name} test: {'pass' if test['success'] else 'FAIL'} {dict(zip(test['axes'], test['passed']))}"
@@ -185,6 +213,7 @@ def sim_summary(record: dict[str, Any]) -> str:
     lines.append(
         f"\nset: {m['n_valid']} valid of {m['n_simulated']}{unreachable}, "
         f"median fidelity {_fmt(m.get('median_fidelity'))}"
+        + ("" if m.get("median_q1_change") is None else f", median Q1 change {100 * m['median_q1_change']:+.1f} %")
     )
     if "q1_vs_measured" in m:
         q, p = m["q1_vs_measured"], m["predicted_vs_measured"]

@@ -5,12 +5,23 @@ object it simulates a set of grasps spanning the quality range: the A* optimum, 
 seeded random sample ("top"), random force-closure grasps and HFTS runs; then writes
 ``sim_study.json`` and ``sim_study.md`` with the set-level correlations, and prints the
 throughput of ``mujoco.rollout`` against a serial ``mj_step`` loop measured in the same run.
+
+The second table is about generalisation: per object and size (``--diagonals``), with the
+default (reach-aware) contacts, the share of valid grasps (all, and A* with HFTS), the deepest
+initial penetration, the median fidelity, the median planned-to-realized Q1 change, the
+collision surface's offset from the mesh at the contacts, and the decomposition's parts and
+time. For meshes the project was never tuned on::
+
+    ogcp assets fetch all
+    python -m benchmarks.studies.sim_study --objects bunny homer plane cow bone cheetah dragon dog \
+        --diagonals 0.05 0.2 2 --top 0 --random-fc 0 --hfts-runs 8 --rate-grasps 0 --no-throughput
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import time
 from pathlib import Path
@@ -22,12 +33,13 @@ from planner import GraspPlanner, resolve_object, sample_contacts
 from planner.baselines.hfts import HFTS
 from planner.grasp.contact_set import ContactSet
 from planner.grasp.quality import q1
+from planner.grasp.reach import default_tip_radius
 from planner.infra.atomic import write_json_atomic
 from planner.infra.provenance import provenance
 from sim_eval.body import object_inertia
 from sim_eval.decomposition.decompose import decompose
 from sim_eval.directions import direction_set
-from sim_eval.evaluate import GraspEvaluator
+from sim_eval.evaluate import GraspEvaluator, object_diagonal
 from sim_eval.predict import predicted_resistance
 from sim_eval.protocol import ramp_trials, serial_trials, settle
 from sim_eval.result import SimRecord
@@ -95,23 +107,26 @@ def throughput(contacts: ContactSet, mesh: Any, grasp: tuple[int, ...], settings
 
 
 def study_object(
-    name: str, n: int, m: int, seed: int, settings: SimSettings, args: argparse.Namespace
+    name: str, n: int, m: int, seed: int, settings: SimSettings, args: argparse.Namespace, diagonal: float | None = None
 ) -> dict[str, Any]:
-    mesh, source = resolve_object(name)
-    contacts = sample_contacts(mesh, n, seed, source=source)
+    mesh, source = resolve_object(name, diagonal)
+    contacts = sample_contacts(mesh, n, seed, source=source, tip_radius=default_tip_radius(mesh))
     grasps, labels = grasp_pool(contacts, m, seed, args.top, args.random_fc, args.hfts_runs)
     evaluator = GraspEvaluator(settings, progress=True)
     result = evaluator.evaluate(mesh, contacts, grasps, labels)
-    slow = GraspEvaluator(settings.with_updates(ramp_time=2 * settings.ramp_time)).evaluate(
-        mesh, contacts, grasps[: args.rate_grasps], labels[: args.rate_grasps]
-    )
     changes = []
-    for fast, half in zip(result.grasps, slow.grasps, strict=False):
-        ok = ~fast.censored & ~half.censored & np.isfinite(fast.measured) & np.isfinite(half.measured)
-        changes.extend(np.abs(half.measured[ok] / fast.measured[ok] - 1).tolist())
+    slow_grasps = 0
+    if args.rate_grasps:
+        slow = GraspEvaluator(settings.with_updates(ramp_time=2 * settings.ramp_time)).evaluate(
+            mesh, contacts, grasps[: args.rate_grasps], labels[: args.rate_grasps]
+        )
+        slow_grasps = len(slow.grasps)
+        for fast, half in zip(result.grasps, slow.grasps, strict=False):
+            ok = ~fast.censored & ~half.censored & np.isfinite(fast.measured) & np.isfinite(half.measured)
+            changes.extend(np.abs(half.measured[ok] / fast.measured[ok] - 1).tolist())
     record = SimRecord.from_dict(result.to_dict())
     rate = {
-        "grasps": len(slow.grasps),
+        "grasps": slow_grasps,
         "directions": len(changes),
         "median_change": float(np.median(changes)) if changes else None,
         "p90_change": float(np.percentile(changes, 90)) if changes else None,
@@ -119,6 +134,8 @@ def study_object(
     }
     summary = {
         "object": name,
+        "diagonal": object_diagonal(mesh),
+        "generalisation": generalisation(record, labels),
         "contacts": n,
         "grasps": len(grasps),
         "labels": labels,
@@ -133,6 +150,10 @@ def study_object(
                 "predicted_min": g.predicted_min,
                 "measured_min": g.measured_min,
                 "median_fidelity": g.median_fidelity,
+                "q1_change": g.q1_change,
+                "collision_offsets": g.collision.get("offsets"),
+                "invalid_reasons": list(g.invalid_reasons),
+                "error": g.error,
             }
             for g in record.grasps
         ],
@@ -141,6 +162,58 @@ def study_object(
     if args.throughput:
         summary["throughput"] = throughput(contacts, mesh, grasps[0], settings)
     return summary
+
+
+def generalisation(record: SimRecord, labels: list[str]) -> dict[str, Any]:
+    """Valid share, penetration, fidelity, Q1 change and collision-surface offsets of one object's grasps."""
+    diagonal = float(record.settings.get("object_diagonal") or math.nan)
+    planned = [g for g, label in zip(record.grasps, labels, strict=True) if label in ("astar", "hfts")]
+    offsets = [abs(o) for g in record.grasps for o in g.collision.get("offsets", []) if o is not None]
+    within = [g.collision["within_tolerance"] for g in record.grasps if "within_tolerance" in g.collision]
+    decomposition = record.decomposition
+    levels = [decomposition, *decomposition.get("refined", [])]
+    m = record.set_metrics
+    return {
+        "valid": sum(bool(g.valid) for g in record.grasps) / max(1, len(record.grasps)),
+        "valid_astar_hfts": sum(bool(g.valid) for g in planned) / max(1, len(planned)),
+        "max_penetration_ratio": m.get("max_initial_penetration_ratio"),
+        "median_fidelity": m.get("median_fidelity"),
+        "median_q1_change": m.get("median_q1_change"),
+        "median_abs_q1_change": _median([abs(g.q1_change) for g in record.grasps if g.q1_change is not None]),
+        "median_offset_ratio": _median(offsets) / diagonal if offsets else None,
+        "max_offset_ratio": max(offsets) / diagonal if offsets else None,
+        "within_tolerance": sum(within) / len(within) if within else None,
+        "hull_counts": [level.get("hull_count") for level in levels],
+        "decomposition_seconds": sum(float(level.get("compute_seconds") or 0.0) for level in levels),
+    }
+
+
+def _median(values: list[float]) -> float | None:
+    return float(np.median(values)) if values else None
+
+
+def generalisation_markdown(rows: list[dict[str, Any]]) -> str:
+    """The generalisation table: one row per object and size."""
+
+    def pct(v: Any, digits: int = 0) -> str:
+        return "-" if v is None else f"{100 * v:.{digits}f} %"
+
+    header = (
+        "| object | diagonal [m] | grasps | valid | valid A*+HFTS | max penetration / diag | median fidelity | "
+        "median Q1 change | median / max offset / diag | within tolerance | parts | decomposition [s] |"
+    )
+    lines = [header, "|" + "---|" * 12]
+    for r in rows:
+        g = r["generalisation"]
+        fid = "-" if g["median_fidelity"] is None else f"{g['median_fidelity']:.3f}"
+        lines.append(
+            f"| {r['object']} | {r['diagonal']:.3g} | {r['grasps']} | {pct(g['valid'])} | "
+            f"{pct(g['valid_astar_hfts'])} | {pct(g['max_penetration_ratio'], 3)} | {fid} | "
+            f"{pct(g['median_q1_change'], 1)} | {pct(g['median_offset_ratio'], 3)} / {pct(g['max_offset_ratio'], 2)} | "
+            f"{pct(g['within_tolerance'])} | {'/'.join(str(c) for c in g['hull_counts'])} | "
+            f"{g['decomposition_seconds']:.0f} |"
+        )
+    return "\n".join(lines) + "\n"
 
 
 def markdown(rows: list[dict[str, Any]]) -> str:
@@ -177,21 +250,25 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--directions", type=int, default=64)
     parser.add_argument("--holding-load", type=float, default=3.0)
     parser.add_argument("--no-throughput", dest="throughput", action="store_false")
+    parser.add_argument(
+        "--diagonals", type=float, nargs="+", default=None, help="sizes [m] to scale each object to (default: its own)"
+    )
     parser.add_argument("--out", type=Path, default=Path("results/sim_study"))
     args = parser.parse_args(argv)
     settings = SimSettings(directions=args.directions, holding_load=args.holding_load)
     rows = []
     for name in args.objects:
-        rows.append(study_object(name, args.contacts, args.fingers, args.seed, settings, args))
-        print(markdown(rows[-1:]), flush=True)
-        if "throughput" in rows[-1]:
-            print("throughput:", json.dumps(rows[-1]["throughput"]), flush=True)
+        for diagonal in args.diagonals or [None]:
+            rows.append(study_object(name, args.contacts, args.fingers, args.seed, settings, args, diagonal))
+            print(markdown(rows[-1:]), generalisation_markdown(rows[-1:]), sep="\n", flush=True)
+            if "throughput" in rows[-1]:
+                print("throughput:", json.dumps(rows[-1]["throughput"]), flush=True)
     args.out.mkdir(parents=True, exist_ok=True)
     write_json_atomic(
         args.out / "sim_study.json", {"rows": rows, "settings": settings.to_dict(), "provenance": provenance()}
     )
-    (args.out / "sim_study.md").write_text(markdown(rows))
-    print(markdown(rows))
+    (args.out / "sim_study.md").write_text(markdown(rows) + "\n" + generalisation_markdown(rows))
+    print(markdown(rows), generalisation_markdown(rows), sep="\n")
     return 0
 
 

@@ -118,6 +118,27 @@ def triangle_distances(points: NDArray[np.float64], triangles: NDArray[np.float6
     return _point_triangle(p, a, b, c, nearest=False)[0]
 
 
+def nearest_on_triangles(
+    points: NDArray[np.float64], triangles: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Nearest point of a small triangle set to each query point (all pairs, exact).
+
+    Args:
+        points: Query points, shape (n, 3) [m].
+        triangles: Triangle corners, shape (f, 3, 3) [m], f >= 1.
+
+    Returns:
+        ``(distance (n,) [m], nearest point (n, 3) [m])``.
+    """
+    p = points[:, None, :]
+    a, b, c = (triangles[None, :, i, :] for i in range(3))
+    distance, point, _ = _point_triangle(p, a, b, c, nearest=True)
+    assert point is not None
+    best = np.argmin(distance, axis=1)
+    rows = np.arange(len(points))
+    return distance[rows, best], point[rows, best]
+
+
 @dataclass(frozen=True, eq=False)
 class Nearest:
     """Nearest surface points of query points.

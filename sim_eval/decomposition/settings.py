@@ -29,6 +29,10 @@ _INT_RANGES = {
 }
 
 
+#: Settings that never change the parts of one CoACD run.
+_NOT_IN_KEY = ("timeout_s", "contact_tolerance", "refine_thresholds")
+
+
 def _number(value: object, integral: bool) -> bool:
     kind = numbers.Integral if integral else numbers.Real
     return isinstance(value, kind) and not isinstance(value, bool)
@@ -55,6 +59,11 @@ class DecompositionSettings:
         max_ch_vertex: Vertex limit per part when ``decimate`` is on.
         seed: CoACD's random seed (fixed, so results repeat).
         timeout_s: Wall-clock limit of one CoACD run [s]; not part of the cache key.
+        contact_tolerance: Largest distance between the mesh and the collision surface along a
+            contact's normal that a grasp accepts, as a fraction of the object's bounding-box
+            diagonal; beyond it the grasp is simulated on a finer decomposition.
+        refine_thresholds: The finer CoACD thresholds tried in turn (each below ``threshold``
+            counts; empty: never refine). Neither refinement field is part of the cache key.
     """
 
     method: str = "coacd"
@@ -71,6 +80,8 @@ class DecompositionSettings:
     max_ch_vertex: int = 256
     seed: int = 0
     timeout_s: float = 300.0
+    contact_tolerance: float = 0.0025
+    refine_thresholds: tuple[float, ...] = (0.02,)
 
     def __post_init__(self) -> None:
         if self.method not in METHODS:
@@ -93,6 +104,18 @@ class DecompositionSettings:
             if not isinstance(getattr(self, name), bool | np.bool_):
                 raise OgcpError(f"decomposition {name} must be true or false, got {getattr(self, name)!r}")
             object.__setattr__(self, name, bool(getattr(self, name)))
+        if not (_number(self.contact_tolerance, False) and 0 < self.contact_tolerance <= 0.1):
+            raise OgcpError(
+                f"contact_tolerance must be a fraction of the diagonal above 0 and at most 0.1, "
+                f"got {self.contact_tolerance!r}"
+            )
+        thresholds = self.refine_thresholds
+        if not (
+            isinstance(thresholds, (tuple, list)) and all(_number(t, False) and 0.01 <= t <= 1.0 for t in thresholds)
+        ):
+            raise OgcpError(f"refine_thresholds must be a list of CoACD thresholds from 0.01 to 1, got {thresholds!r}")
+        object.__setattr__(self, "refine_thresholds", tuple(sorted({float(t) for t in thresholds}, reverse=True)))
+        object.__setattr__(self, "contact_tolerance", float(self.contact_tolerance))
         object.__setattr__(self, "max_convex_hull", int(self.max_convex_hull))
         object.__setattr__(self, "threshold", float(self.threshold))
         object.__setattr__(self, "timeout_s", float(self.timeout_s))
@@ -108,10 +131,19 @@ class DecompositionSettings:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON form: every field."""
-        return asdict(self)
+        data = asdict(self)
+        data["refine_thresholds"] = list(self.refine_thresholds)
+        return data
+
+    @property
+    def ladder(self) -> tuple[float, ...]:
+        """The CoACD thresholds a grasp may be simulated with, coarse to fine (one for the hull)."""
+        if self.method == "convex_hull":
+            return (self.threshold,)
+        return (self.threshold, *(t for t in self.refine_thresholds if t < self.threshold))
 
     def key_dict(self) -> dict[str, Any]:
         """The fields that determine the parts: the hull ignores CoACD's; the timeout never counts."""
         if self.method == "convex_hull":
             return {"method": self.method}
-        return {k: v for k, v in self.to_dict().items() if k != "timeout_s"}
+        return {k: v for k, v in self.to_dict().items() if k not in _NOT_IN_KEY}

@@ -123,7 +123,7 @@ def test_force_closure_box_grasp_matches_its_prediction(box_grasp_result):
     # torque, by the restoring moment finite tips exert as the object turns towards 2 degrees.
     assert np.all(best.measured[ok] <= best.predicted[ok] * 1.12)
     record = box_grasp_result.to_dict()
-    assert record["schema"] == "ogcp.sim/1" and record["grasps"][0]["median_fidelity"] == pytest.approx(
+    assert record["schema"] == "ogcp.sim/2" and record["grasps"][0]["median_fidelity"] == pytest.approx(
         best.median_fidelity
     )
     json.dumps(record, allow_nan=False)  # valid JSON: NaN written as null

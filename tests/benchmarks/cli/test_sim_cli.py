@@ -41,7 +41,7 @@ def test_evaluate_json_is_the_sim_schema(plan_file, tmp_path):
     assert status == 0
     record = json.loads(out)
     assert record == json.loads(target.read_text())
-    assert record["schema"] == "ogcp.sim/1"
+    assert record["schema"] == "ogcp.sim/2"
     grasp = record["grasps"][0]
     assert len(grasp["measured"]) == len(grasp["predicted"]) == 12 + 2 + 1
     assert "median_fidelity" in grasp and record["settings"]["directions"] == 2

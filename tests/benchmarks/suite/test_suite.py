@@ -231,7 +231,7 @@ BAD_SUITES = [
     ),
     (
         "schema_version = 1\nobjects = ['boxx']\n[[methods]]\nmethod = 'astar'",
-        "objects[0] object 'boxx'; valid choices: <path to a mesh file>, amphora, box, bunny",
+        "objects[0] object 'boxx'; valid choices: <path to a mesh file>, amphora, bone, box, bunny",
     ),
     (
         "schema_version = 1\nobjects = ['box']\n[[methods]]\nmethod = 'astar'\n[simulation]\nenabled = true\nF_max = 1",

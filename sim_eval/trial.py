@@ -1,0 +1,259 @@
+"""One grasp's simulated test: tips placed on the collision surface, preload, gates, ramps, hold tests.
+
+The tips start where they touch the parts actually simulated (:func:`~sim_eval.collision.place_tips`),
+never inside them. What they touch there are the *realized* contacts: the prediction the
+measurement is compared with, the ramp's targets and Q1's weakest direction all come from them,
+and the planned contacts' Q1 and prediction are reported next to them, so that the share of the
+analytic quality that survives contact with the geometry is a number in the result.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from planner.grasp.contact_set import ContactSet
+from planner.grasp.quality import Q1Certificate, q1_certificate
+from sim_eval.collision import TipPlacement, place_tips
+from sim_eval.collision_fit import ContactFit
+from sim_eval.directions import direction_set
+from sim_eval.gates import gate_failures
+from sim_eval.metrics import fidelity
+from sim_eval.predict import predicted_resistance
+from sim_eval.protocol import Settled, hold_trials, ramp_trials, settle
+from sim_eval.result import GraspSimResult
+from sim_eval.scene import GRAVITY, GraspScene, build_scene
+from sim_eval.settings import SimSettings
+
+DEXGRASPBENCH = {"load_per_kg": 10.0, "duration": 2.0, "move_limit": 0.05, "rotation_limit": 15.0, "mu": 0.6}
+WEIGHT_TEST_DURATION = 2.0  # [s]
+FIDELITY_FLOOR = 1e-3  # predictions below this fraction of F_max have no fidelity
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class ObjectBody:
+    """What every grasp on one object shares.
+
+    Attributes:
+        com: Centre of mass, shape (3,) [m].
+        inertia: Inertia about the COM, shape (3, 3) [kg·m²].
+        tip_radius: Fingertip radius [m].
+        diagonal: Bounding-box diagonal [m].
+    """
+
+    com: NDArray[np.float64]
+    inertia: NDArray[np.float64]
+    tip_radius: float
+    diagonal: float
+
+
+def _axis_loads(magnitude: float) -> tuple[NDArray[np.float64], list[str]]:
+    loads = np.zeros((6, 6))
+    labels = []
+    for k, (axis, sign) in enumerate((a, s) for a in range(3) for s in (1.0, -1.0)):
+        loads[k, axis] = sign * magnitude
+        labels.append(f"{'+' if sign > 0 else '-'}{'xyz'[axis]}")
+    return loads, labels
+
+
+def realized_summary(placement: TipPlacement, q1_planned: float, q1_realized: float) -> dict[str, Any]:
+    """The ``realized`` entry of a simulated grasp: per finger point, normal and offset from the plan."""
+    change = (q1_realized - q1_planned) / q1_planned if q1_planned > 0 else None
+    return {
+        "points": placement.points.tolist(),
+        "normals": placement.normals.tolist(),
+        "offsets": placement.offsets.tolist(),
+        "normal_angles": placement.normal_angles.tolist(),
+        "travel": placement.travel.tolist(),
+        "q1": q1_realized,
+        "q1_change": change,
+    }
+
+
+def _lost_tips(placement: TipPlacement, max_inward: float) -> str:
+    fingers = ", ".join(str(f) for f in np.flatnonzero(~placement.placed))
+    return (
+        f"finger(s) {fingers}: no collision part within {max_inward * 1e3:.3g} mm beyond the planned contact "
+        f"along its normal (the decomposition lost that region of the mesh); try a smaller --threshold"
+    )
+
+
+def simulate_grasp(
+    contacts: ContactSet,
+    grasp: tuple[int, ...],
+    label: str,
+    fit: ContactFit,
+    body: ObjectBody,
+    settings: SimSettings,
+) -> GraspSimResult:
+    """Simulate one grasp on the parts of ``fit``.
+
+    Args:
+        contacts: The contact set the grasp indexes.
+        grasp: Contact indices, length m.
+        label: Where the grasp came from.
+        fit: The decomposition chosen for this grasp and its offsets at the contacts.
+        body: Mass properties, tip radius and size of the object.
+        settings: Simulation settings, lengths already scaled to the object.
+
+    Returns:
+        The grasp's result; an error result when a tip finds no collision surface.
+    """
+    idx = np.asarray(grasp, dtype=np.intp)
+    positions, normals = contacts.positions[idx], contacts.normals[idx]
+    compat = settings.protocol == "dexgraspbench"
+    mu = settings.mu if settings.mu is not None else (DEXGRASPBENCH["mu"] if compat else contacts.mu)
+    planned = q1_certificate(contacts.subset_wrenches(idx))
+    collision = {**fit.to_dict(), "note": fit.note(body.diagonal)}
+    placement = place_tips(fit.surface, positions, normals, body.tip_radius, max_inward=body.tip_radius)
+    if not placement.placed.all():
+        failed = failed_result(contacts, grasp, label, _lost_tips(placement, body.tip_radius), "")
+        return dataclasses.replace(failed, collision=collision)
+    realized = ContactSet(
+        placement.points, placement.normals, contacts.com, contacts.torque_scale, contacts.mu, contacts.cone_edges
+    )
+    achieved = q1_certificate(realized.wrenches.reshape(-1, 6))
+    weakest = _weakest(achieved, planned)
+    dirs = direction_set(settings.directions, settings.direction_seed, weakest)
+
+    def predict(at: NDArray[np.float64], inward: NDArray[np.float64]) -> NDArray[np.float64]:
+        return predicted_resistance(
+            at,
+            inward,
+            contacts.com,
+            contacts.torque_scale,
+            mu,
+            settings.prediction_cone_edges,
+            settings.max_normal_force,
+            dirs.vectors,
+        ).resistance
+
+    predicted = predict(placement.points, placement.normals)
+    args = (fit.decomposition.parts, body.com, body.inertia, placement.points, placement.normals, settings, mu)
+    scene = build_scene(*args, body.tip_radius)
+    settled = settle(scene, settings)
+    nan = np.full(len(predicted), math.nan)
+    measured, censored, fid = nan.copy(), np.zeros(len(predicted), dtype=bool), nan.copy()
+    holds: dict[str, Any] = {}
+    if not settled.gates["diverged"]:
+        if compat:
+            holds["dexgraspbench"] = _dexgraspbench(scene, settled, settings)
+        else:
+            measured, censored = _ramp(scene, settled, dirs.vectors, predicted, contacts.torque_scale, settings)
+            fid = fidelity(measured, predicted, FIDELITY_FLOOR * settings.max_normal_force)
+            fid[censored] = math.nan
+        if settings.weight_test:
+            weightless = build_scene(*args, body.tip_radius, gravity=False)
+            holds["weight"] = _weight(weightless, settings)
+    return GraspSimResult(
+        grasp,
+        label,
+        planned.q1,
+        dirs.vectors,
+        tuple(dirs.labels),
+        predicted,
+        measured,
+        censored,
+        fid,
+        dict(settled.gates),
+        settled.normal_forces,
+        fit.surface.signed_distance(positions, nearest=False)[0],
+        holds,
+        invalid_reasons=tuple(f.to_dict() for f in gate_failures(settled.gates, settled.normal_forces, settings)),
+        predicted_planned=predict(positions, normals),
+        realized=realized_summary(placement, planned.q1, achieved.q1),
+        collision=collision,
+    )
+
+
+def _weakest(achieved: Q1Certificate, planned: Q1Certificate) -> NDArray[np.float64] | None:
+    """Q1's weakest direction of the simulated grasp (of the planned one if the realized is not in closure)."""
+    if achieved.force_closure:
+        return achieved.direction
+    return planned.direction if planned.force_closure else None
+
+
+def _ramp(
+    scene: GraspScene,
+    settled: Settled,
+    directions: NDArray[np.float64],
+    predicted: NDArray[np.float64],
+    torque_scale: float,
+    settings: SimSettings,
+) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+    """Each direction's ramp reaches its prediction after ``ramp_time`` (a floor keeps ~0 ones moving)."""
+    finite = np.where(np.isfinite(predicted), predicted, 0.0)
+    floor = settings.min_ramp_fraction * max(float(finite.max()), settings.holding_load)
+    targets = np.maximum(finite, floor)
+    trials = ramp_trials(
+        scene,
+        settled,
+        directions,
+        targets / settings.ramp_time,
+        settings.ramp_extent * settings.ramp_time,
+        torque_scale,
+        settings,
+    )
+    measured = np.where(trials.diverged, math.nan, trials.failure_load)
+    return measured, ~trials.failed
+
+
+def _dexgraspbench(scene: GraspScene, settled: Settled, settings: SimSettings) -> dict[str, Any]:
+    loads, labels = _axis_loads(DEXGRASPBENCH["load_per_kg"] * settings.object_mass)
+    passed = hold_trials(
+        scene,
+        settled,
+        loads,
+        DEXGRASPBENCH["duration"],
+        DEXGRASPBENCH["move_limit"],
+        DEXGRASPBENCH["rotation_limit"],
+        settings,
+    )
+    return {
+        "axes": labels,
+        "passed": passed.tolist(),
+        "success": bool(passed.all()),
+        "load": DEXGRASPBENCH["load_per_kg"] * settings.object_mass,
+        **DEXGRASPBENCH,
+    }
+
+
+def _weight(scene: GraspScene, settings: SimSettings) -> dict[str, Any]:
+    """Weight m g along the six force axes: gravity off, the weight applied as an external force."""
+    settled = settle(scene, settings)
+    loads, labels = _axis_loads(settings.object_mass * GRAVITY)
+    passed = hold_trials(
+        scene, settled, loads, WEIGHT_TEST_DURATION, settings.move_threshold, settings.rotation_threshold, settings
+    )
+    return {
+        "axes": labels,
+        "passed": passed.tolist(),
+        "success": bool(passed.all()),
+        "load": settings.object_mass * GRAVITY,
+    }
+
+
+def failed_result(contacts: ContactSet, grasp: tuple[int, ...], label: str, error: str, trace: str) -> GraspSimResult:
+    """The result of a grasp that could not be simulated (its planned Q1 and the reason)."""
+    empty = np.zeros(0)
+    q1 = q1_certificate(contacts.subset_wrenches(np.asarray(grasp, dtype=np.intp))).q1
+    return GraspSimResult(
+        grasp,
+        label,
+        q1,
+        np.zeros((0, 6)),
+        (),
+        empty,
+        empty,
+        np.zeros(0, dtype=bool),
+        empty,
+        {"valid": False, "traceback": trace},
+        empty,
+        empty,
+        {},
+        error,
+    )
