@@ -25,7 +25,8 @@ class GateFailure:
     """One failed validity gate of a settled grasp.
 
     Attributes:
-        gate: ``penetration``, ``contact``, ``creep`` or ``diverged``.
+        gate: ``penetration``, ``contact``, ``creep`` or ``diverged``; ``force_closure`` explains
+            the others when the grasp the tips realize is not in force closure.
         finger: Position of the finger in the grasp, None for a gate of the whole grasp.
         value: What was measured (unit in ``unit``).
         limit: The gate's limit (same unit).
@@ -50,12 +51,14 @@ class GateFailure:
             what = f"{who} does not press on the object after settling ({self.value:.2g} N, needs > {self.limit:.2g} N)"
         elif self.gate == "creep":
             what = f"the object drifts {_um(self.value)} at the end of settling (limit {_um(self.limit)})"
+        elif self.gate == "force_closure":
+            what = f"the grasp the tips realize is not in force closure (Q1 {self.value:.2g} N)"
         else:
             what = "the simulation diverged while settling"
         return f"{what}: {self.advice}"
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON form (the ``invalid_reasons`` entries of ``ogcp.sim/1``)."""
+        """JSON form (the ``invalid_reasons`` entries of ``ogcp.sim/2``)."""
         return {
             "gate": self.gate,
             "finger": self.finger,
@@ -64,6 +67,15 @@ class GateFailure:
             "unit": self.unit,
             "message": self.message,
         }
+
+
+def not_in_force_closure(q1: float) -> GateFailure:
+    """Why an invalid grasp could not hold, when its realized contacts are not in force closure."""
+    advice = (
+        "no preload can hold it, so it slips or loses a finger; plan with a method that guarantees force "
+        "closure (astar, es) or with more contacts"
+    )
+    return GateFailure("force_closure", None, q1, 0.0, "N", advice)
 
 
 def gate_failures(gates: Mapping[str, Any], normal_forces: ArrayLike, settings: SimSettings) -> tuple[GateFailure, ...]:

@@ -8,7 +8,9 @@ from numpy.typing import NDArray
 
 from planner.infra.errors import OgcpError
 from sim_eval.body import object_inertia
-from sim_eval.decomposition.decompose import DecompositionSettings, decompose
+from sim_eval.collision import place_tips
+from sim_eval.collision_fit import DecompositionLadder
+from sim_eval.decomposition.decompose import DecompositionSettings
 from sim_eval.evaluate import object_diagonal, tip_radius
 from sim_eval.protocol import FULL_STATE, Settled, settle
 from sim_eval.scene import GraspScene, build_scene
@@ -73,7 +75,11 @@ def render_plan(
     width: int = 640,
     height: int = 480,
 ) -> NDArray[np.uint8]:
-    """Picture of one grasp of an ``ogcp.plan/1`` record after settling (default: the best grasp)."""
+    """Picture of one grasp of an ``ogcp.plan/1`` record after settling (default: the best grasp).
+
+    The grasp is the one ``evaluate`` simulates: on the decomposition the grasp's contacts call
+    for, with the tips started on its surface.
+    """
     from sim_eval.plan_input import plan_input
 
     plan = plan_input(record)
@@ -81,11 +87,14 @@ def render_plan(
     if not 0 <= grasp_index < len(plan.grasps):
         raise OgcpError(f"grasp index {grasp_index} outside the plan's {len(plan.grasps)} grasps")
     idx = np.asarray(plan.grasps[grasp_index], dtype=np.intp)
-    parts = decompose(plan.mesh, decomposition)
     com, inertia = object_inertia(plan.mesh, settings.object_mass)
     mu = settings.mu if settings.mu is not None else plan.contacts.mu
     radius = tip_radius(plan.mesh, settings)
-    scene = build_scene(
-        parts.parts, com, inertia, plan.contacts.positions[idx], plan.contacts.normals[idx], settings, mu, radius
+    ladder = DecompositionLadder(
+        plan.mesh, decomposition or DecompositionSettings(), object_diagonal(plan.mesh), radius
     )
+    positions, normals = plan.contacts.positions[idx], plan.contacts.normals[idx]
+    fit = ladder.fit(positions, normals)
+    placed = place_tips(fit.surface, positions, normals, radius, max_inward=radius)
+    scene = build_scene(fit.decomposition.parts, com, inertia, placed.points, placed.normals, settings, mu, radius)
     return render_grasp(scene, settle(scene, settings), width, height)

@@ -21,7 +21,7 @@ from planner.grasp.quality import Q1Certificate, q1_certificate
 from sim_eval.collision import TipPlacement, place_tips
 from sim_eval.collision_fit import ContactFit
 from sim_eval.directions import direction_set
-from sim_eval.gates import gate_failures
+from sim_eval.gates import GateFailure, gate_failures, not_in_force_closure
 from sim_eval.metrics import fidelity
 from sim_eval.predict import predicted_resistance
 from sim_eval.protocol import Settled, hold_trials, ramp_trials, settle
@@ -163,11 +163,18 @@ def simulate_grasp(
         settled.normal_forces,
         fit.surface.signed_distance(positions, nearest=False)[0],
         holds,
-        invalid_reasons=tuple(f.to_dict() for f in gate_failures(settled.gates, settled.normal_forces, settings)),
+        invalid_reasons=tuple(f.to_dict() for f in _reasons(settled, settings, achieved)),
         predicted_planned=predict(positions, normals),
         realized=realized_summary(placement, planned.q1, achieved.q1),
         collision=collision,
     )
+
+
+def _reasons(settled: Settled, settings: SimSettings, achieved: Q1Certificate) -> list[GateFailure]:
+    failures = list(gate_failures(settled.gates, settled.normal_forces, settings))
+    if failures and not achieved.force_closure:
+        failures.insert(0, not_in_force_closure(achieved.q1))
+    return failures
 
 
 def _weakest(achieved: Q1Certificate, planned: Q1Certificate) -> NDArray[np.float64] | None:

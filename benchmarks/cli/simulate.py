@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import sys
@@ -45,6 +46,22 @@ def _add_decomposition_options(parser: argparse.ArgumentParser) -> None:
         type=finite_number,
         default=_DECOMPOSITION.timeout_s,
         help=f"CoACD time limit [s] (default {_DECOMPOSITION.timeout_s:g})",
+    )
+    parser.add_argument(
+        "--refine",
+        type=finite_number,
+        nargs="*",
+        default=list(_DECOMPOSITION.refine_thresholds),
+        metavar="THRESHOLD",
+        help="finer CoACD thresholds tried in turn where the collision surface misses the mesh at a contact "
+        f"(default {' '.join(f'{t:g}' for t in _DECOMPOSITION.refine_thresholds)}; none: never refine)",
+    )
+    parser.add_argument(
+        "--contact-tolerance",
+        type=finite_number,
+        default=_DECOMPOSITION.contact_tolerance,
+        help="largest offset of the collision surface from the mesh along a contact normal, as a fraction of "
+        f"the object's diagonal (default {_DECOMPOSITION.contact_tolerance:g})",
     )
 
 
@@ -115,7 +132,13 @@ def register(commands: Any) -> None:
 def _decomposition(args: argparse.Namespace) -> Any:
     from sim_eval.decomposition.decompose import DecompositionSettings
 
-    return DecompositionSettings(method=args.decomposition, threshold=args.threshold, timeout_s=args.timeout)
+    return DecompositionSettings(
+        method=args.decomposition,
+        threshold=args.threshold,
+        timeout_s=args.timeout,
+        refine_thresholds=tuple(args.refine),
+        contact_tolerance=args.contact_tolerance,
+    )
 
 
 def _settings(args: argparse.Namespace) -> Any:
@@ -263,12 +286,16 @@ def run_decompose(args: argparse.Namespace) -> int:
     from sim_eval.decomposition.decompose import decompose
 
     mesh, _ = resolve_object(args.object, args.diagonal)
-    result = decompose(mesh, _decomposition(args), progress=sys.stderr.isatty(), name=args.object)
-    if args.json:
-        print(json.dumps({**result.meta, "cache_path": str(result.cache_path)}))
-    else:
-        print(
-            f"{args.object}: {result.hull_count} convex parts, volume ratio {result.volume_ratio}, "
-            f"{result.compute_seconds:.1f} s, cached at {result.cache_path}"
-        )
+    settings = _decomposition(args)
+    # Every level of the ladder, so that evaluate finds the finer ones cached too.
+    for threshold in settings.ladder:
+        level = dataclasses.replace(settings, threshold=threshold)
+        result = decompose(mesh, level, progress=sys.stderr.isatty(), name=args.object)
+        if args.json:
+            print(json.dumps({**result.meta, "cache_path": str(result.cache_path)}))
+        else:
+            print(
+                f"{args.object} at threshold {threshold:g}: {result.hull_count} convex parts, volume ratio "
+                f"{result.volume_ratio}, {result.compute_seconds:.1f} s, cached at {result.cache_path}"
+            )
     return 0

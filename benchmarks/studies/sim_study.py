@@ -176,6 +176,7 @@ def generalisation(record: SimRecord, labels: list[str]) -> dict[str, Any]:
     return {
         "valid": sum(bool(g.valid) for g in record.grasps) / max(1, len(record.grasps)),
         "valid_astar_hfts": sum(bool(g.valid) for g in planned) / max(1, len(planned)),
+        "valid_force_closure": _share([bool(g.valid) for g in record.grasps if (g.q1 or 0.0) > 0]),
         "max_penetration_ratio": m.get("max_initial_penetration_ratio"),
         "median_fidelity": m.get("median_fidelity"),
         "median_q1_change": m.get("median_q1_change"),
@@ -186,6 +187,10 @@ def generalisation(record: SimRecord, labels: list[str]) -> dict[str, Any]:
         "hull_counts": [level.get("hull_count") for level in levels],
         "decomposition_seconds": sum(float(level.get("compute_seconds") or 0.0) for level in levels),
     }
+
+
+def _share(flags: list[bool]) -> float | None:
+    return sum(flags) / len(flags) if flags else None
 
 
 def _median(values: list[float]) -> float | None:
@@ -199,16 +204,18 @@ def generalisation_markdown(rows: list[dict[str, Any]]) -> str:
         return "-" if v is None else f"{100 * v:.{digits}f} %"
 
     header = (
-        "| object | diagonal [m] | grasps | valid | valid A*+HFTS | max penetration / diag | median fidelity | "
-        "median Q1 change | median / max offset / diag | within tolerance | parts | decomposition [s] |"
+        "| object | diagonal [m] | grasps | valid | valid A*+HFTS | valid, Q1 > 0 | max penetration / diag | "
+        "median fidelity | median Q1 change | median / max offset / diag | within tolerance | parts | "
+        "decomposition [s] |"
     )
-    lines = [header, "|" + "---|" * 12]
+    lines = [header, "|" + "---|" * 13]
     for r in rows:
         g = r["generalisation"]
         fid = "-" if g["median_fidelity"] is None else f"{g['median_fidelity']:.3f}"
         lines.append(
             f"| {r['object']} | {r['diagonal']:.3g} | {r['grasps']} | {pct(g['valid'])} | "
-            f"{pct(g['valid_astar_hfts'])} | {pct(g['max_penetration_ratio'], 3)} | {fid} | "
+            f"{pct(g['valid_astar_hfts'])} | {pct(g['valid_force_closure'])} | {pct(g['max_penetration_ratio'], 3)} | "
+            f"{fid} | "
             f"{pct(g['median_q1_change'], 1)} | {pct(g['median_offset_ratio'], 3)} / {pct(g['max_offset_ratio'], 2)} | "
             f"{pct(g['within_tolerance'])} | {'/'.join(str(c) for c in g['hull_counts'])} | "
             f"{g['decomposition_seconds']:.0f} |"

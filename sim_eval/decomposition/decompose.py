@@ -22,6 +22,7 @@ mass properties must not come from the parts (see :func:`sim_eval.body.object_in
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import importlib.metadata
 import inspect
@@ -275,6 +276,11 @@ def decompose(
     if cached is not None:
         return cached
     manifold = is_closed_manifold(faces)
+    given = settings
+    if settings.preprocess_mode == "if_open":
+        # CoACD's own "auto" test also remeshes closed meshes it dislikes (a pinched vertex), and its
+        # voxel remesh inflates the surface by about a voxel: the parts then stand proud everywhere.
+        settings = dataclasses.replace(settings, preprocess_mode="off" if manifold else "on")
     if settings.method == "coacd":
         if settings.preprocess_mode == "off" and not manifold:
             raise OgcpError(
@@ -304,10 +310,11 @@ def decompose(
         "volume_ratio": hull_volume / mesh_volume if mesh_volume and mesh_volume > 0 else None,
         "compute_seconds": seconds,
         "preprocess_mode": settings.preprocess_mode if settings.method == "coacd" else None,
+        "preprocess_mode_given": given.preprocess_mode,
         "input_closed_manifold": manifold,
         "remeshed": _remeshed(settings, log),
         "coacd_version": coacd_version(),
-        "settings": settings.key_dict(),
+        "settings": given.key_dict(),
         "mesh_sha256": mesh_sha,
         "vertices": len(vertices),
         "faces": len(faces),

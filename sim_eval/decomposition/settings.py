@@ -14,7 +14,7 @@ from planner.infra.errors import OgcpError, choice_error
 __all__ = ["METHODS", "PREPROCESS_MODES", "DecompositionSettings"]
 
 METHODS = ("coacd", "convex_hull")
-PREPROCESS_MODES = ("auto", "on", "off")
+PREPROCESS_MODES = ("if_open", "auto", "on", "off")
 
 #: Integer settings and their ranges (None: unbounded above); CoACD rejects a preprocess
 #: resolution outside 5-1000 and takes an unsigned 32-bit seed.
@@ -47,8 +47,11 @@ class DecompositionSettings:
             the hull of the mesh: exact for convex objects, fast for tests).
         threshold: CoACD concavity threshold, 0.01-1 (smaller: more, tighter parts).
         max_convex_hull: Most parts CoACD may return; -1 = no limit.
-        preprocess_mode: ``"auto"`` (remesh only meshes failing CoACD's manifold check),
-            ``"on"`` (always remesh) or ``"off"`` (never; the mesh must be closed).
+        preprocess_mode: ``"if_open"`` (remesh only meshes that are not closed and consistently
+            oriented by ogcp's edge test), ``"auto"`` (remesh what fails CoACD's own manifold
+            check, which also rejects closed meshes with a pinched vertex), ``"on"`` (always
+            remesh) or ``"off"`` (never; the mesh must be closed). Remeshing moves the surface
+            outward by about a voxel (the diagonal / ``preprocess_resolution``).
         preprocess_resolution: Voxel resolution of the remeshing, 5-1000.
         resolution: Surface samples per part for CoACD's concavity metric.
         mcts_nodes: Children per node of CoACD's cutting-plane tree search.
@@ -69,7 +72,7 @@ class DecompositionSettings:
     method: str = "coacd"
     threshold: float = 0.05
     max_convex_hull: int = -1
-    preprocess_mode: str = "auto"
+    preprocess_mode: str = "if_open"
     preprocess_resolution: int = 50
     resolution: int = 2000
     mcts_nodes: int = 20

@@ -73,3 +73,20 @@ def test_collision_parts_standing_proud_move_the_tip_out_and_are_reported_on_tha
     assert grasp.collision["within_tolerance"] is False
     assert "finger 2" in grasp.collision["note"] and "3 mm" in grasp.collision["note"]
     assert result.set_metrics["n_outside_collision_tolerance"] == 1
+
+
+def test_a_grasp_out_of_force_closure_says_so_before_its_gates():
+    box = trimesh.creation.box([0.1, 0.08, 0.06])
+    # Three tips on one face and its neighbour: nothing pushes back along +x.
+    normals = np.array([[0.0, 0.0, -1.0], [0.0, 0.0, -1.0], [-1.0, 0.0, 0.0]])
+    positions = np.array([[0.02, 0.02, 0.03], [-0.02, -0.02, 0.03], [0.05, 0.0, 0.0]])
+    contacts = ContactSet(positions, normals, np.zeros(3), 0.1, 0.5, 8, {})
+    parts = Decomposition(((np.asarray(box.vertices), np.asarray(box.faces)),), {"hull_count": 1})
+    result = GraspEvaluator(SimSettings(directions=0, threads=1), DecompositionSettings(method="convex_hull")).evaluate(
+        box, contacts, [(0, 1, 2)], parts=parts
+    )
+    grasp = result.grasps[0]
+    assert not grasp.valid
+    first = grasp.invalid_reasons[0]
+    assert first["gate"] == "force_closure" and "not in force closure" in first["message"]
+    assert len(grasp.invalid_reasons) > 1  # the gates that failed follow

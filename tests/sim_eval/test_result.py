@@ -1,4 +1,4 @@
-"""The ``ogcp.sim/1`` record: written by SimResult, read back by SimRecord, leniently."""
+"""The ``ogcp.sim/2`` record: written by SimResult, read back by SimRecord (``/1`` too), leniently."""
 
 from __future__ import annotations
 
@@ -27,6 +27,9 @@ def _grasp(label: str, measured: list[float], error: str | None = None) -> Grasp
         surface_distance=np.array([0.0, 1e-4, 2e-4]),
         hold_tests={"weight": {"success": True, "axes": ["+z"], "passed": [True]}},
         error=error,
+        predicted_planned=np.linspace(1.1, 2.1, d),
+        realized={"points": [[0.0, 0.0, 0.0]] * 3, "offsets": [0.0, 1e-4, 0.0], "q1": 0.2, "q1_change": -0.2},
+        collision={"threshold": 0.02, "offsets": [0.0, -1e-4, None], "within_tolerance": False},
     )
 
 
@@ -53,7 +56,9 @@ def test_a_record_reads_back_what_was_written() -> None:
         assert read.valid == written.valid and read.gates == written.gates and read.hold_tests == written.hold_tests
         assert read.direction_labels == written.direction_labels
         np.testing.assert_array_equal(read.directions, written.directions)
-        for name in ("predicted", "measured", "fidelity", "normal_forces", "surface_distance"):
+        assert read.realized == written.realized and read.collision == written.collision
+        assert (read.q1_realized, read.q1_change) == (0.2, -0.2)
+        for name in ("predicted", "predicted_planned", "measured", "fidelity", "normal_forces", "surface_distance"):
             np.testing.assert_array_equal(getattr(read, name), getattr(written, name))  # NaN read back as NaN
         np.testing.assert_array_equal(read.censored, written.censored)
         for name in ("predicted_min", "median_fidelity"):
@@ -71,3 +76,13 @@ def test_partial_and_hand_written_records_read_leniently() -> None:
     assert odd.label == "None" and odd.valid is None and odd.measured_min is None
     np.testing.assert_array_equal(odd.measured, [1.0, np.nan, np.nan])
     assert SimRecord.from_dict({"grasps": "none"}).grasps == ()
+
+
+def test_a_sim_1_record_reads_with_its_tips_at_the_planned_contacts() -> None:
+    """In ``/1`` the tips started at the planned contacts: the prediction is the planned one too."""
+    old = {"schema": "ogcp.sim/1", "grasps": [{"label": "best", "predicted": [1.0, 2.0], "q1": 0.3}]}
+    record = SimRecord.from_dict(old)
+    (grasp,) = record.grasps
+    assert record.schema == "ogcp.sim/1"
+    np.testing.assert_array_equal(grasp.predicted_planned, [1.0, 2.0])
+    assert grasp.realized == {} and grasp.collision == {} and grasp.q1_realized is None and grasp.q1_change is None

@@ -31,6 +31,24 @@ def test_evaluate_prints_measured_against_predicted(plan_file):
     assert status == 0
     assert "predicted [N]" in out and "measured [N]" in out and "q1-weakest" in out
     assert "median fidelity" in out
+    # Where the tips really started, and how far the collision surface is from the mesh.
+    assert "realized contacts:" in out and "collision surface:" in out and "median Q1 change" in out
+
+
+def test_refinement_flags_reach_the_settings(plan_file):
+    from benchmarks.cli.app import build_parser
+    from benchmarks.cli.simulate import _decomposition
+
+    never = _decomposition(build_parser().parse_args(["evaluate", str(plan_file), "--refine"]))
+    assert never.refine_thresholds == () and never.ladder == (never.threshold,)
+    finer = _decomposition(
+        build_parser().parse_args(
+            ["evaluate", str(plan_file), "--refine", "0.03", "0.01", "--contact-tolerance", "0.001"]
+        )
+    )
+    assert finer.ladder == (0.05, 0.03, 0.01) and finer.contact_tolerance == 0.001
+    status, _, err = _run(["evaluate", str(plan_file), "--refine", "0.001"])
+    assert status == 2 and "refine_thresholds" in err and err.count("\n") == 1
 
 
 def test_evaluate_json_is_the_sim_schema(plan_file, tmp_path):

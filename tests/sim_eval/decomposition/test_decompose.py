@@ -58,7 +58,7 @@ def ring_decomposition(tmp_path_factory: pytest.TempPathFactory) -> tuple[Decomp
     "bad, match",
     [
         ({"method": "vhacd"}, "valid choices: coacd, convex_hull"),
-        ({"preprocess_mode": "maybe"}, "valid choices: auto, off, on"),
+        ({"preprocess_mode": "maybe"}, "valid choices: auto, if_open, off, on"),
         ({"threshold": 0.001}, "threshold"),
         ({"threshold": float("nan")}, "threshold"),
         ({"preprocess_resolution": 2000}, "preprocess_resolution"),
@@ -355,3 +355,13 @@ def test_distance_refuses_bad_input() -> None:
         surface_distance([_box_part((1, 1, 1))], np.zeros(3))
     with pytest.raises(OgcpError, match="empty"):
         surface_distance([], np.zeros((1, 3)))
+
+
+def test_if_open_remeshes_only_meshes_that_are_not_closed(tmp_path: Path) -> None:
+    closed = decompose(_ring(), DecompositionSettings(**TINY), cache=tmp_path, name="ring")
+    assert closed.meta["preprocess_mode_given"] == "if_open" and closed.meta["preprocess_mode"] == "off"
+    assert closed.meta["remeshed"] is False
+    # Not remeshed, the parts are hulls of pieces of the mesh: no vertex of theirs stands outside it.
+    assert max(float(np.abs(v).max()) for v, _ in closed.parts) <= 0.06 + 1e-9
+    opened = decompose(_open_box(), DecompositionSettings(**TINY), cache=tmp_path, name="open box")
+    assert opened.meta["preprocess_mode"] == "on" and opened.meta["remeshed"] is True
