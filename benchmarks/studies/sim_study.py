@@ -61,7 +61,7 @@ def grasp_pool(
     fc = [g for value, g in scored if value > 0]
     for k in rng.permutation(len(fc))[:random_fc]:
         found.setdefault(fc[k], "random-fc")
-    for run in HFTS(runs=hfts_runs, seed=seed).run(contacts, m).runs:
+    for run in HFTS(runs=hfts_runs, seed=seed).run(contacts, m).runs if hfts_runs else ():
         found.setdefault(tuple(run.grasp), "hfts")
     return list(found), list(found.values())
 
@@ -98,7 +98,7 @@ def throughput(contacts: ContactSet, mesh: Any, grasp: tuple[int, ...], settings
     return {
         "trials": len(dirs),
         "steps_per_trial": batched.steps,
-        "threads": settings.threads or os.cpu_count(),
+        "threads": float(settings.threads or os.cpu_count() or 1),
         "rollout_trials_per_s": len(dirs) / (t1 - t0),
         "serial_trials_per_s": len(dirs) / (t2 - t1),
         "speedup": (t2 - t1) / (t1 - t0),
@@ -181,7 +181,7 @@ def generalisation(record: SimRecord, labels: list[str]) -> dict[str, Any]:
         "median_fidelity": m.get("median_fidelity"),
         "median_q1_change": m.get("median_q1_change"),
         "median_abs_q1_change": _median([abs(g.q1_change) for g in record.grasps if g.q1_change is not None]),
-        "median_offset_ratio": _median(offsets) / diagonal if offsets else None,
+        "median_offset_ratio": float(np.median(offsets)) / diagonal if offsets else None,
         "max_offset_ratio": max(offsets) / diagonal if offsets else None,
         "within_tolerance": sum(within) / len(within) if within else None,
         "hull_counts": [level.get("hull_count") for level in levels],
