@@ -1,14 +1,12 @@
-"""The object as a rigid body for simulation: convex parts, mass properties, surface distance.
+"""The object as a rigid body for simulation: convex parts and mass properties.
 
 Mass and inertia come from the watertight mesh, never from the union of convex parts, whose
-overlaps would count some volume twice. Distances to the parts are exact
-(:class:`sim_eval.collision.CollisionSurface`).
+overlaps would count some volume twice. Distances to the parts live in :mod:`sim_eval.collision`.
 """
 
 from __future__ import annotations
 
 import warnings
-from collections.abc import Sequence
 
 import numpy as np
 import trimesh
@@ -17,7 +15,6 @@ from scipy.spatial import QhullError
 
 from planner.grasp.contact_set import NonWatertightWarning, mass_properties
 from planner.infra.errors import OgcpError
-from sim_eval.collision import CollisionSurface
 
 Part = tuple[NDArray[np.float64], NDArray[np.int64]]
 
@@ -114,28 +111,3 @@ def object_inertia(mesh: trimesh.Trimesh, mass: float = 0.1) -> tuple[NDArray[np
         )
         inertia = np.array(hull.moment_inertia, dtype=float) * (mass / float(hull.volume))
     return np.asarray(com, dtype=float), 0.5 * (inertia + inertia.T)
-
-
-def surface_distance(parts: Sequence[Part], points: ArrayLike) -> NDArray[np.float64]:
-    """Signed distance of points to the surface of the union of convex parts.
-
-    Outside every part the value is the exact distance to the union (the nearest part).
-    Inside some part it is minus the largest depth of the point in any single part; the
-    true depth in the union is at least that much (a point deep in the union may sit near
-    the boundary of each part it lies in), so negative values are bounds on the depth, not
-    exact depths. Points on the outer surface give 0.
-
-    Args:
-        parts: Convex parts, each ``(vertices (v, 3) [m], faces (f, 3))``.
-        points: Query points (e.g. planned contacts), shape (n, 3) [m].
-
-    Returns:
-        Signed distances, shape (n,) [m]: positive outside, negative inside.
-
-    Raises:
-        OgcpError: For no parts or points that are not (n, 3).
-    """
-    points = np.asarray(points, dtype=np.float64)
-    if points.ndim != 2 or points.shape[1] != 3 or not np.all(np.isfinite(points)):
-        raise OgcpError(f"query points must be finite with shape (n, 3), got {points.shape}")
-    return CollisionSurface.from_parts(parts).signed_distance(points, nearest=False)[0]

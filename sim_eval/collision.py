@@ -81,14 +81,21 @@ class CollisionSurface:
 
         Args:
             points: Query points, shape (n, 3) [m].
+            nearest: Also return the nearest points.
 
         Returns:
             ``(distance (n,) [m], nearest point (n, 3) [m] or None when not asked for)``: the
             minimum over the parts of each part's exact signed distance (positive outside
             every part); the nearest point is on the part that attains it (for points inside,
-            the projection onto its nearest facet plane).
+            the projection onto its nearest facet plane). Inside the union this bounds the
+            depth from below (a point deep in the union may lie near each part's boundary).
+
+        Raises:
+            OgcpError: For points that are not finite (n, 3).
         """
-        points = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+        points = np.asarray(points, dtype=np.float64)
+        if points.ndim != 2 or points.shape[1] != 3 or not np.all(np.isfinite(points)):
+            raise OgcpError(f"query points must be finite with shape (n, 3), got {points.shape}")
         best = np.full(len(points), np.inf)
         closest = np.zeros((len(points), 3))
         for triangles, planes in zip(self.triangles, self.planes, strict=True):

@@ -55,20 +55,25 @@ class ContactFit:
     refine_error: str | None = None
 
     @property
+    def errors(self) -> NDArray[np.float64]:
+        """``|offset|`` per contact [m], inf where no collision surface is near, shape (m,)."""
+        return np.where(np.isnan(self.offsets), np.inf, np.abs(self.offsets))
+
+    @property
     def within_tolerance(self) -> bool:
         """Whether every contact's offset is known and within the tolerance."""
-        return bool(np.all(np.abs(self.offsets) <= self.tolerance))
+        return bool(np.all(self.errors <= self.tolerance))
 
     @property
     def worst(self) -> float:
         """The largest ``|offset|`` [m] (inf when some contact has no collision surface near it)."""
-        return float(np.max(np.where(np.isnan(self.offsets), np.inf, np.abs(self.offsets))))
+        return float(self.errors.max())
 
     def note(self, diagonal: float) -> str | None:
         """One line when the tolerance was not met (None when it was)."""
         if self.within_tolerance:
             return None
-        finger = int(np.argmax(np.where(np.isnan(self.offsets), np.inf, np.abs(self.offsets))))
+        finger = int(np.argmax(self.errors))
         if math.isinf(self.worst):
             where = f"finger {finger} finds no collision surface within reach of its contact"
         else:

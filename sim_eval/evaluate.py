@@ -86,8 +86,9 @@ class GraspEvaluator:
         """
         given = self.settings or SimSettings()
         # One absolute value for everything below: the lengths scaled to this object's size.
-        scale = given.length_scale(object_diagonal(mesh))
-        settings = given.scaled(object_diagonal(mesh))
+        diagonal = object_diagonal(mesh)
+        scale = given.length_scale(diagonal)
+        settings = given.scaled(diagonal)
         start = time.perf_counter()
         chosen = [tuple(int(i) for i in g) for g in grasps]
         labels = list(labels) if labels is not None else [f"grasp-{i}" for i in range(len(chosen))]
@@ -96,7 +97,6 @@ class GraspEvaluator:
         for g in chosen:
             if len(g) < 2 or min(g) < 0 or max(g) >= len(contacts) or len(set(g)) != len(g):
                 raise OgcpError(f"grasp {list(g)} must hold >= 2 distinct indices in 0..{len(contacts) - 1}")
-        diagonal = object_diagonal(mesh)
         decomposition = self.decomposition or DecompositionSettings()
         if parts is None:
             parts = decompose(mesh, decomposition, cache=self.cache, progress=self.progress)

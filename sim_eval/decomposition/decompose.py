@@ -43,7 +43,7 @@ from scipy.spatial import ConvexHull
 
 from planner.infra.cache import cache_dir, read_entry, write_entry
 from planner.infra.errors import OgcpError
-from sim_eval.body import Part, hull_part, is_closed_manifold, object_inertia, surface_distance
+from sim_eval.body import Part, hull_part, is_closed_manifold, object_inertia
 from sim_eval.decomposition.coacd_child import run_coacd_child
 from sim_eval.decomposition.settings import DecompositionSettings
 
@@ -55,7 +55,6 @@ __all__ = [
     "decompose",
     "mesh_sha256",
     "object_inertia",  # re-exported from sim_eval.body for the evaluator
-    "surface_distance",
 ]
 
 SCHEMA = "ogcp.decomposition/1"

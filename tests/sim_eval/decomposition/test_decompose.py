@@ -19,7 +19,8 @@ from scipy.spatial.transform import Rotation
 from planner.grasp import NonWatertightWarning, mass_properties
 from planner.infra import OgcpError
 from planner.infra.cache import ENTRY_MANIFEST, CacheEntryWarning
-from sim_eval.body import hull_part, is_closed_manifold, object_inertia, surface_distance
+from sim_eval.body import hull_part, is_closed_manifold, object_inertia
+from sim_eval.collision import CollisionSurface
 from sim_eval.decomposition import Decomposition, DecompositionSettings, cache_key, decompose
 
 # Monkeypatching needs the module objects themselves (``decompose`` is also a function name).
@@ -39,6 +40,10 @@ def _ring() -> trimesh.Trimesh:
 def _open_box() -> trimesh.Trimesh:
     box = trimesh.creation.box(extents=(0.3, 0.2, 0.1))
     return trimesh.Trimesh(box.vertices, box.faces[:-1], process=False)
+
+
+def _distance(parts, points) -> np.ndarray:
+    return CollisionSurface.from_parts(parts).signed_distance(points, nearest=False)[0]
 
 
 def _volume(parts: tuple) -> float:
@@ -200,7 +205,7 @@ def test_coacd_splits_a_concave_ring_into_parts_of_its_volume(ring_decomposition
         assert (np.array(vertices) @ planes[:, :3].T + planes[:, 3]).max() < 1e-9
         assert is_closed_manifold(faces)
     # The union covers the ring: its vertices are on or inside the parts.
-    assert surface_distance(result.parts, mesh.vertices).max() < 1e-3 * 0.06
+    assert _distance(result.parts, mesh.vertices).max() < 1e-3 * 0.06
 
 
 def test_a_cache_hit_does_not_run_coacd_again(ring_decomposition: tuple, monkeypatch: pytest.MonkeyPatch) -> None:
@@ -321,7 +326,7 @@ def test_distance_to_a_box_matches_closed_forms() -> None:
     on_face = rng.uniform(-half, half, size=(50, 3))
     axis = rng.integers(0, 3, size=50)
     on_face[np.arange(50), axis] = half[axis] * rng.choice([-1.0, 1.0], size=50)
-    assert np.abs(surface_distance(parts, on_face)).max() < 1e-12
+    assert np.abs(_distance(parts, on_face)).max() < 1e-12
     queries = np.array(
         [
             [half[0] + 0.02, 0.01, -0.02],  # straight out of the +x face
@@ -332,7 +337,7 @@ def test_distance_to_a_box_matches_closed_forms() -> None:
         ]
     )
     expected = [0.02, 0.05, 0.03, -0.05, -0.01]
-    np.testing.assert_allclose(surface_distance(parts, queries), expected, atol=1e-12)
+    np.testing.assert_allclose(_distance(parts, queries), expected, atol=1e-12)
 
 
 def test_distance_to_a_union_of_overlapping_parts() -> None:
@@ -347,14 +352,14 @@ def test_distance_to_a_union_of_overlapping_parts() -> None:
         ]
     )
     expected = [0.1, 0.1, np.hypot(0.05, 0.05), -0.025, -0.03]
-    np.testing.assert_allclose(surface_distance(parts, queries), expected, atol=1e-12)
+    np.testing.assert_allclose(_distance(parts, queries), expected, atol=1e-12)
 
 
 def test_distance_refuses_bad_input() -> None:
     with pytest.raises(OgcpError, match="shape"):
-        surface_distance([_box_part((1, 1, 1))], np.zeros(3))
+        _distance([_box_part((1, 1, 1))], np.zeros(3))
     with pytest.raises(OgcpError, match="empty"):
-        surface_distance([], np.zeros((1, 3)))
+        _distance([], np.zeros((1, 3)))
 
 
 def test_if_open_remeshes_only_meshes_that_are_not_closed(tmp_path: Path) -> None:
