@@ -67,7 +67,9 @@ class SimSettings:
         integrator: MuJoCo integrator.
         cone: Friction cone type.
         impratio: Frictional-to-normal constraint impedance ratio.
-        noslip_iterations: Post-solve no-slip iterations (stop creep under sustained load).
+        noslip_iterations: Post-solve no-slip iterations (stop creep under sustained load). Two
+            hold a sphere on spheres; tips on the many faces of convex parts slid at 30-80 % of
+            the Coulomb limit (creep up to 0.8 mm/s, resistance 10-25 % low) until 30.
         solver: Constraint solver.
         solver_iterations: Maximum solver iterations per step.
         contact_solref: Contact solref (time constant [s], damping ratio).
@@ -111,7 +113,7 @@ class SimSettings:
     integrator: str = "implicitfast"
     cone: str = "elliptic"
     impratio: float = 10.0
-    noslip_iterations: int = 2
+    noslip_iterations: int = 30
     solver: str = "Newton"
     solver_iterations: int = 100
     contact_solref: tuple[float, float] = (0.004, 1.0)
