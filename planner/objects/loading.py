@@ -1,14 +1,24 @@
-"""Loading object meshes from files (units are metres; meshes are used as given)."""
+"""Loading object meshes from files (units are metres; meshes are used as given).
+
+A file is planned on only if all of it was read and it bounds a solid: trimesh parses it,
+and the checks around the parse refuse what trimesh would silently drop or misread
+(a file cut short, counts that disagree, faces pointing at missing vertices, non-finite
+coordinates, flat or open surfaces). The only changes made to a mesh are re-orientations
+with a single right answer, each announced by a :class:`MeshOrientationWarning`.
+"""
 
 from __future__ import annotations
 
 import hashlib
+import warnings
 from pathlib import Path
 
 import numpy as np
 import trimesh
 
 from planner.infra.errors import OgcpError
+from planner.objects.file_checks import check_mesh_file
+from planner.objects.repair import MeshOrientationWarning, require_solid
 
 MESH_SUFFIXES = (".obj", ".stl", ".ply", ".off", ".glb", ".gltf")
 
@@ -22,31 +32,70 @@ def file_sha256(path: Path) -> str:
     return digest.hexdigest()
 
 
-def load_mesh(path: str | Path) -> trimesh.Trimesh:
-    """Read a triangle mesh from a file trimesh understands.
+def load_mesh(path: str | Path, solid: bool = True) -> trimesh.Trimesh:
+    """Read a triangle mesh from a file trimesh understands, and check that it bounds a solid.
 
     Args:
-        path: Mesh file (OBJ, STL, PLY, OFF, GLB, glTF).
+        path: Mesh file (OBJ, STL, PLY, OFF, GLB, glTF), coordinates in metres.
+        solid: Require a closed, consistently wound surface; False leaves that to the caller
+            (``ogcp assets fetch`` repairs the meshes it downloads: fills holes, then checks).
 
     Returns:
-        The mesh (scenes are concatenated into one mesh).
+        The mesh (scenes are concatenated into one mesh; duplicate vertices merged), with
+        outward normals: a mesh whose winding was mixed or inside out is re-oriented, with a
+        :class:`MeshOrientationWarning` saying so.
 
     Raises:
-        OgcpError: When the file is missing, unreadable, or holds no triangles.
+        OgcpError: One line naming the file, when it is missing, unreadable, truncated or
+            inconsistent (counts, face indices), holds no triangles or non-finite
+            coordinates, or is flat, open or otherwise no closed surface.
     """
     path = Path(path)
     if not path.is_file():
         raise OgcpError(f"mesh file not found: {path}")
     if path.suffix.lower() not in MESH_SUFFIXES:
         raise OgcpError(f"{path}: unsupported mesh format {path.suffix!r}; supported: {', '.join(MESH_SUFFIXES)}")
+    check_mesh_file(path)
     try:
-        mesh = trimesh.load(path, force="mesh", process=True)
+        # Unprocessed first: processing merges vertices and drops non-finite ones without a word.
+        mesh = trimesh.load(path, force="mesh", process=False)
     except Exception as exc:  # trimesh raises many types for corrupt files
         raise OgcpError(f"{path}: cannot read mesh ({type(exc).__name__}: {exc})".splitlines()[0]) from exc
     if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
         raise OgcpError(f"{path}: file holds no triangle mesh")
-    if not np.all(np.isfinite(mesh.vertices)):
-        raise OgcpError(f"{path}: mesh has non-finite vertex coordinates")
+    _check_arrays(path, np.asarray(mesh.vertices), np.asarray(mesh.faces))
+    # The same result as loading with process=True, which ogcp always used (checked on every
+    # built-in object and fetched mesh): merged duplicate vertices, unreferenced ones removed.
+    mesh.process()
     if mesh.area <= 0:
         raise OgcpError(f"{path}: mesh has zero surface area")
+    if not solid:
+        return mesh
+    try:
+        mesh, steps = require_solid(mesh)
+    except OgcpError as exc:
+        raise OgcpError(f"{path}: {exc}") from None
+    if steps:
+        warnings.warn(f"{path}: {'; '.join(steps)}", MeshOrientationWarning, stacklevel=2)
     return mesh
+
+
+def _check_arrays(path: Path, vertices: np.ndarray, faces: np.ndarray) -> None:
+    """Refuse faces that index missing vertices and vertices that are not finite.
+
+    The file checks catch these with line numbers for OFF, OBJ and PLY; this catches them for
+    every format, in the order trimesh read them (vertex and face numbers count from 0).
+    """
+    outside = (faces < 0) | (faces >= len(vertices))
+    if outside.any():
+        face = int(np.argmax(outside.any(axis=1)))
+        vertex = int(faces[face][outside[face]][0])
+        raise OgcpError(
+            f"{path}: face {face} references vertex {vertex}, file has {len(vertices)} vertices (0 to {len(vertices) - 1})"
+        )
+    bad = ~np.all(np.isfinite(vertices), axis=1)
+    if bad.any():
+        raise OgcpError(
+            f"{path}: {int(bad.sum())} of {len(vertices)} vertices have non-finite coordinates (NaN or inf), "
+            f"the first is vertex {int(np.argmax(bad))} (counting from 0)"
+        )

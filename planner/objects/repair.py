@@ -1,17 +1,30 @@
 """Deterministic mesh repair with numpy and scipy: winding, holes and inward-facing meshes.
 
 trimesh's own repair functions need networkx, which ogcp does not depend on. Every fetched mesh
-goes through :func:`repair_mesh` before its normals and centroid are used.
+goes through :func:`repair_mesh` before its normals and centroid are used; every mesh file a
+user names goes through :func:`require_solid`, which fixes only what has one right answer
+(winding, inside-out) and refuses what ogcp cannot plan on (flat or open surfaces).
 """
 
 from __future__ import annotations
 
 import numpy as np
 import trimesh
+from numpy.typing import NDArray
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import breadth_first_order, connected_components
 
-__all__ = ["repair_mesh"]
+from planner.infra.errors import OgcpError
+from planner.infra.tolerance import TOL
+
+__all__ = ["MeshOrientationWarning", "repair_mesh", "require_solid"]
+
+#: What every refusal of :func:`require_solid` asks for.
+_NEEDS = "ogcp needs a closed, watertight surface for the object's volume, centre of mass and inward normals"
+
+
+class MeshOrientationWarning(UserWarning):
+    """A mesh's faces were re-oriented: their winding disagreed, or they pointed inward."""
 
 
 def _traverses(faces: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -135,3 +148,74 @@ def repair_mesh(mesh: trimesh.Trimesh) -> tuple[trimesh.Trimesh, tuple[str, ...]
         out.invert()
         steps.append("inverted the winding (faces pointed inward)")
     return out, tuple(steps)
+
+
+def _faces(count: int) -> str:
+    return f"{count} face" if count == 1 else f"{count} faces"
+
+
+def _point(vertex: NDArray[np.float64]) -> str:
+    """A vertex [m] for a message: 4 significant digits locate it in any mesh a user can open."""
+    return "[" + ", ".join(f"{x:.4g}" for x in vertex) + "]"
+
+
+def require_solid(mesh: trimesh.Trimesh) -> tuple[trimesh.Trimesh, tuple[str, ...]]:
+    """Check that a mesh bounds a solid; re-orient faces where only one orientation is right.
+
+    A closed, orientable surface has exactly two consistent orientations, and the sign of the
+    enclosed volume tells them apart, so a mixed or inward winding is fixed rather than
+    refused. Flat, open, non-manifold and one-sided surfaces have no volume centroid and no
+    inside, so no contact normal can be trusted: they are refused.
+
+    Args:
+        mesh: Mesh with finite vertices, shape (V, 3) [m] (not modified).
+
+    Returns:
+        ``(mesh, descriptions of the re-orientations)``: the input itself when nothing changed.
+
+    Raises:
+        OgcpError: One line, without the file name, saying why the mesh is no solid.
+    """
+    vertices = np.asarray(mesh.vertices, dtype=float)
+    # Singular values of the centred cloud: the smallest is its thickness across the best plane.
+    spread = np.linalg.svd(vertices - vertices.mean(axis=0), compute_uv=False)
+    if spread[-1] <= TOL.rank * spread[0]:
+        raise _refusal(f"mesh is flat (all {len(vertices)} vertices lie in one plane, so it encloses no volume)")
+    edges, counts = np.unique(mesh.edges_sorted, axis=0, return_counts=True)
+    for problem, bad in (("border only one face", counts == 1), ("are shared by more than two faces", counts > 2)):
+        if bad.any():
+            first = edges[np.argmax(bad)]
+            where = f"the first from {_point(vertices[first[0]])} to {_point(vertices[first[1]])}"
+            kind = "open" if problem.startswith("border") else "not a closed surface"
+            raise _refusal(f"mesh is {kind} ({int(bad.sum())} edges {problem}, {where})")
+    steps: list[str] = []
+    out = mesh
+    if not out.is_winding_consistent:
+        oriented = _orient_consistently(out)
+        if oriented is None or not oriented.is_winding_consistent:
+            raise _refusal("mesh is one-sided (its faces cannot be oriented consistently, like a Klein bottle)")
+        flipped = int(np.sum(np.any(oriented.faces != out.faces, axis=1)))
+        steps.append(f"winding was mixed: flipped {_faces(flipped)} that disagreed with their neighbours")
+        out = oriented
+    # Signed volume from the divergence theorem, summed here: trimesh's also divides by it for
+    # the centroid, which warns (divide by zero) on exactly the meshes refused next.
+    corners = np.asarray(out.vertices, dtype=float)[np.asarray(out.faces)]
+    volume = float(np.einsum("ij,ij->", corners[:, 0], np.cross(corners[:, 1], corners[:, 2])) / 6.0)
+    diagonal = float(np.linalg.norm(out.extents))
+    # Relative to the bounding box, so that millimetre and metre files are judged alike.
+    if abs(volume) <= TOL.rank * diagonal**3:
+        raise _refusal(
+            f"mesh encloses no volume (signed volume {volume:.3g} m^3, bounding-box diagonal {diagonal:.3g} m)"
+        )
+    if volume < 0:
+        out = out.copy()
+        out.invert()
+        steps.append(
+            f"mesh is inside out (its faces point inward, signed volume {volume:.3g} m^3): "
+            f"flipped all {_faces(len(out.faces))} so that they point outward"
+        )
+    return out, tuple(steps)
+
+
+def _refusal(problem: str) -> OgcpError:
+    return OgcpError(f"{problem}; {_NEEDS}")
