@@ -100,7 +100,7 @@ class GraspEvaluator:
         decomposition = self.decomposition or DecompositionSettings()
         if parts is None:
             parts = decompose(mesh, decomposition, cache=self.cache, progress=self.progress)
-        com, inertia = object_inertia(mesh, settings.object_mass)
+        com, inertia = object_inertia(mesh, settings.body_mass)
         radius = tip_radius(mesh, settings)
         body = ObjectBody(com, inertia, radius, diagonal)
         ladder = DecompositionLadder(mesh, decomposition, diagonal, radius, self.cache, self.progress, first=parts)

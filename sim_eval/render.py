@@ -87,7 +87,7 @@ def render_plan(
     if not 0 <= grasp_index < len(plan.grasps):
         raise OgcpError(f"grasp index {grasp_index} outside the plan's {len(plan.grasps)} grasps")
     idx = np.asarray(plan.grasps[grasp_index], dtype=np.intp)
-    com, inertia = object_inertia(plan.mesh, settings.object_mass)
+    com, inertia = object_inertia(plan.mesh, settings.body_mass)
     mu = settings.mu if settings.mu is not None else plan.contacts.mu
     radius = tip_radius(plan.mesh, settings)
     ladder = DecompositionLadder(

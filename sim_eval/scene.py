@@ -68,7 +68,9 @@ def _options(spec: mujoco.MjSpec, settings: SimSettings, gravity: bool) -> None:
     opt.noslip_iterations = settings.noslip_iterations
     opt.solver = _SOLVERS[settings.solver]
     opt.iterations = settings.solver_iterations
-    opt.gravity = [0.0, 0.0, -GRAVITY if gravity else 0.0]
+    # The object's mass is divided by inertia_scale's inverse; gravity is multiplied by it, so
+    # that its weight stays object_mass g at every size.
+    opt.gravity = [0.0, 0.0, -GRAVITY / settings.inertia_scale if gravity else 0.0]
 
 
 def _add_object(
@@ -169,7 +171,7 @@ def build_scene(
     Args:
         parts: Convex parts of the object, each ``(vertices (v, 3) [m], faces (f, 3))``.
         com: Object centre of mass, shape (3,) [m].
-        inertia: Inertia tensor about the COM, shape (3, 3) [kg·m²] (for ``settings.object_mass``).
+        inertia: Inertia tensor about the COM, shape (3, 3) [kg·m²] (for ``settings.body_mass``).
         positions: Planned contacts, shape (m, 3) [m].
         normals: Inward unit normals at the contacts, shape (m, 3).
         settings: Simulation settings.
@@ -185,7 +187,7 @@ def build_scene(
     spec = mujoco.MjSpec()
     spec.modelname = "ogcp_grasp"
     _options(spec, settings, settings.gravity if gravity is None else gravity)
-    _add_object(spec, parts, com, inertia, settings.object_mass, settings, mu)
+    _add_object(spec, parts, com, inertia, settings.body_mass, settings, mu)
     a, b = tangent_basis(normals)
     for i in range(len(positions)):
         centre = positions[i] - tip_radius * normals[i]

@@ -6,7 +6,7 @@ import math
 from dataclasses import asdict, dataclass, fields, replace
 from typing import Any
 
-from planner.grasp.reach import DEFAULT_TIP_RADIUS_RATIO
+from planner.grasp.defaults import DEFAULT_TIP_RADIUS_RATIO
 from planner.infra.errors import OgcpError, choice_error
 from planner.objects.builtin import DEFAULT_DIAGONAL
 
@@ -47,8 +47,13 @@ class SimSettings:
     force-travel curve relative to the object (kp = F_max / compliance) and the gates their
     fraction of it. The fingertip slides' masses (:data:`SERVO_MASSES`) are divided by the same
     factor, so that each servo's natural frequency sqrt(kp / m) is the same at every size.
-    Forces, times and the object's mass are not scaled. ``scale_lengths = false`` uses every
-    setting as given (absolute metres and kilograms) at every size.
+    The object's simulated mass and inertia are divided by it too (``inertia_scale``) and
+    gravity multiplied by it: with forces and times unscaled, every motion is then the
+    reference one scaled by the factor (m a = F with m / s and a s), so slip, creep and
+    failure happen at the same fraction of the object's size. ``object_mass`` stays the
+    physical mass that the weight test and the DexGraspBench loads are computed from.
+    ``scale_lengths = false`` uses every setting as given (absolute metres and kilograms) at
+    every size.
 
     Attributes:
         max_normal_force: Per-finger normal-force cap F_max [N].
@@ -62,6 +67,8 @@ class SimSettings:
         tangential_compliance: F_max / kp of the tangential servos [m at the reference diagonal].
         target_factor: Normal servo target depth in units of F_max / kp (> 1 saturates the preload).
         object_mass: Object mass [kg]; inertia comes from the watertight mesh.
+        inertia_scale: Factor on the object's simulated mass and inertia, and divisor of
+            gravity (set by :meth:`scaled`; 1 at the reference diagonal).
         mu: Friction coefficient; None = the plan's contact-set mu.
         timestep: Physics step [s].
         integrator: MuJoCo integrator.
@@ -108,6 +115,7 @@ class SimSettings:
     tangential_compliance: float = 1e-4
     target_factor: float = 1.5
     object_mass: float = 0.1
+    inertia_scale: float = 1.0
     mu: float | None = None
     timestep: float = 0.002
     integrator: str = "implicitfast"
@@ -144,6 +152,7 @@ class SimSettings:
             "servo_compliance",
             "tangential_compliance",
             "object_mass",
+            "inertia_scale",
             "timestep",
             "impratio",
             "settle_time",
@@ -194,6 +203,11 @@ class SimSettings:
             raise OgcpError("contact_solref needs 2 numbers and contact_solimp 3")
 
     @property
+    def body_mass(self) -> float:
+        """The object's simulated mass [kg]: ``object_mass`` times ``inertia_scale``."""
+        return self.object_mass * self.inertia_scale
+
+    @property
     def servo_stiffness(self) -> float:
         """kp of the normal servo [N/m]."""
         return self.max_normal_force / self.servo_compliance
@@ -235,6 +249,9 @@ class SimSettings:
         # servo keeps its natural frequency, hence its accuracy at the fixed step (masses fixed,
         # a 5 cm object's servos ring near the step's limit and resist ~20 % less).
         masses = {name: getattr(self, name) / factor for name in SERVO_MASSES}
+        # The object's mass follows for the same reason: fixed, a 5 cm object was 16x heavier
+        # relative to its servos and crept past the gate where the 0.2 m one held.
+        masses["inertia_scale"] = self.inertia_scale / factor
         dmin, dmax, width = self.contact_solimp
         return replace(self, **lengths, **masses, contact_solimp=(dmin, dmax, width * factor), scale_lengths=False)
 
@@ -264,8 +281,10 @@ class SimSettings:
 
 
 def scaled_lengths(settings: SimSettings) -> dict[str, float]:
-    """The length settings of (scaled) settings [m], as recorded next to the given ones."""
+    """The length settings of (scaled) settings [m], as recorded next to the given ones, and the
+    object's simulated mass [kg]."""
     return {
         **{name: getattr(settings, name) for name in LENGTH_SETTINGS},
         "contact_solimp_width": settings.contact_solimp[2],
+        "body_mass": settings.body_mass,
     }

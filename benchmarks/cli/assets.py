@@ -8,9 +8,14 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from planner.objects.fetch import FETCH_GROUPS, ObjectStatus, expand_names, fetch_objects, list_objects, meshes_dir
+# The manifest of fetchable objects is plain TOML; planner.objects.fetch (numpy, trimesh) is
+# imported by the handlers, so that ``--help`` does not load it.
+from planner.objects.fetchable import FETCH_GROUPS
+
+if TYPE_CHECKING:
+    from planner.objects.fetch import ObjectStatus
 
 _CACHE_HELP = "cache root, as $OGCP_CACHE (default $OGCP_CACHE or ~/.cache/ogcp); meshes go to DIR/meshes"
 
@@ -60,6 +65,8 @@ def format_table(rows: list[ObjectStatus]) -> str:
 
 def run_list(args: argparse.Namespace) -> int:
     """Print every object and where the fetched ones are cached."""
+    from planner.objects.fetch import list_objects, meshes_dir
+
     rows = list_objects(args.cache)
     print(format_table(rows))
     missing = [r.name for r in rows if r.cached is False]
@@ -71,6 +78,8 @@ def run_list(args: argparse.Namespace) -> int:
 
 def run_fetch(args: argparse.Namespace) -> int:
     """Fetch the named objects; built-in names are accepted and need nothing."""
+    from planner.objects.fetch import expand_names, fetch_objects, meshes_dir
+
     fetchable, builtin = expand_names(args.names)
     for name in builtin:
         print(f"{name}: built-in, generated on use (nothing to fetch)", file=sys.stderr)

@@ -12,22 +12,26 @@ import json
 import math
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import trimesh
-
+# Only light modules at the top: the parser is built for every command, ``--help`` included.
+# The contact sampling, the engines and the summaries (numpy, trimesh, scipy, numba) are
+# imported by the functions that use them.
 from benchmarks.cli.method_options import GROUPS, add_method_options, config_from_args, not_applicable
 from benchmarks.cli.options import add_diagonal_option, integer, number, positive_int
-from benchmarks.cli.plan_summary import describe
 from planner.config.methods import DEFAULT_FINGERS, DEFAULT_METHOD, DEFAULT_SEED
-from planner.grasp.contact_set import DEFAULT_CONE_EDGES, DEFAULT_CONTACTS, DEFAULT_MU, ContactSet, sample_contacts
-from planner.grasp.reach import DEFAULT_TIP_RADIUS_RATIO, default_tip_radius
+from planner.grasp.defaults import DEFAULT_CONE_EDGES, DEFAULT_CONTACTS, DEFAULT_MU, DEFAULT_TIP_RADIUS_RATIO
 from planner.infra.atomic import write_json_atomic
 from planner.infra.errors import OgcpError
 from planner.infra.parallel import BACKENDS, DEFAULT_BACKEND, DEFAULT_JOBS
 from planner.methods.registry import METHODS, MethodSpec, method_spec
-from planner.methods.runners import RunOptions
-from planner.objects import BUILTIN_OBJECTS, DEFAULT_DIAGONAL, resolve_object
+from planner.objects.builtin import BUILTIN_OBJECTS, DEFAULT_DIAGONAL
+
+if TYPE_CHECKING:
+    import trimesh
+
+    from planner.grasp.contact_set import ContactSet
+    from planner.methods.runners import RunOptions
 
 #: Run-time flags (destination -> flag); each applies to the methods whose spec lists it.
 RUN_FLAGS = {
@@ -84,6 +88,9 @@ def tip_radius(text: str) -> float:
 
 def sample_from_args(mesh: trimesh.Trimesh, source: dict[str, Any], n: int, args: argparse.Namespace) -> ContactSet:
     """Sample ``n`` contacts with the contact flags; no ``--tip-radius`` means the default fingertip."""
+    from planner.grasp.contact_set import sample_contacts
+    from planner.grasp.reach import default_tip_radius
+
     radius = default_tip_radius(mesh) if args.tip_radius is None else args.tip_radius
     return sample_contacts(mesh, n, args.seed, args.mu, args.cone_edges, source, tip_radius=radius)
 
@@ -148,6 +155,9 @@ def register(commands: Any) -> None:
 
 def load_contact_set(spec: str, args: argparse.Namespace) -> ContactSet:
     """Contact set from a contact JSON file, or sampled from a mesh or built-in object."""
+    from planner.grasp.contact_set import ContactSet
+    from planner.objects.resolve import resolve_object
+
     if spec.lower().endswith(".json"):
         if args.contacts is not None:
             raise OgcpError("-n/--contacts does not apply to a contact file (its contacts are fixed)")
@@ -167,6 +177,8 @@ def run_options_from_args(spec: MethodSpec, args: argparse.Namespace) -> RunOpti
     Raises:
         OgcpError: For a run-time flag of another method.
     """
+    from planner.methods.runners import RunOptions
+
     given = {field: getattr(args, field) for field in RUN_FLAGS if field != "optimum"}
     given["optimum"] = False if args.no_optimum else None
     options: dict[str, Any] = {}
@@ -184,6 +196,8 @@ def run_options_from_args(spec: MethodSpec, args: argparse.Namespace) -> RunOpti
 
 
 def run_contacts(args: argparse.Namespace) -> int:
+    from planner.objects.resolve import resolve_object
+
     mesh, source = resolve_object(args.object, args.diagonal)
     contacts = sample_from_args(mesh, source, args.contacts, args)
     write_json_atomic(args.output, contacts.to_dict())
@@ -192,6 +206,8 @@ def run_contacts(args: argparse.Namespace) -> int:
 
 
 def run_plan(args: argparse.Namespace) -> int:
+    from benchmarks.cli.plan_summary import describe
+
     spec = method_spec(args.method)
     config = config_from_args(spec, args)
     options = run_options_from_args(spec, args)

@@ -12,6 +12,9 @@ import sys
 from pathlib import Path
 from typing import Any
 
+# The names only: the figure modules (numpy, the records; matplotlib when drawing) load in the handler.
+from benchmarks.plots.names import NAMES
+
 
 def register(commands: Any) -> None:
     """Add the ``plot`` sub-command to the ``ogcp`` parser.
@@ -19,8 +22,6 @@ def register(commands: Any) -> None:
     Args:
         commands: The sub-parsers object of the ``ogcp`` parser.
     """
-    from benchmarks.plots.report import NAMES  # no matplotlib: the figure modules import it when drawing
-
     plot = commands.add_parser("plot", help="paper figures (PDF + PNG) and the time table from a suite run")
     plot.add_argument(
         "run", type=Path, metavar="RUN", help="results folder of ogcp suite (results.jsonl + manifest.json)"

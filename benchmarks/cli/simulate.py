@@ -10,13 +10,12 @@ import sys
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
+# Only light modules at the top (the settings and their defaults): the parser is built for every
+# command, ``--help`` included. numpy, the plan records and MuJoCo load in the handlers.
 from benchmarks.cli.options import add_diagonal_option, finite_number, nonnegative_int
 from planner.infra.atomic import write_json_atomic
 from planner.infra.errors import OgcpError
 from planner.objects.builtin import DEFAULT_DIAGONAL
-from planner.records.plan import load_plan
 from sim_eval.decomposition.settings import METHODS as DECOMPOSITION_METHODS
 from sim_eval.decomposition.settings import DecompositionSettings
 from sim_eval.settings import PROTOCOLS, SimSettings
@@ -129,9 +128,7 @@ def register(commands: Any) -> None:
     decompose.set_defaults(handler=run_decompose)
 
 
-def _decomposition(args: argparse.Namespace) -> Any:
-    from sim_eval.decomposition.decompose import DecompositionSettings
-
+def _decomposition(args: argparse.Namespace) -> DecompositionSettings:
     return DecompositionSettings(
         method=args.decomposition,
         threshold=args.threshold,
@@ -141,9 +138,7 @@ def _decomposition(args: argparse.Namespace) -> Any:
     )
 
 
-def _settings(args: argparse.Namespace) -> Any:
-    from sim_eval.settings import SimSettings
-
+def _settings(args: argparse.Namespace) -> SimSettings:
     extra: dict[str, Any] = {}
     if args.settings is not None:
         try:
@@ -200,6 +195,8 @@ def _realized_lines(grasp: Any) -> list[str]:
 
 def sim_summary(record: dict[str, Any]) -> str:
     """Human-readable table of an ``ogcp.sim/1`` or ``/2`` record."""
+    import numpy as np
+
     from sim_eval.result import SimRecord
 
     sim = SimRecord.from_dict(record)
@@ -250,6 +247,7 @@ def sim_summary(record: dict[str, Any]) -> str:
 
 
 def run_evaluate(args: argparse.Namespace) -> int:
+    from planner.records.plan import load_plan
     from sim_eval.evaluate import evaluate_plan
 
     record = load_plan(args.plan)

@@ -21,7 +21,7 @@ from sim_eval.settings import SimSettings
 def trials():
     box = trimesh.creation.box([0.1, 0.08, 0.06])
     settings = SimSettings()
-    com, inertia = object_inertia(box, settings.object_mass)
+    com, inertia = object_inertia(box, settings.body_mass)
     positions = np.array([[0.05, 0.0, 0.0], [-0.05, 0.0, 0.0], [0.0, 0.0, 0.03]])
     normals = np.array([[-1.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
     scene = build_scene([(box.vertices, box.faces)], com, inertia, positions, normals, settings, 0.5, 0.008)

@@ -11,6 +11,7 @@ from planner.infra.errors import OgcpError
 
 from .data import RunData, SkipFigure, load_run
 from .figures import fig4_q1_histograms, fig6_states_per_level, fig7_iterations_f, fig8_wastar_tradeoff
+from .names import FIGURE_NAMES, NAMES, TABLE
 from .simulation import sim_fidelity, sim_q1_vs_resistance, sim_survival
 from .style import DEFAULT_DPI, FORMATS, SAVE_FORMATS, save_figure
 from .tables import time_table
@@ -21,19 +22,24 @@ if TYPE_CHECKING:
 
 FigureBuilder = Callable[[RunData, "list[str] | None"], "Figure"]
 
-#: File stem -> builder, in the order they are drawn.
-FIGURES: dict[str, FigureBuilder] = {
-    "fig4_q1_histograms": fig4_q1_histograms,
-    "fig5_search_tree": fig5_search_tree,
-    "fig6_states_per_level": fig6_states_per_level,
-    "fig7_iterations_f": fig7_iterations_f,
-    "fig8_wastar_tradeoff": fig8_wastar_tradeoff,
-    "sim_q1_vs_resistance": sim_q1_vs_resistance,
-    "sim_fidelity": sim_fidelity,
-    "sim_survival": sim_survival,
-}
-TABLE = "fig9_times"
-NAMES = (*FIGURES, TABLE)
+#: File stem -> builder, in the order they are drawn. The stems are written once, in
+#: :mod:`benchmarks.plots.names`, which ``ogcp plot --help`` reads without these modules.
+FIGURES: dict[str, FigureBuilder] = dict(
+    zip(
+        FIGURE_NAMES,
+        (
+            fig4_q1_histograms,
+            fig5_search_tree,
+            fig6_states_per_level,
+            fig7_iterations_f,
+            fig8_wastar_tradeoff,
+            sim_q1_vs_resistance,
+            sim_fidelity,
+            sim_survival,
+        ),
+        strict=True,
+    )
+)
 
 
 @dataclass(frozen=True)

@@ -156,7 +156,7 @@ def grasp_model(
     if initpoints is not None:
         opt.sdf_initpoints = initpoints
     body = spec.body("object")
-    com, inertia = object_inertia(mesh, settings.object_mass)
+    com, inertia = object_inertia(mesh, settings.body_mass)
     body.explicitinertial, body.mass, body.ipos = True, settings.object_mass, com
     body.inertia = [0.0, 0.0, 0.0]  # the SDF's XML gives a placeholder diagonal inertia
     body.fullinertia = [inertia[0, 0], inertia[1, 1], inertia[2, 2], inertia[0, 1], inertia[0, 2], inertia[1, 2]]

@@ -69,7 +69,7 @@ def grasp_pool(
 def throughput(contacts: ContactSet, mesh: Any, grasp: tuple[int, ...], settings: SimSettings) -> dict[str, float]:
     """Direction-trials per second: rollout over threads vs a serial mj_step loop, same trials."""
     parts = decompose(mesh)
-    com, inertia = object_inertia(mesh, settings.object_mass)
+    com, inertia = object_inertia(mesh, settings.body_mass)
     idx = np.asarray(grasp)
     radius = settings.tip_radius_ratio * float(np.linalg.norm(np.ptp(mesh.vertices, axis=0)))
     scene = build_scene(

@@ -24,7 +24,7 @@ from benchmarks.suite.config import (
 from benchmarks.suite.params import METHOD_PARAMS, complete, default_label, seed_values, values_of
 from planner.config.methods import DEFAULT_FINGERS, DEFAULT_SEED, HAND_FINGERS
 from planner.config.options import Option
-from planner.grasp.contact_set import DEFAULT_CONE_EDGES, DEFAULT_CONTACTS, DEFAULT_MU
+from planner.grasp.defaults import DEFAULT_CONE_EDGES, DEFAULT_CONTACTS, DEFAULT_MU
 from planner.infra.assets import asset_path, assets_dir
 from planner.infra.errors import OgcpError, choice_error
 from planner.objects import BUILTIN_OBJECTS, DEFAULT_DIAGONAL, MESH_SUFFIXES, file_sha256

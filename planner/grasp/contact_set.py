@@ -21,6 +21,8 @@ import numpy as np
 import trimesh
 from numpy.typing import NDArray
 
+# The defaults live in a module without numpy and trimesh, for readers that need nothing else.
+from planner.grasp.defaults import DEFAULT_CONE_EDGES, DEFAULT_MU
 from planner.grasp.reach import fill_reachable, reach_settings
 from planner.grasp.wrench import contact_wrenches
 from planner.infra.atomic import write_json_atomic
@@ -28,10 +30,6 @@ from planner.infra.errors import OgcpError
 from planner.infra.tolerance import TOL
 
 SCHEMA = "ogcp.contacts/1"
-DEFAULT_MU = 0.5
-DEFAULT_CONE_EDGES = 8
-#: Contacts sampled from a mesh when no count is given.
-DEFAULT_CONTACTS = 100
 #: ``source["sampling"]`` of a set from :func:`sample_contacts`.
 EVEN_SAMPLING = "even"
 

@@ -15,6 +15,7 @@ import numpy as np
 import trimesh
 from numpy.typing import ArrayLike, NDArray
 
+from planner.grasp.defaults import DEFAULT_TIP_RADIUS_RATIO
 from planner.grasp.mesh_distance import SurfaceIndex
 from planner.infra.errors import OgcpError
 
@@ -25,10 +26,6 @@ from planner.infra.errors import OgcpError
 #: clearance is r, while still removing every concavity that is really narrower than the tip.
 #: At the simulation's default tip (4 % of the diagonal) it is 0.04 % of the diagonal.
 REACH_TOLERANCE = 0.01
-#: Default fingertip radius as a fraction of the object's bounding-box diagonal: the one
-#: default of both the contact sampling and the simulation, so that a plan made with the
-#: defaults only holds contacts the simulated fingertip can touch.
-DEFAULT_TIP_RADIUS_RATIO = 0.04
 #: Area-weighted batches drawn to replace unreachable contacts before giving up; batch k
 #: draws ``max(2 * missing, 64) * 2**k`` points, so up to ~128x the shortfall are tried.
 FILL_BATCHES = 6

@@ -11,8 +11,6 @@ import contextlib
 from collections.abc import Callable, Iterable, Iterator
 from typing import Any
 
-import joblib
-
 from planner.infra.errors import OgcpError, choice_error
 
 BACKENDS = ("dask", "loky")
@@ -45,6 +43,8 @@ def _backend_context(backend: str, address: str | None) -> Iterator[None]:
         client = Client(address, timeout="10s")
     except OSError as exc:
         raise OgcpError(f"cannot reach the Dask scheduler at {address}: {exc}") from exc
+    import joblib  # lazy, see run_tasks
+
     try:
         with joblib.parallel_config(backend="dask"):
             yield
@@ -77,6 +77,9 @@ def run_tasks(
         for task in tasks:
             yield function(*task)
         return
+    # Lazy: the backends and defaults above are read where joblib would be wasted (``ogcp --help``).
+    import joblib
+
     with _backend_context(backend, address):
         parallel = joblib.Parallel(n_jobs=jobs if backend == "loky" else -1, return_as="generator_unordered")
         yield from parallel(joblib.delayed(function)(*task) for task in tasks)

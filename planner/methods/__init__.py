@@ -7,9 +7,37 @@
 The configurations themselves live one layer down, in :mod:`planner.config`, because the
 engines (search, baselines, hands) read their defaults from them and the registry imports
 the engines.
+
+The names below load their modules on first use (PEP 562): the registry is read (``ogcp --help``)
+without loading the engines, which load when a method runs.
 """
 
-from planner.methods.registry import METHODS, MethodSpec, method_spec
-from planner.methods.runners import MethodRun, RunOptions
+from __future__ import annotations
 
-__all__ = ["METHODS", "MethodRun", "MethodSpec", "RunOptions", "method_spec"]
+from typing import TYPE_CHECKING
+
+from planner.infra.lazy import lazy_exports
+
+if TYPE_CHECKING:
+    from planner.methods.registry import METHODS, MethodSpec, method_spec
+    from planner.methods.runners import MethodRun, RunOptions
+
+#: Public name -> the module that defines it.
+_EXPORTS = {
+    "METHODS": "planner.methods.registry",
+    "MethodRun": "planner.methods.runners",
+    "MethodSpec": "planner.methods.registry",
+    "RunOptions": "planner.methods.runners",
+    "method_spec": "planner.methods.registry",
+}
+
+__all__ = [
+    "METHODS",
+    "MethodRun",
+    "MethodSpec",
+    "RunOptions",
+    "method_spec",
+]
+
+
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

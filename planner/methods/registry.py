@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from planner.config.methods import (
     AStarConfig,
@@ -24,11 +24,34 @@ from planner.config.methods import (
     WAStarConfig,
 )
 from planner.config.options import MethodConfig, Option, options_of
-from planner.grasp.contact_set import ContactSet
 from planner.infra.errors import choice_error
-from planner.methods.runners import MethodRun, RunOptions, run_exhaustive, run_hfts, run_search
 
-Runner = Callable[[Any, ContactSet, int, RunOptions], MethodRun]
+if TYPE_CHECKING:
+    from planner.grasp.contact_set import ContactSet
+    from planner.methods.runners import MethodRun, RunOptions
+
+Runner = Callable[[Any, "ContactSet", int, "RunOptions"], "MethodRun"]
+
+
+@dataclass(frozen=True)
+class _Deferred:
+    """The runner ``name`` of :mod:`planner.methods.runners`, imported when first called.
+
+    The runners import every engine (numpy, trimesh, scipy, the numba kernels), while the
+    registry is also read where only names, titles and options are needed (``ogcp --help``).
+    A dataclass rather than a closure, so that a spec still pickles (parallel suite cells).
+
+    Attributes:
+        name: The runner function's name in :mod:`planner.methods.runners`.
+    """
+
+    name: str
+
+    def __call__(self, config: Any, contacts: ContactSet, m: int, options: RunOptions) -> MethodRun:
+        from planner.methods import runners
+
+        runner: Runner = getattr(runners, self.name)
+        return runner(config, contacts, m, options)
 
 
 @dataclass(frozen=True)
@@ -66,6 +89,8 @@ class MethodSpec:
         """
         if type(config) is not self.config:
             raise TypeError(f"method {self.name!r} runs a {self.config.__name__}, got a {type(config).__name__}")
+        from planner.methods.runners import RunOptions  # lazy: see _Deferred
+
         return self.runner(config, contacts, m, options or RunOptions())
 
 
@@ -77,12 +102,14 @@ _HFTS_RUN_OPTIONS = ("jobs", "backend", "address", "optimum")
 METHODS: dict[str, MethodSpec] = {
     spec.name: spec
     for spec in (
-        MethodSpec("astar", "A*", AStarConfig, run_search, True, False, _SEARCH_RUN_OPTIONS),
-        MethodSpec("dijkstra", "Dijkstra", DijkstraConfig, run_search, True, False, _SEARCH_RUN_OPTIONS),
-        MethodSpec("wastar", "WA*", WAStarConfig, run_search, False, False, _SEARCH_RUN_OPTIONS),
-        MethodSpec("es", "ES", ESConfig, run_exhaustive, True, True, _ES_RUN_OPTIONS),
-        MethodSpec("es-pruned", "ES (pruned)", ESPrunedConfig, run_exhaustive, True, True, _ES_RUN_OPTIONS),
-        MethodSpec("hfts", "HFTS", HFTSConfig, run_hfts, False, False, _HFTS_RUN_OPTIONS),
+        MethodSpec("astar", "A*", AStarConfig, _Deferred("run_search"), True, False, _SEARCH_RUN_OPTIONS),
+        MethodSpec("dijkstra", "Dijkstra", DijkstraConfig, _Deferred("run_search"), True, False, _SEARCH_RUN_OPTIONS),
+        MethodSpec("wastar", "WA*", WAStarConfig, _Deferred("run_search"), False, False, _SEARCH_RUN_OPTIONS),
+        MethodSpec("es", "ES", ESConfig, _Deferred("run_exhaustive"), True, True, _ES_RUN_OPTIONS),
+        MethodSpec(
+            "es-pruned", "ES (pruned)", ESPrunedConfig, _Deferred("run_exhaustive"), True, True, _ES_RUN_OPTIONS
+        ),
+        MethodSpec("hfts", "HFTS", HFTSConfig, _Deferred("run_hfts"), False, False, _HFTS_RUN_OPTIONS),
     )
 }
 #: The best-first searches (A*, Dijkstra, WA*).

@@ -2,14 +2,46 @@
 
 :func:`resolve_object` turns what a user names (a built-in, a fetched object or a mesh
 path) into a mesh and the source record that results carry.
+
+The names below load their modules on first use (PEP 562), so that the built-in objects' names
+and the fetchable objects' manifest are read (``ogcp --help``) without loading trimesh.
 """
 
-from planner.objects.builtin import BUILTIN_OBJECTS, DEFAULT_DIAGONAL, builtin_mesh, normalise_scale
-from planner.objects.fetch import ObjectStatus, fetch_objects, is_cached, list_objects, load_fetched
-from planner.objects.fetchable import FETCH_GROUPS, FETCHABLE_OBJECTS, PAPER_OBJECTS, FetchableObject
-from planner.objects.loading import MESH_SUFFIXES, file_sha256, load_mesh
-from planner.objects.repair import repair_mesh
-from planner.objects.resolve import resolve_object
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from planner.infra.lazy import lazy_exports
+
+if TYPE_CHECKING:
+    from planner.objects.builtin import BUILTIN_OBJECTS, DEFAULT_DIAGONAL, builtin_mesh, normalise_scale
+    from planner.objects.fetch import ObjectStatus, fetch_objects, is_cached, list_objects, load_fetched
+    from planner.objects.fetchable import FETCH_GROUPS, FETCHABLE_OBJECTS, PAPER_OBJECTS, FetchableObject
+    from planner.objects.loading import MESH_SUFFIXES, file_sha256, load_mesh
+    from planner.objects.repair import repair_mesh
+    from planner.objects.resolve import resolve_object
+
+#: Public name -> the module that defines it.
+_EXPORTS = {
+    "BUILTIN_OBJECTS": "planner.objects.builtin",
+    "DEFAULT_DIAGONAL": "planner.objects.builtin",
+    "FETCHABLE_OBJECTS": "planner.objects.fetchable",
+    "FETCH_GROUPS": "planner.objects.fetchable",
+    "MESH_SUFFIXES": "planner.objects.loading",
+    "PAPER_OBJECTS": "planner.objects.fetchable",
+    "FetchableObject": "planner.objects.fetchable",
+    "ObjectStatus": "planner.objects.fetch",
+    "builtin_mesh": "planner.objects.builtin",
+    "fetch_objects": "planner.objects.fetch",
+    "file_sha256": "planner.objects.loading",
+    "is_cached": "planner.objects.fetch",
+    "list_objects": "planner.objects.fetch",
+    "load_fetched": "planner.objects.fetch",
+    "load_mesh": "planner.objects.loading",
+    "normalise_scale": "planner.objects.builtin",
+    "repair_mesh": "planner.objects.repair",
+    "resolve_object": "planner.objects.resolve",
+}
 
 __all__ = [
     "BUILTIN_OBJECTS",
@@ -31,3 +63,6 @@ __all__ = [
     "repair_mesh",
     "resolve_object",
 ]
+
+
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -7,28 +7,41 @@ bounding-box diagonal of ``DEFAULT_DIAGONAL`` (0.2 m).
 from __future__ import annotations
 
 from collections.abc import Callable
-
-import numpy as np
-import trimesh
+from typing import TYPE_CHECKING
 
 from planner.infra.errors import OgcpError, choice_error
+
+if TYPE_CHECKING:
+    import trimesh
+
+# numpy and trimesh are imported in the functions that use them: the names and the default
+# diagonal are read where loading them would be wasted (``ogcp --help``, the simulation's settings).
 
 DEFAULT_DIAGONAL = 0.2  # [m]
 
 
 def _box() -> trimesh.Trimesh:
+    import trimesh
+
     return trimesh.creation.box(extents=(3.0, 2.0, 1.4))
 
 
 def _sphere() -> trimesh.Trimesh:
+    import trimesh
+
     return trimesh.creation.icosphere(subdivisions=4, radius=1.0)
 
 
 def _donut() -> trimesh.Trimesh:
+    import trimesh
+
     return trimesh.creation.torus(major_radius=1.0, minor_radius=0.4, major_sections=64, minor_sections=32)
 
 
 def _amphora() -> trimesh.Trimesh:
+    import numpy as np
+    import trimesh
+
     # Profile (radius, height) of a vase: foot, belly, shoulder, neck and lip, closed on
     # the axis at both ends so the surface of revolution is watertight.
     heights = np.linspace(0.0, 1.0, 41)
@@ -62,6 +75,8 @@ def normalise_scale(mesh: trimesh.Trimesh, diagonal: float = DEFAULT_DIAGONAL) -
     Returns:
         A scaled copy.
     """
+    import numpy as np
+
     out = mesh.copy()
     lo, hi = out.bounds
     out.apply_translation(-(lo + hi) / 2.0)
@@ -82,6 +97,8 @@ def builtin_mesh(name: str, diagonal: float = DEFAULT_DIAGONAL) -> trimesh.Trime
     Raises:
         OgcpError: For an unknown name.
     """
+    import numpy as np
+
     if name not in BUILTIN_OBJECTS:
         raise choice_error("object", name, BUILTIN_OBJECTS)
     if not (np.isfinite(diagonal) and diagonal > 0):

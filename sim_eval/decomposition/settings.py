@@ -4,10 +4,9 @@ from __future__ import annotations
 
 import math
 import numbers
+import sys
 from dataclasses import asdict, dataclass, fields
 from typing import Any
-
-import numpy as np
 
 from planner.infra.errors import OgcpError, choice_error
 
@@ -36,6 +35,13 @@ _NOT_IN_KEY = ("timeout_s", "contact_tolerance", "refine_thresholds")
 def _number(value: object, integral: bool) -> bool:
     kind = numbers.Integral if integral else numbers.Real
     return isinstance(value, kind) and not isinstance(value, bool)
+
+
+def _boolean(value: object) -> bool:
+    # A numpy bool exists only once numpy is loaded, so the check never imports it: the settings'
+    # defaults are read where numpy would be wasted (``ogcp --help``).
+    numpy = sys.modules.get("numpy")
+    return isinstance(value, bool) or (numpy is not None and isinstance(value, numpy.bool_))
 
 
 @dataclass(frozen=True)
@@ -104,7 +110,7 @@ class DecompositionSettings:
                 raise OgcpError(f"decomposition {name} must be an integer {bounds}, got {value!r}")
             object.__setattr__(self, name, int(value))  # plain ints keep to_dict() JSON-ready
         for name in ("merge", "decimate"):
-            if not isinstance(getattr(self, name), bool | np.bool_):
+            if not _boolean(getattr(self, name)):
                 raise OgcpError(f"decomposition {name} must be true or false, got {getattr(self, name)!r}")
             object.__setattr__(self, name, bool(getattr(self, name)))
         if not (_number(self.contact_tolerance, False) and 0 < self.contact_tolerance <= 0.1):
