@@ -62,15 +62,20 @@ class Tolerances:
     allow_missing: bool = False
 
     def validate(self) -> None:
-        """Raises OgcpError for a negative tolerance, a ratio below 1 or an unknown time key."""
+        """Raises OgcpError for a negative or non-finite tolerance, a relative one above 1, a ratio below 1 or an
+        unknown time key."""
         if self.time_key not in TIME_KEYS:
             raise choice_error("time key", self.time_key, TIME_KEYS)
         for name in ("q1", "optimality", "min_time", "resistance"):
             value = getattr(self, name)
-            if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):
+            if isinstance(value, bool) or not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):
                 raise OgcpError(f"{name} tolerance must be a number >= 0, got {value!r}")
-        if not (math.isfinite(self.time_ratio) and self.time_ratio >= 1):
-            raise OgcpError(f"time ratio must be a number >= 1, got {self.time_ratio!r}")
+        # A relative drop above 100 % cannot happen: such a tolerance would switch the check off unseen.
+        if self.resistance > 1:
+            raise OgcpError(f"resistance tolerance is a relative drop from 0 to 1, got {self.resistance!r}")
+        ratio = self.time_ratio
+        if isinstance(ratio, bool) or not (isinstance(ratio, (int, float)) and math.isfinite(ratio) and ratio >= 1):
+            raise OgcpError(f"time ratio must be a number >= 1, got {ratio!r}")
 
 
 @dataclass(frozen=True)

@@ -3,8 +3,9 @@
 Each grasp is simulated with fingertip spheres at its contacts on a CoACD-decomposed object;
 disturbance wrenches are ramped along many directions until the object moves, and the
 measured resistance is compared with Q1 and with the analytic limit of the same actuation
-model. The package consumes plan results (schema ``ogcp.plan/1``) and the planner's value
-types; it never runs a search and never imports matplotlib.
+model. The package consumes plan results (schema ``ogcp.plan/1``), grasps from any planner
+(schema ``ogcp.grasps/1``, :func:`evaluate_grasps`) and the planner's value types; it never
+runs a search and never imports matplotlib.
 
 The names below load their modules on first use, so that reading a setting or a result
 record (``sim_eval.settings``, ``sim_eval.result``) never pays for importing MuJoCo.
@@ -17,8 +18,11 @@ from typing import TYPE_CHECKING
 from planner.infra.lazy import lazy_exports
 
 if TYPE_CHECKING:
+    from planner.records.grasps import ExternalGrasps, load_grasps
     from sim_eval.decomposition import Decomposition, DecompositionSettings
     from sim_eval.evaluate import GraspEvaluator, evaluate_plan
+    from sim_eval.external import evaluate_grasps
+    from sim_eval.external_export import export_grasps
     from sim_eval.result import SIM_SCHEMA, GraspSimResult, SimGraspRecord, SimRecord, SimResult
     from sim_eval.settings import SimSettings
 
@@ -27,26 +31,34 @@ _EXPORTS = {
     "SIM_SCHEMA": "sim_eval.result",
     "Decomposition": "sim_eval.decomposition",
     "DecompositionSettings": "sim_eval.decomposition",
+    "ExternalGrasps": "planner.records.grasps",
     "GraspEvaluator": "sim_eval.evaluate",
     "GraspSimResult": "sim_eval.result",
     "SimGraspRecord": "sim_eval.result",
     "SimRecord": "sim_eval.result",
     "SimResult": "sim_eval.result",
     "SimSettings": "sim_eval.settings",
+    "evaluate_grasps": "sim_eval.external",
     "evaluate_plan": "sim_eval.evaluate",
+    "export_grasps": "sim_eval.external_export",
+    "load_grasps": "planner.records.grasps",
 }
 
 __all__ = [
     "SIM_SCHEMA",
     "Decomposition",
     "DecompositionSettings",
+    "ExternalGrasps",
     "GraspEvaluator",
     "GraspSimResult",
     "SimGraspRecord",
     "SimRecord",
     "SimResult",
     "SimSettings",
+    "evaluate_grasps",
     "evaluate_plan",
+    "export_grasps",
+    "load_grasps",
 ]
 
 

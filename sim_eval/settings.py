@@ -6,7 +6,8 @@ import math
 from dataclasses import asdict, dataclass, fields, replace
 from typing import Any
 
-from planner.grasp.defaults import DEFAULT_TIP_RADIUS_RATIO
+from planner.config.options import MAX_SEED, Option
+from planner.grasp.defaults import DEFAULT_TIP_RADIUS_RATIO, MAX_DIAGONAL, MAX_MU, MIN_DIAGONAL
 from planner.infra.errors import OgcpError, choice_error
 from planner.objects.builtin import DEFAULT_DIAGONAL
 
@@ -23,6 +24,55 @@ LENGTH_SETTINGS = (
 )
 #: The fingertip slides' masses [kg], divided by the length scale (see :meth:`SimSettings.scaled`).
 SERVO_MASSES = ("tip_mass", "slide_armature")
+
+
+def _range(low: float, high: float, kind: str = "float", exclusive: bool = True) -> Option:
+    return Option(kind, None, minimum=low, exclusive=exclusive and kind == "float", maximum=high)
+
+
+#: Valid range of every number among the settings, as given (lengths and the slides' masses at
+#: the reference diagonal; :func:`_absolute` widens them for absolute settings). Each keeps a
+#: test finite in time and memory and away from overflow (F_max = 10^308 N made every measured
+#: value NaN): forces to 10 kN (the default F_max is 10 N); masses to 1 t; lengths to the reference
+#: object's own size (a tolerance as large as the object tolerates anything); friction as for
+#: planning; steps from 10 us (200x the default 2 ms's steps) to 0.1 s (past stability already:
+#: the gates report the divergence); times to minutes; directions to 10^4 (each is a rollout;
+#: 10^9 asked for 45 GB at once); solver iterations to 10^3 and 10^4 (each runs every step).
+RANGES: dict[str, Option] = {
+    "max_normal_force": _range(0, 1e4),
+    "tip_radius": _range(0, MAX_DIAGONAL),
+    "tip_radius_ratio": _range(0, 1),  # of the object's diagonal: a tip as large as the object
+    "tip_mass": _range(0, 1e3),
+    "slide_armature": _range(0, 1e3),
+    "servo_compliance": _range(0, REFERENCE_DIAGONAL),
+    "tangential_compliance": _range(0, REFERENCE_DIAGONAL),
+    "target_factor": _range(1, 100),  # > 1 saturates the preload; 100 is a target 100 F_max deep
+    "object_mass": _range(0, 1e3),
+    "inertia_scale": _range(0, 1e3),
+    "mu": _range(0, MAX_MU),
+    "timestep": _range(1e-5, 0.1, exclusive=False),
+    "impratio": _range(0, 1e4),
+    "noslip_iterations": _range(0, 1000, "int"),
+    "solver_iterations": _range(1, 10_000, "int"),
+    "settle_time": _range(0, 60),
+    "creep_tolerance": _range(0, REFERENCE_DIAGONAL),
+    "penetration_tolerance": _range(0, REFERENCE_DIAGONAL),
+    "directions": _range(0, 10_000, "int"),
+    "direction_seed": _range(0, MAX_SEED, "int"),
+    "move_threshold": _range(0, REFERENCE_DIAGONAL),
+    "rotation_threshold": _range(0, 180),  # degrees: half a turn is any rotation
+    "ramp_time": _range(0, 600),
+    "ramp_extent": _range(1, 10),  # > 1: the ramp passes the prediction; 10x it finds any failure
+    "min_ramp_fraction": _range(0, 1),
+    "prediction_cone_edges": _range(3, 1024, "int"),  # polygon error 1 - cos(pi / k): 5e-6 at 1024
+    "holding_load": _range(0, 1e4),
+    "threads": _range(1, 1024, "int"),  # one MuJoCo data each; more than cores only take turns
+}
+#: Most MuJoCo steps of one settling or one ramp (the default ramp is 3000): beyond, one
+#: direction of one grasp takes hours.
+MAX_STEPS = 10**7
+#: Settings that may be left unset (None): the object's default tip, the plan's mu, all cores.
+UNSET = ("tip_radius", "mu", "threads")
 
 PROTOCOLS = ("resistance", "dexgraspbench")
 INTEGRATORS = ("implicitfast", "implicit", "euler", "rk4")
@@ -145,52 +195,14 @@ class SimSettings:
     scale_lengths: bool = True
 
     def __post_init__(self) -> None:
-        positive = (
-            "max_normal_force",
-            "tip_radius_ratio",
-            "tip_mass",
-            "servo_compliance",
-            "tangential_compliance",
-            "object_mass",
-            "inertia_scale",
-            "timestep",
-            "impratio",
-            "settle_time",
-            "creep_tolerance",
-            "penetration_tolerance",
-            "move_threshold",
-            "rotation_threshold",
-            "ramp_time",
-            "min_ramp_fraction",
-            "holding_load",
-        )
-        for name in positive:
-            value = getattr(self, name)
-            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
-                raise OgcpError(f"simulation setting {name} must be a positive number, got {value!r}")
-        for name in ("tip_radius", "mu"):
-            value = getattr(self, name)
-            if value is not None and not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
-                raise OgcpError(f"simulation setting {name} must be a positive number or unset, got {value!r}")
-        if not self.ramp_extent > 1.0:
-            raise OgcpError(f"simulation setting ramp_extent must be > 1, got {self.ramp_extent!r}")
-        if not self.target_factor > 1.0:
-            raise OgcpError(f"simulation setting target_factor must be > 1, got {self.target_factor!r}")
-        for name, low in (
-            ("noslip_iterations", 0),
-            ("solver_iterations", 1),
-            ("directions", 0),
-            ("direction_seed", 0),
-            ("prediction_cone_edges", 3),
-        ):
-            value = getattr(self, name)
-            if not isinstance(value, int) or isinstance(value, bool) or value < low:
-                raise OgcpError(f"simulation setting {name} must be an integer >= {low}, got {value!r}")
         for name in ("gravity", "weight_test", "scale_lengths"):
             if not isinstance(getattr(self, name), bool):
                 raise OgcpError(f"simulation setting {name} must be true or false, got {getattr(self, name)!r}")
-        if self.threads is not None and (not isinstance(self.threads, int) or self.threads < 1):
-            raise OgcpError(f"simulation setting threads must be an integer >= 1 or unset, got {self.threads!r}")
+        for name, declared in RANGES.items():
+            value = getattr(self, name)
+            if value is None and name in UNSET:
+                continue
+            object.__setattr__(self, name, _absolute(declared, name, self.scale_lengths).check(_where(name), value))
         for name, choices in (
             ("protocol", PROTOCOLS),
             ("integrator", INTEGRATORS),
@@ -199,8 +211,18 @@ class SimSettings:
         ):
             if getattr(self, name) not in choices:
                 raise choice_error(f"simulation setting {name}", getattr(self, name), choices)
-        if len(self.contact_solref) != 2 or len(self.contact_solimp) != 3:
-            raise OgcpError("contact_solref needs 2 numbers and contact_solimp 3")
+        object.__setattr__(self, "contact_solref", _solref(self.contact_solref))
+        object.__setattr__(self, "contact_solimp", _solimp(self.contact_solimp, self.scale_lengths))
+        for what, seconds in (
+            ("settle_time", self.settle_time),
+            ("ramp_time x ramp_extent", self.ramp_time * self.ramp_extent),
+        ):
+            if seconds / self.timestep > MAX_STEPS:
+                raise OgcpError(
+                    f"simulation settings {what} / timestep = {seconds:g} s / {self.timestep:g} s is "
+                    f"{seconds / self.timestep:.3g} MuJoCo steps; at most {MAX_STEPS:.0e} per settling or "
+                    "ramp: shorten it or take a longer timestep"
+                )
 
     @property
     def body_mass(self) -> float:
@@ -274,10 +296,53 @@ class SimSettings:
         for key in data:
             if key not in valid:
                 raise choice_error("simulation setting", key, valid)
-        for key in ("contact_solref", "contact_solimp"):
-            if key in data:
-                data[key] = tuple(float(v) for v in data[key])
         return cls(**data)
+
+
+def _where(name: str) -> str:
+    return f"simulation setting {name}"
+
+
+def _absolute(declared: Option, name: str, scale_lengths: bool) -> Option:
+    """The range of a setting given in absolute units: lengths up to the largest object, masses
+    as heavy as the smallest object's slides are (so :meth:`SimSettings.scaled` stays in range)."""
+    if scale_lengths or declared.maximum is None:
+        return declared
+    if name in LENGTH_SETTINGS:
+        factor = MAX_DIAGONAL / REFERENCE_DIAGONAL
+    elif name in (*SERVO_MASSES, "inertia_scale"):
+        factor = REFERENCE_DIAGONAL / MIN_DIAGONAL
+    else:
+        return declared
+    return replace(declared, maximum=declared.maximum * factor)
+
+
+def _numbers(name: str, value: Any, count: int) -> tuple[float, ...]:
+    """``count`` finite numbers from a list or tuple (TOML and JSON give lists)."""
+    ok = isinstance(value, (list, tuple)) and len(value) == count
+    if ok and all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in value):
+        return tuple(float(v) for v in value)
+    raise OgcpError(f"{_where(name)}: expected a list of {count} finite numbers, got {value!r}")
+
+
+def _solref(value: Any) -> tuple[float, float]:
+    """MuJoCo's solref: (time constant [s] > 0, damping ratio > 0), or (-stiffness < 0, -damping <= 0)."""
+    timeconst, damping = _numbers("contact_solref", value, 2)
+    if not ((timeconst > 0 and damping > 0) or (timeconst < 0 and damping <= 0)):
+        raise OgcpError(
+            f"{_where('contact_solref')}: expected (time constant > 0, damping ratio > 0) or MuJoCo's "
+            f"(-stiffness < 0, -damping <= 0), got {list(value)!r}"
+        )
+    return timeconst, damping
+
+
+def _solimp(value: Any, scale_lengths: bool) -> tuple[float, float, float]:
+    """MuJoCo's solimp: 0 < dmin <= dmax < 1 and a width > 0 [m at the reference diagonal]."""
+    dmin, dmax, width = _numbers("contact_solimp", value, 3)
+    if not 0 < dmin <= dmax < 1:
+        raise OgcpError(f"{_where('contact_solimp')}: expected 0 < dmin <= dmax < 1, got {list(value)!r}")
+    length = _absolute(RANGES["creep_tolerance"], "creep_tolerance", scale_lengths)
+    return dmin, dmax, length.check(f"{_where('contact_solimp')} width", width)
 
 
 def scaled_lengths(settings: SimSettings) -> dict[str, float]:

@@ -1,8 +1,10 @@
-"""What a wheel ships, checked statically from pyproject.toml (no wheel is built here).
+"""What a wheel ships and what it requires, checked statically from pyproject.toml (no wheel is built here).
 
 The wheel install itself (``pip install`` of a built wheel, then ``ogcp`` from another folder) is
 a release check; these tests keep its inputs right: every code package listed, every file of
-``assets/`` matched by a package-data pattern and found by the asset locator, ``py.typed`` shipped.
+``assets/`` matched by a package-data pattern and found by the asset locator, ``py.typed`` shipped;
+every dependency bounded below and pinned by ``constraints.txt`` within its range. No network:
+which wheels exist on PyPI is ``python -m benchmarks.studies.wheels``.
 """
 
 from __future__ import annotations
@@ -11,11 +13,15 @@ import tomllib
 from pathlib import Path
 
 import pytest
+from packaging.requirements import Requirement
+from packaging.utils import canonicalize_name
+from packaging.version import Version
 
 from planner.infra import asset_path
 
 ROOT = Path(__file__).resolve().parent.parent
-SETUPTOOLS = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
+PYPROJECT = tomllib.loads((ROOT / "pyproject.toml").read_text())
+SETUPTOOLS = PYPROJECT["tool"]["setuptools"]
 # Run from a checkout only: study scripts and speed benchmarks.
 NOT_SHIPPED = {"benchmarks.studies", "benchmarks.perf"}
 
@@ -71,3 +77,49 @@ def test_the_locator_finds_every_shipped_file(relative):
 def test_packages_are_marked_typed(package):
     assert (ROOT / package / "py.typed").is_file()
     assert "py.typed" in SETUPTOOLS["package-data"][package]
+
+
+def _requirements(*extras: str) -> list[Requirement]:
+    """The runtime requirements and those of the given extras, without ogcp's own (``ogcp[test]``)."""
+    project = PYPROJECT["project"]
+    lines = list(project["dependencies"]) + [r for extra in extras for r in project["optional-dependencies"][extra]]
+    return [r for r in map(Requirement, lines) if canonicalize_name(r.name) != "ogcp"]
+
+
+def _pins() -> dict[str, Version]:
+    """constraints.txt as {canonical name: pinned version}; every line must be ``name==version``."""
+    pins: dict[str, Version] = {}
+    for line in (ROOT / "constraints.txt").read_text().splitlines():
+        line = line.split("#", 1)[0].strip()
+        if not line:
+            continue
+        requirement = Requirement(line)
+        specs = list(requirement.specifier)
+        assert len(specs) == 1 and specs[0].operator == "==", f"constraints.txt: {line!r} is not name==version"
+        name = canonicalize_name(requirement.name)
+        assert name not in pins, f"constraints.txt pins {name} twice"
+        pins[name] = Version(specs[0].version)
+    return pins
+
+
+def test_constraints_pin_every_dependency_within_its_range():
+    pins = _pins()
+    for requirement in _requirements(*PYPROJECT["project"]["optional-dependencies"]):
+        name = canonicalize_name(requirement.name)
+        assert name in pins, f"constraints.txt does not pin {name}, a dependency in pyproject.toml"
+        assert requirement.specifier.contains(pins[name], prereleases=True), (
+            f"constraints.txt pins {name}=={pins[name]}, outside pyproject.toml's {requirement}"
+        )
+
+
+def test_every_dependency_has_a_lower_bound():
+    for requirement in _requirements(*PYPROJECT["project"]["optional-dependencies"]):
+        operators = {spec.operator for spec in requirement.specifier}
+        assert operators & {">=", ">", "==", "~="}, f"{requirement} has no lower bound"
+
+
+def test_dm_control_is_not_a_dependency():
+    # It pulled labmaze, which has no wheels for Python 3.13; nothing in ogcp imports it.
+    names = {canonicalize_name(r.name) for r in _requirements(*PYPROJECT["project"]["optional-dependencies"])}
+    assert "dm-control" not in names and "labmaze" not in names
+    assert "dm-control" not in _pins()

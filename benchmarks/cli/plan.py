@@ -8,6 +8,7 @@ The method flags come from the methods' declared options
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import sys
@@ -18,9 +19,19 @@ from typing import TYPE_CHECKING, Any
 # The contact sampling, the engines and the summaries (numpy, trimesh, scipy, numba) are
 # imported by the functions that use them.
 from benchmarks.cli.method_options import GROUPS, add_method_options, config_from_args, not_applicable
-from benchmarks.cli.options import add_diagonal_option, integer, number, positive_int
+from benchmarks.cli.options import add_diagonal_option, check_output, integer, positive_int, typed, valid
 from planner.config.methods import DEFAULT_FINGERS, DEFAULT_METHOD, DEFAULT_SEED
-from planner.grasp.defaults import DEFAULT_CONE_EDGES, DEFAULT_CONTACTS, DEFAULT_MU, DEFAULT_TIP_RADIUS_RATIO
+from planner.config.options import JOBS, TIME_LIMIT
+from planner.grasp.defaults import (
+    CONE_EDGES,
+    CONTACT_SEED,
+    DEFAULT_CONE_EDGES,
+    DEFAULT_CONTACTS,
+    DEFAULT_MU,
+    DEFAULT_TIP_RADIUS_RATIO,
+    MU,
+    TIP_RADIUS,
+)
 from planner.infra.atomic import write_json_atomic
 from planner.infra.errors import OgcpError
 from planner.infra.parallel import BACKENDS, DEFAULT_BACKEND, DEFAULT_JOBS
@@ -54,14 +65,20 @@ def _add_contact_options(parser: argparse.ArgumentParser, n_default: int | None)
         help=f"number of contacts sampled from the surface (default {DEFAULT_CONTACTS})",
     )
     parser.add_argument(
-        "--seed", type=integer, default=DEFAULT_SEED, help=f"seed of every random choice (default {DEFAULT_SEED})"
+        "--seed",
+        type=typed(CONTACT_SEED),
+        default=DEFAULT_SEED,
+        help=f"seed of every random choice (default {DEFAULT_SEED}; {valid(CONTACT_SEED)})",
     )
-    parser.add_argument("--mu", type=number, default=DEFAULT_MU, help=f"friction coefficient (default {DEFAULT_MU})")
+    # None, not the default, so that a contact file (whose mu and k are fixed) can refuse them.
+    parser.add_argument(
+        "--mu", type=typed(MU), default=None, help=f"friction coefficient (default {DEFAULT_MU}; {valid(MU)})"
+    )
     parser.add_argument(
         "--cone-edges",
-        type=integer,
-        default=DEFAULT_CONE_EDGES,
-        help=f"friction-cone edges k (default {DEFAULT_CONE_EDGES})",
+        type=typed(CONE_EDGES),
+        default=None,
+        help=f"friction-cone edges k (default {DEFAULT_CONE_EDGES}; {valid(CONE_EDGES)})",
     )
     parser.add_argument(
         "--tip-radius",
@@ -76,14 +93,14 @@ def _add_contact_options(parser: argparse.ArgumentParser, n_default: int | None)
 
 
 def tip_radius(text: str) -> float:
-    """A fingertip radius [m]: a finite number >= 0."""
+    """A fingertip radius [m]: a finite number in :data:`TIP_RADIUS`'s range (0 = plain sampling)."""
     try:
         value = float(text)
     except ValueError:
         value = math.nan  # reported below, with the valid values
     if not (math.isfinite(value) and value >= 0):
         raise argparse.ArgumentTypeError(f"expected a finite number of metres >= 0 (0 = plain sampling), got {text!r}")
-    return value
+    return float(typed(TIP_RADIUS)(text))
 
 
 def sample_from_args(mesh: trimesh.Trimesh, source: dict[str, Any], n: int, args: argparse.Namespace) -> ContactSet:
@@ -92,7 +109,9 @@ def sample_from_args(mesh: trimesh.Trimesh, source: dict[str, Any], n: int, args
     from planner.grasp.reach import default_tip_radius
 
     radius = default_tip_radius(mesh) if args.tip_radius is None else args.tip_radius
-    return sample_contacts(mesh, n, args.seed, args.mu, args.cone_edges, source, tip_radius=radius)
+    mu = DEFAULT_MU if args.mu is None else args.mu
+    cone_edges = DEFAULT_CONE_EDGES if args.cone_edges is None else args.cone_edges
+    return sample_contacts(mesh, n, args.seed, mu, cone_edges, source, tip_radius=radius)
 
 
 def register(commands: Any) -> None:
@@ -105,7 +124,13 @@ def register(commands: Any) -> None:
     contacts.add_argument("-o", "--output", required=True, type=Path, help="output JSON file")
     contacts.set_defaults(handler=run_contacts)
 
-    plan = commands.add_parser("plan", help="plan an optimal or bounded-suboptimal m-contact grasp")
+    plan = commands.add_parser(
+        "plan",
+        help="plan an optimal or bounded-suboptimal m-contact grasp",
+        epilog="exit status: 0 a finished search (status optimal, bounded or approximate; heuristic for HFTS); "
+        "2 invalid input, or no valid grasp; 3 stopped at --time-limit and 130 stopped by Ctrl-C, both with the "
+        "best grasp so far, its certified bound and gap printed (and written with -o). A second Ctrl-C aborts.",
+    )
     plan.add_argument(
         "object",
         metavar="MESH_OR_NAME_OR_CONTACTS",
@@ -125,15 +150,17 @@ def register(commands: Any) -> None:
     add_method_options(plan, groups)
     plan.add_argument(
         "--time-limit",
-        type=number,
+        type=typed(TIME_LIMIT),
         default=None,
         metavar="SECONDS",
-        help="stop A*/WA*/Dijkstra after this many seconds with the best grasp so far and a "
-        "certified bound on the optimum (exit status 2)",
+        help="stop A*/WA*/Dijkstra after this many seconds; the result is the best grasp so far "
+        "with its certified bound and gap (status 'stopped', exit status 3)",
     )
     _add_contact_options(plan, None)
     es, hfts = groups.values()
-    es.add_argument("--jobs", type=positive_int, default=None, help=f"worker processes (default {DEFAULT_JOBS})")
+    es.add_argument(
+        "--jobs", type=typed(JOBS), default=None, help=f"worker processes (default {DEFAULT_JOBS}; {valid(JOBS)})"
+    )
     es.add_argument(
         "--backend", default=None, help=f"parallel backend: {', '.join(BACKENDS)} (default {DEFAULT_BACKEND})"
     )
@@ -165,6 +192,10 @@ def load_contact_set(spec: str, args: argparse.Namespace) -> ContactSet:
             raise OgcpError("--tip-radius does not apply to a contact file (its contacts are fixed)")
         if args.diagonal is not None:
             raise OgcpError("--diagonal does not apply to a contact file (its contacts are fixed)")
+        if args.mu is not None:
+            raise OgcpError("--mu does not apply to a contact file (its wrenches are fixed)")
+        if args.cone_edges is not None:
+            raise OgcpError("--cone-edges does not apply to a contact file (its wrenches are fixed)")
         return ContactSet.load(spec)
     mesh, source = resolve_object(spec, args.diagonal)
     n = args.contacts if args.contacts is not None else DEFAULT_CONTACTS
@@ -205,15 +236,25 @@ def run_contacts(args: argparse.Namespace) -> int:
     return 0
 
 
+#: Exit status of ``ogcp plan`` by the result's status: a stopped search is a result, not an error.
+EXIT_STATUS = {"stopped": 3, "interrupted": 130}
+
+
 def run_plan(args: argparse.Namespace) -> int:
+    from benchmarks.cli.interrupt import stop_on_interrupt
     from benchmarks.cli.plan_summary import describe
 
     spec = method_spec(args.method)
     config = config_from_args(spec, args)
     options = run_options_from_args(spec, args)
+    check_output(args.output)  # before the search whose result it is to hold
     contacts = load_contact_set(args.object, args)
-    run = spec.run(config, contacts, args.fingers, options)
+    if "time_limit" in spec.run_options:  # the searches: Ctrl-C returns their best grasp
+        with stop_on_interrupt() as stop:
+            run = spec.run(config, contacts, args.fingers, dataclasses.replace(options, stop=stop))
+    else:
+        run = spec.run(config, contacts, args.fingers, options)
     if args.output is not None:
         write_json_atomic(args.output, run.record)
     print(json.dumps(run.record) if args.json else describe(run, contacts))
-    return 0
+    return EXIT_STATUS.get(run.record.get("status", ""), 0)

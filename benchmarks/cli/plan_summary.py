@@ -10,7 +10,7 @@ from planner.grasp.contact_set import ContactSet
 from planner.methods.registry import METHODS
 from planner.methods.runners import MethodRun
 from planner.records.plan import PlanHand, PlanOptimum, PlanView
-from planner.search.result import SearchResult
+from planner.search.result import UNFINISHED, SearchResult
 
 
 def describe(run: MethodRun, contacts: ContactSet) -> str:
@@ -28,7 +28,14 @@ def search_summary(result: SearchResult, contacts: ContactSet) -> str:
     s, c = result.stats, result.config
     heuristic = f"Γh={c['heuristic']} b={c['heuristic_branching']}" if c["heuristic"] != "none" else "no heuristic"
     method = METHODS[result.method].title + (f" (eps={result.eps:g})" if result.method == "wastar" else "")
-    if result.method == "wastar":
+    if result.status in UNFINISHED:
+        why = "at its time limit" if result.status == "stopped" else "by request"
+        relative = result.gap / result.bound if result.bound > 0 else 0.0
+        certificate = (
+            f"{result.status} {why}: best so far, optimum <= {result.bound:.6f} "
+            f"(gap {result.gap:.6f}, {100 * relative:.2f} % of the bound)"
+        )
+    elif result.method == "wastar":
         certificate = f"within bound: optimum <= {result.bound:.6f} (guarantee: <= {result.eps_bound:.6f})"
     elif c["symmetry"]:
         certificate = "optimal up to approximate symmetry removal"
@@ -50,7 +57,7 @@ def search_summary(result: SearchResult, contacts: ContactSet) -> str:
             f"Q1 evaluations: {s.q1_evaluations} (cache hits {s.q1_cache_hits}, rejected by bound {s.bound_rejections}), "
             f"hull calls {s.hull_calls}"
         ),
-        f"time: {s.wall_seconds:.2f} s wall, {s.cpu_seconds:.2f} s CPU",
+        f"time: {s.wall_seconds:.2f} s wall, {s.cpu_seconds:.2f} s CPU; peak memory {s.peak_rss_bytes / 2**20:.0f} MiB",
         "contacts (index: position [m] / inward normal):",
     ]
     for i, p, n in zip(result.grasp, result.positions, result.normals):

@@ -13,7 +13,13 @@ from pathlib import Path
 from typing import Any
 
 # The names only: the figure modules (numpy, the records; matplotlib when drawing) load in the handler.
+from benchmarks.cli.options import typed, valid
 from benchmarks.plots.names import NAMES
+from planner.config.options import Option
+
+#: PNG resolution: 10 dpi is the plots' own floor; 1200 dpi is twice print quality, and a figure
+#: at 10^6 dpi asked matplotlib for more memory than any machine has.
+DPI = Option("int", 200, "PNG resolution", minimum=10, maximum=1200)
 
 
 def register(commands: Any) -> None:
@@ -36,7 +42,7 @@ def register(commands: Any) -> None:
         metavar="FMT",
         help="figure formats: pdf, png, svg (default pdf png)",
     )
-    plot.add_argument("--dpi", type=int, default=200, help="PNG resolution (default 200)")
+    plot.add_argument("--dpi", type=typed(DPI), default=DPI.default, help=f"PNG resolution; {valid(DPI)} (default 200)")
     plot.add_argument("--unit", default=None, help="time unit of the table: s or min (default: by magnitude)")
     plot.set_defaults(handler=run_plot)
 

@@ -7,24 +7,28 @@ import dataclasses
 import json
 import math
 import sys
+import tomllib
 from pathlib import Path
 from typing import Any
 
 # Only light modules at the top (the settings and their defaults): the parser is built for every
 # command, ``--help`` included. numpy, the plan records and MuJoCo load in the handlers.
-from benchmarks.cli.options import add_diagonal_option, finite_number, nonnegative_int
+from benchmarks.cli.options import add_diagonal_option, check_output, finite_number, typed, valid
+from planner.config.options import ConfigError, Option
 from planner.infra.atomic import write_json_atomic
 from planner.infra.errors import OgcpError
 from planner.objects.builtin import DEFAULT_DIAGONAL
 from sim_eval.decomposition.settings import METHODS as DECOMPOSITION_METHODS
 from sim_eval.decomposition.settings import DecompositionSettings
-from sim_eval.settings import PROTOCOLS, SimSettings
+from sim_eval.settings import PROTOCOLS, RANGES, SimSettings
 
 AXIS_LABELS = ("+fx", "-fx", "+fy", "-fy", "+fz", "-fz", "+tx", "-tx", "+ty", "-ty", "+tz", "-tz", "q1-weakest")
 
 # Defaults are read from the settings themselves, so each is written once.
 _SIM = SimSettings()
 _DECOMPOSITION = DecompositionSettings()
+#: Grasps of a plan simulated at most: at least one (0 would simulate nothing and succeed).
+MAX_GRASPS = Option("int", None, "grasps simulated at most", minimum=1)
 
 
 def _add_decomposition_options(parser: argparse.ArgumentParser) -> None:
@@ -67,30 +71,41 @@ def _add_decomposition_options(parser: argparse.ArgumentParser) -> None:
 def register(commands: Any) -> None:
     """Add ``evaluate`` and ``decompose`` to the ``ogcp`` sub-commands."""
     evaluate = commands.add_parser("evaluate", help="simulate the grasps of a plan in MuJoCo: measured vs predicted")
-    evaluate.add_argument("plan", type=Path, metavar="PLAN.json", help="plan result (ogcp plan ... --json / -o)")
+    evaluate.add_argument(
+        "plan",
+        type=Path,
+        metavar="PLAN_OR_GRASPS.json",
+        help="plan result (ogcp plan ... --json / -o) or grasps from any planner (schema ogcp.grasps/1, "
+        "docs/external_grasps.md)",
+    )
     evaluate.add_argument(
         "--directions",
-        type=nonnegative_int,
+        type=typed(RANGES["directions"]),
         default=_SIM.directions,
-        help=f"quasi-uniform 6-D load directions besides the 12 axes and Q1's weakest (default {_SIM.directions})",
+        help="quasi-uniform 6-D load directions besides the 12 axes and Q1's weakest; "
+        f"{valid(RANGES['directions'])} (default {_SIM.directions})",
     )
     evaluate.add_argument(
         "--max-force",
-        type=finite_number,
+        type=typed(RANGES["max_normal_force"]),
         default=_SIM.max_normal_force,
-        help=f"per-finger normal-force cap F_max [N] (default {_SIM.max_normal_force:g})",
+        help=f"per-finger normal-force cap F_max [N]; {valid(RANGES['max_normal_force'])} "
+        f"(default {_SIM.max_normal_force:g})",
     )
     evaluate.add_argument(
         "--tip-radius",
-        type=finite_number,
+        type=typed(RANGES["tip_radius"]),
         default=None,
-        help=f"fingertip radius [m] (default {100 * _SIM.tip_radius_ratio:g}%% of the object's diagonal)",
+        metavar="METRES",
+        help=f"fingertip radius [m]; {valid(RANGES['tip_radius'])} "
+        f"(default {100 * _SIM.tip_radius_ratio:g}%% of the object's diagonal)",
     )
     evaluate.add_argument(
         "--ramp-time",
-        type=finite_number,
+        type=typed(RANGES["ramp_time"]),
         default=_SIM.ramp_time,
-        help=f"seconds for a load to reach its prediction (default {_SIM.ramp_time:g})",
+        metavar="SECONDS",
+        help=f"seconds for a load to reach its prediction; {valid(RANGES['ramp_time'])} (default {_SIM.ramp_time:g})",
     )
     evaluate.add_argument(
         "--protocol",
@@ -99,14 +114,33 @@ def register(commands: Any) -> None:
         help="ramp to failure (default) or DexGraspBench's fixed +-x,y,z load",
     )
     evaluate.add_argument("--weight-test", action="store_true", help="also hold m g along the six force axes")
-    evaluate.add_argument("--max-grasps", type=nonnegative_int, default=None, help="simulate at most this many grasps")
-    evaluate.add_argument("--threads", type=nonnegative_int, default=None, help="rollout threads (default: all cores)")
+    evaluate.add_argument(
+        "--on-surface",
+        choices=("project", "refuse"),
+        default="project",
+        help="contacts of an ogcp.grasps/1 file off the mesh surface: project them onto it (with a warning) "
+        "or refuse the file (default project)",
+    )
+    evaluate.add_argument(
+        "--max-grasps",
+        type=typed(MAX_GRASPS),
+        default=None,
+        metavar="N",
+        help=f"simulate at most this many grasps, best first; {valid(MAX_GRASPS)} (default: all of the plan's)",
+    )
+    evaluate.add_argument(
+        "--threads",
+        type=typed(RANGES["threads"]),
+        default=None,
+        help=f"rollout threads; {valid(RANGES['threads'])} (default: all cores)",
+    )
     evaluate.add_argument(
         "--settings",
         type=Path,
         default=None,
-        help="JSON file of further simulation settings (lengths at a 0.2 m diagonal, scaled with the object; "
-        '"scale_lengths": false makes them absolute)',
+        metavar="FILE",
+        help="JSON or TOML (.toml) file of further simulation settings, by name (lengths at a 0.2 m diagonal, "
+        'scaled with the object; "scale_lengths": false makes them absolute)',
     )
     _add_decomposition_options(evaluate)
     evaluate.add_argument(
@@ -138,17 +172,33 @@ def _decomposition(args: argparse.Namespace) -> DecompositionSettings:
     )
 
 
+def settings_file(path: Path) -> dict[str, Any]:
+    """The settings of a ``--settings`` file: a JSON object, or a TOML table for a ``.toml`` file.
+
+    Raises:
+        OgcpError: For a file that cannot be read, is not valid JSON (TOML), or is not a table
+            of settings; one line naming the file and where it is wrong.
+    """
+    toml = path.suffix.lower() == ".toml"
+    try:
+        text = path.read_text(encoding="utf-8")
+        data = tomllib.loads(text) if toml else json.loads(text)
+    except (OSError, UnicodeDecodeError) as exc:
+        raise OgcpError(f"{path}: cannot read simulation settings: {getattr(exc, 'strerror', None) or exc}") from exc
+    except json.JSONDecodeError as exc:
+        hint = "" if text.lstrip().startswith(("{", "[")) else "; a TOML file needs the suffix .toml"
+        raise OgcpError(f"{path}: not valid JSON ({exc.msg} at line {exc.lineno} column {exc.colno}){hint}") from exc
+    except tomllib.TOMLDecodeError as exc:
+        raise OgcpError(f"{path}: not valid TOML ({exc})") from exc
+    if not isinstance(data, dict):
+        raise OgcpError(
+            f"{path}: simulation settings must be a JSON object of settings by name, got {type(data).__name__}"
+        )
+    return data
+
+
 def _settings(args: argparse.Namespace) -> SimSettings:
-    extra: dict[str, Any] = {}
-    if args.settings is not None:
-        try:
-            extra = json.loads(args.settings.read_text())
-        except (OSError, json.JSONDecodeError) as exc:
-            raise OgcpError(f"{args.settings}: cannot read simulation settings: {exc}") from exc
-        if not isinstance(extra, dict):
-            raise OgcpError(f"{args.settings}: simulation settings must be a JSON object")
-    if args.threads == 0:
-        raise OgcpError("--threads must be >= 1")
+    extra = settings_file(args.settings) if args.settings is not None else {}
     values = {
         "directions": args.directions,
         "max_normal_force": args.max_force,
@@ -159,15 +209,30 @@ def _settings(args: argparse.Namespace) -> SimSettings:
         "threads": args.threads,
         **extra,
     }
-    return SimSettings.from_dict(values)
+    try:
+        return SimSettings.from_dict(values)
+    except OgcpError as exc:
+        # Name the file when the value came from it (the flags' own values were checked by argparse).
+        flag = isinstance(exc, ConfigError) and exc.field.rsplit(" ", 1)[-1] not in extra
+        if args.settings is None or flag:
+            raise
+        raise OgcpError(f"{args.settings}: {exc}") from exc
 
 
-def _fmt(value: float | None, digits: int = 3) -> str:
-    return "-" if value is None or not math.isfinite(value) else f"{value:.{digits}f}"
+def _fmt(value: Any, digits: int = 3, scale: float = 1.0) -> str:
+    """A number of a record for the table: ``-`` for what is not one (NaN is null in JSON, a
+    diverged grasp's creep is infinite, a hand-edited record may hold anything)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        return "-"
+    return f"{scale * value:.{digits}f}"
+
+
+def _list(values: Any) -> list[Any]:
+    return values if isinstance(values, list) else []
 
 
 def _millimetres(values: Any) -> str:
-    return "/".join("-" if v is None else f"{1e3 * v:.2f}" for v in values)
+    return "/".join(_fmt(v, 2, 1e3) for v in _list(values))
 
 
 def _realized_lines(grasp: Any) -> list[str]:
@@ -178,14 +243,14 @@ def _realized_lines(grasp: Any) -> list[str]:
         change = grasp.q1_change
         lines.append(
             f"  realized contacts: {_millimetres(realized.get('offsets', []))} mm from the plan, normals "
-            f"{'/'.join(f'{a:.1f}' for a in realized.get('normal_angles', []))} deg off; Q1 "
+            f"{'/'.join(_fmt(a, 1) for a in _list(realized.get('normal_angles')))} deg off; Q1 "
             f"{_fmt(grasp.q1, 4)} -> {_fmt(grasp.q1_realized, 4)} N"
             + ("" if change is None else f" ({100 * change:+.1f} %)")
         )
     if collision:
         lines.append(
             f"  collision surface: {_millimetres(collision.get('offsets', []))} mm from the mesh along the normals "
-            f"(tolerance {_fmt(1e3 * collision.get('tolerance', math.nan), 2)} mm, CoACD threshold "
+            f"(tolerance {_fmt(collision.get('tolerance'), 2, 1e3)} mm, CoACD threshold "
             f"{collision.get('threshold')})"
         )
         if collision.get("note"):
@@ -201,23 +266,25 @@ def sim_summary(record: dict[str, Any]) -> str:
 
     sim = SimRecord.from_dict(record)
     name = sim.object.get("name") or sim.object.get("path", "?")
-    lines = [f"object: {name}, {len(sim.grasps)} grasp(s), {sim.wall_seconds:.1f} s"]
+    lines = [f"object: {name}, {len(sim.grasps)} grasp(s), {_fmt(sim.wall_seconds, 1)} s"]
     for g in sim.grasps:
         head = f"\n{g.label} {list(g.grasp or ())}: Q1 {_fmt(g.q1, 4)} N"
         if g.error:
             lines.append(f"{head}  {'UNREACHABLE' if g.unreachable else 'ERROR'} {g.error}")
             continue
         gates = g.gates
+        # A diverged grasp has no finite creep or measurements: its table shows "-" for them.
+        diverged = " DIVERGED" if gates.get("diverged") is True else ""
         lines.append(
-            f"{head}  valid {g.valid} (penetration {gates['initial_penetration'] * 1e3:.3f} mm, "
-            f"tips in contact {gates['tips_in_contact']}, creep {gates['creep'] * 1e6:.2f} um)"
+            f"{head}  valid {g.valid}{diverged} (penetration {_fmt(gates.get('initial_penetration'), 3, 1e3)} mm, "
+            f"tips in contact {gates.get('tips_in_contact', '-')}, creep {_fmt(gates.get('creep'), 2, 1e6)} um)"
         )
         lines.extend(f"  invalid: {reason}" for reason in g.invalid_reasons)
         lines.extend(_realized_lines(g))
         for name, test in g.hold_tests.items():
-            lines.append(
-                f"  {name} test: {'pass' if test['success'] else 'FAIL'} {dict(zip(test['axes'], test['passed']))}"
-            )
+            test = test if isinstance(test, dict) else {}
+            passed = dict(zip(_list(test.get("axes")), _list(test.get("passed"))))
+            lines.append(f"  {name} test: {'pass' if test.get('success') is True else 'FAIL'} {passed}")
         if not np.isfinite(g.measured).any():
             continue
         lines.append("  direction    predicted [N]  measured [N]  fidelity")
@@ -230,26 +297,34 @@ def sim_summary(record: dict[str, Any]) -> str:
         )
     m = sim.set_metrics
     unreachable = f" ({m['n_unreachable']} unreachable, not simulated)" if m.get("n_unreachable") else ""
+    change = _fmt(m.get("median_q1_change"), 1, 100)
     lines.append(
-        f"\nset: {m['n_valid']} valid of {m['n_simulated']}{unreachable}, "
+        f"\nset: {m.get('n_valid', '-')} valid of {m.get('n_simulated', '-')}{unreachable}, "
         f"median fidelity {_fmt(m.get('median_fidelity'))}"
-        + ("" if m.get("median_q1_change") is None else f", median Q1 change {100 * m['median_q1_change']:+.1f} %")
+        + ("" if change == "-" else f", median Q1 change {'' if change.startswith('-') else '+'}{change} %")
     )
-    if "q1_vs_measured" in m:
-        q, p = m["q1_vs_measured"], m["predicted_vs_measured"]
+    q, p = m.get("q1_vs_measured"), m.get("predicted_vs_measured")
+    if isinstance(q, dict) and isinstance(p, dict):
         lines.append(
-            f"Q1 vs measured min: Spearman {_fmt(q['spearman'])}, Kendall {_fmt(q['kendall'])}; "
-            f"predicted vs measured: Spearman {_fmt(p['spearman'])}, Kendall {_fmt(p['kendall'])}; "
-            f"AUC(Q1, holds {m['holding_load']} N) {_fmt(m['auc_q1_holds'])}"
+            f"Q1 vs measured min: Spearman {_fmt(q.get('spearman'))}, Kendall {_fmt(q.get('kendall'))}; "
+            f"predicted vs measured: Spearman {_fmt(p.get('spearman'))}, Kendall {_fmt(p.get('kendall'))}; "
+            f"AUC(Q1, holds {m.get('holding_load', '-')} N) {_fmt(m.get('auc_q1_holds'))}"
         )
     lines.append("(+ = held to the end of the ramp: a lower bound)")
     return "\n".join(lines)
 
 
 def run_evaluate(args: argparse.Namespace) -> int:
+    from benchmarks.cli.external import is_external, run_external
     from planner.records.plan import load_plan
     from sim_eval.evaluate import evaluate_plan
 
+    if is_external(args.plan):
+        return run_external(args, _settings(args), _decomposition(args), sim_summary)
+
+    # Before the simulation: an output with nowhere to go would waste it.
+    check_output(args.output)
+    check_output(args.render)
     record = load_plan(args.plan)
     result = evaluate_plan(
         record, _settings(args), _decomposition(args), progress=sys.stderr.isatty(), max_grasps=args.max_grasps

@@ -1,7 +1,8 @@
 """The ``ogcp suite`` and ``ogcp compare`` commands (registered by :mod:`benchmarks.cli.app`).
 
 Exit status: ``suite`` 0 when every cell of the suite is recorded without error (or the
-run stopped at ``--max-cells`` without errors), 1 when a cell is recorded as an error;
+run stopped at ``--max-cells`` without errors), 1 when a cell is recorded as an error or
+as stopped at ``--time-limit``;
 ``compare`` 0 without regressions, 1 with regressions; both 2 on invalid input.
 """
 
@@ -12,7 +13,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from benchmarks.cli.options import number, positive_int
+from benchmarks.cli.options import number, positive_int, typed, valid
+from planner.config.options import JOBS, TIME_LIMIT
 from planner.infra.parallel import BACKENDS
 
 
@@ -31,11 +33,20 @@ def register(commands: Any) -> None:
         metavar="DIR",
         help="results folder: results.jsonl + manifest.json; must be empty unless --resume",
     )
-    suite.add_argument("--jobs", type=positive_int, default=1, help="cells run in parallel (default 1)")
+    suite.add_argument(
+        "--jobs",
+        type=typed(JOBS),
+        default=1,
+        help=f"cells run in parallel; {valid(JOBS)}, 4 per CPU core (default 1)",
+    )
     suite.add_argument("--backend", default="loky", help=f"parallel backend: {', '.join(BACKENDS)} (default loky)")
     suite.add_argument("--address", default=None, metavar="HOST:PORT", help="Dask scheduler address (backend dask)")
     suite.add_argument("--resume", action="store_true", help="continue the run in DIR, skipping its finished cells")
-    suite.add_argument("--retry-errors", action="store_true", help="with --resume: rerun cells recorded as errors")
+    suite.add_argument(
+        "--retry-errors",
+        action="store_true",
+        help="with --resume: rerun cells recorded as errors or as stopped at --time-limit",
+    )
     suite.add_argument(
         "--max-cells",
         type=positive_int,
@@ -53,11 +64,12 @@ def register(commands: Any) -> None:
     )
     suite.add_argument(
         "--time-limit",
-        type=number,
+        type=typed(TIME_LIMIT),
         default=None,
         metavar="SECONDS",
-        help="wall-clock budget per search cell (astar, wastar, dijkstra); a cell past it is "
-        "recorded as an error (rerun with --resume --retry-errors)",
+        help=f"wall-clock budget per search cell (astar, wastar, dijkstra), {TIME_LIMIT.bounds()}; a cell past it is "
+        "recorded as stopped, with its best grasp, certified bound and gap (rerun it with "
+        "--resume --retry-errors and a larger budget)",
     )
     suite.add_argument(
         "--no-simulation",
@@ -70,22 +82,25 @@ def register(commands: Any) -> None:
     compare.add_argument("run", type=Path, metavar="RUN", help="results folder under test")
     compare.add_argument("baseline", type=Path, metavar="BASELINE", help="reference results folder")
     compare.add_argument(
-        "--q1-tolerance", type=number, default=1e-9, help="largest allowed drop of a cell's Q1, absolute (default 1e-9)"
+        "--q1-tolerance",
+        type=number,
+        default=1e-9,
+        help="largest allowed drop of a cell's Q1, absolute, >= 0 (default 1e-9)",
     )
     compare.add_argument(
         "--optimality-tolerance",
         type=number,
         default=1e-9,
-        help="largest |Q1 - ES optimum| of optimal methods (default 1e-9)",
+        help="largest |Q1 - ES optimum| of optimal methods, >= 0 (default 1e-9)",
     )
     compare.add_argument(
-        "--time-ratio", type=number, default=2.0, help="largest allowed RUN/BASELINE time of a cell (default 2)"
+        "--time-ratio", type=number, default=2.0, help="largest allowed RUN/BASELINE time of a cell, >= 1 (default 2)"
     )
     compare.add_argument(
         "--min-time",
         type=number,
         default=1.0,
-        help="times below this many seconds count as this (noise floor, default 1)",
+        help="times below this many seconds count as this (noise floor), >= 0 (default 1)",
     )
     compare.add_argument(
         "--time-key",
@@ -96,7 +111,7 @@ def register(commands: Any) -> None:
         "--resistance-tolerance",
         type=number,
         default=0.05,
-        help="largest allowed relative drop of the minimum measured resistance (default 0.05)",
+        help="largest allowed relative drop of the minimum measured resistance, 0 to 1 (default 0.05)",
     )
     compare.add_argument(
         "--allow-missing", action="store_true", help="report BASELINE cells missing from RUN without failing"

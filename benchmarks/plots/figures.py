@@ -109,7 +109,9 @@ def _histogram_panel(ax: Axes, es: CellData, others: list[CellData], title: str)
     # Axis up to the highest bar or marker, not to Q_OWS (the histogram's range), which can
     # be several times the optimum and squeeze the distribution into a corner.
     reach = [float(edges[np.flatnonzero(counts)[-1] + 1])] if np.any(counts) else []
-    reach += [c.q1 for c in others if c.q1 is not None] + [c.plan_view.bound or 0.0 for c in others]
+    reach += [c.q1 for c in others if c.q1 is not None] + [
+        c.plan_view.bound or 0.0 for c in others if c.method != "hfts"
+    ]
     reach += [q1 or 0.0 for c in others for q1 in c.plan_view.run_q1s]
     ax.set_xlim(0, min(edges[-1], max(reach, default=edges[-1])) * 1.08)
     # Markers sit in axes coordinates vertically, so a log count axis does not move them.

@@ -20,6 +20,7 @@ from planner.grasp.reach import default_tip_radius
 from planner.methods.registry import method_spec
 from planner.methods.runners import RunOptions
 from planner.objects import resolve_object
+from planner.search.result import UNFINISHED
 
 #: Keys of the [simulation] table that are arguments of evaluate_plan, not simulation settings.
 SIMULATION_ARGUMENTS = ("decomposition", "max_grasps")
@@ -33,7 +34,9 @@ def run_cell(cell: Cell, simulation: dict[str, Any] | None = None, time_limit: f
         simulation: Settings passed to ``sim_eval.evaluate_plan`` (the suite's
             ``[simulation]`` table without ``enabled``); None skips the simulation.
         time_limit: Wall-clock budget of a search cell (astar, wastar, dijkstra) [s]; past
-            it the cell is recorded as a ``SearchTimeout`` error. None: unlimited.
+            it the cell is recorded with status ``stopped`` and the best grasp found, its
+            certified bound and gap (a ``SearchTimeout`` error when it had found none).
+            None: unlimited.
 
     Returns:
         The JSON form of its :class:`~benchmarks.suite.record.CellRecord` (schema ``ogcp.cell/1``).
@@ -52,7 +55,7 @@ def run_cell(cell: Cell, simulation: dict[str, Any] | None = None, time_limit: f
         id=cell.id,
         params=cell.params(),
         groups=tuple(cell.groups),
-        status="ok" if error is None else "error",
+        status="error" if error is not None else cell_status(plan),
         error=error,
         plan=plan,
         simulation=sim,
@@ -61,6 +64,11 @@ def run_cell(cell: Cell, simulation: dict[str, Any] | None = None, time_limit: f
         cpu_seconds=time.process_time() - cpu0,
         finished_at=datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
     ).to_dict()
+
+
+def cell_status(plan: dict[str, Any] | None) -> str:
+    """``stopped`` for the plan of a search that did not finish (time limit), else ``ok``."""
+    return "stopped" if plan is not None and plan.get("status") in UNFINISHED else "ok"
 
 
 def contact_set(cell: Cell) -> ContactSet:

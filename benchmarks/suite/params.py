@@ -10,8 +10,9 @@ from __future__ import annotations
 
 from typing import Any
 
-from planner.config.methods import DEFAULT_HAND_THRESHOLD, SEED
+from planner.config.methods import DEFAULT_HAND_THRESHOLD
 from planner.config.options import ConfigError, Option
+from planner.grasp.defaults import CONTACT_SEED
 from planner.infra.errors import OgcpError
 from planner.methods.registry import EXHAUSTIVE_METHODS, METHODS, OPTIMAL_METHODS
 
@@ -31,6 +32,11 @@ METHOD_PARAMS: dict[str, dict[str, Option]] = {name: spec.options() for name, sp
 TITLES = {name: spec.title for name, spec in METHODS.items()}
 #: Parameters left out of default labels: they vary within one plotted series.
 UNLABELLED = ("seed", "record_tree")
+#: Most seeds of one ``{start, count}`` range: repeats for statistics, where 10^4 is plenty;
+#: 10^12 asked for terabytes before the suite's size was known.
+MAX_SEED_COUNT = 10_000
+#: Seeds of a suite: the contacts' and the methods' have the same range.
+SEED = CONTACT_SEED
 
 
 def seed_values(where: str, value: Any) -> list[int]:
@@ -45,7 +51,9 @@ def seed_values(where: str, value: Any) -> list[int]:
                 f"{where}: a seed range needs exactly the keys count, start; got {', '.join(sorted(value))}"
             )
         start = SEED.check(f"{where}.start", value["start"])
-        count = Option("int", 1, minimum=1).check(f"{where}.count", value["count"])
+        count = Option("int", 1, minimum=1, maximum=MAX_SEED_COUNT).check(f"{where}.count", value["count"])
+        if SEED.maximum is not None and start + count - 1 > SEED.maximum:
+            SEED.check(f"{where}.start + count - 1", start + count - 1)
         return list(range(start, start + count))
     return values_of(where, value, SEED)
 

@@ -8,6 +8,9 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
+import math
+import re
+import string
 import tomllib
 from pathlib import Path
 from typing import Any
@@ -21,17 +24,34 @@ from benchmarks.suite.config import (
     ObjectSpec,
     Suite,
 )
-from benchmarks.suite.params import METHOD_PARAMS, complete, default_label, seed_values, values_of
+from benchmarks.suite.params import METHOD_PARAMS, UNLABELLED, complete, default_label, seed_values, values_of
 from planner.config.methods import DEFAULT_FINGERS, DEFAULT_SEED, HAND_FINGERS
 from planner.config.options import Option
-from planner.grasp.defaults import DEFAULT_CONE_EDGES, DEFAULT_CONTACTS, DEFAULT_MU
+from planner.grasp.defaults import (
+    CONE_EDGES,
+    DEFAULT_CONE_EDGES,
+    DEFAULT_CONTACTS,
+    DEFAULT_MU,
+    DIAGONAL,
+    MU,
+    TIP_RADIUS,
+    check_contact_memory,
+)
 from planner.infra.assets import asset_path, assets_dir
 from planner.infra.errors import OgcpError, choice_error
 from planner.objects import BUILTIN_OBJECTS, DEFAULT_DIAGONAL, MESH_SUFFIXES, file_sha256
 from planner.objects.fetchable import FETCHABLE_OBJECTS
 
-#: A suite's ``tip_radius`` [m]: 0 = the paper's plain sampling, > 0 = contacts a tip this size reaches.
-TIP_RADIUS = Option("float", None, minimum=0)
+#: Most cells of one suite. Every cell is a planning run of a second or more and a line of
+#: results; a million cells took more than 20 s to list before the first one ran. Split larger
+#: studies into several suites.
+MAX_CELLS = 100_000
+#: Longest label: a plot legend or a table column, not a text (and a format width of 10^12
+#: asked for terabytes).
+MAX_LABEL = 200
+#: Contact counts and m of a suite: a grasp has m >= 2 contacts, so a set has at least 2.
+CONTACT_COUNT = Option("int", DEFAULT_CONTACTS, minimum=2)
+FINGERS = Option("int", DEFAULT_FINGERS, minimum=2)
 
 
 def builtin_suites() -> list[str]:
@@ -85,6 +105,10 @@ class _Parser:
     def __init__(self, base: Path) -> None:
         self.base = base
         self.default_tip: float | None = None
+        #: label -> (key path, method, parameters) of the variant it names first.
+        self.labels: dict[str, tuple[str, str, dict[str, Any]]] = {}
+        #: Cells of the groups read so far (a cell two groups list counts twice).
+        self.cell_count = 0
 
     def suite(self, data: dict[str, Any], source: str, text: str, default_name: str) -> Suite:
         _no_unknown_keys("top level", data, TOP_KEYS)
@@ -126,19 +150,13 @@ class _Parser:
             if key not in table:
                 raise OgcpError(f"{where}: missing key {key!r} (set it in the group or at the top level)")
         objects = self.objects(f"{where}.objects", table["objects"])
-        contacts = values_of(
-            f"{where}.contacts", table.get("contacts", DEFAULT_CONTACTS), Option("int", DEFAULT_CONTACTS, minimum=2)
-        )
+        contacts = values_of(f"{where}.contacts", table.get("contacts", DEFAULT_CONTACTS), CONTACT_COUNT)
         seeds = seed_values(f"{where}.contact_seeds", table.get("contact_seeds", DEFAULT_SEED))
-        ms = values_of(f"{where}.m", table.get("m", DEFAULT_FINGERS), Option("int", DEFAULT_FINGERS, minimum=2))
-        mu = Option("float", DEFAULT_MU, minimum=0, exclusive=True).check(f"{where}.mu", table.get("mu", DEFAULT_MU))
-        edges = Option("int", DEFAULT_CONE_EDGES, minimum=3).check(
-            f"{where}.cone_edges", table.get("cone_edges", DEFAULT_CONE_EDGES)
-        )
+        ms = values_of(f"{where}.m", table.get("m", DEFAULT_FINGERS), FINGERS)
+        mu = MU.check(f"{where}.mu", table.get("mu", DEFAULT_MU))
+        edges = CONE_EDGES.check(f"{where}.cone_edges", table.get("cone_edges", DEFAULT_CONE_EDGES))
         simulate = Option("bool", True).check(f"{where}.simulate", table.get("simulate", True))
-        diagonal = Option("float", DEFAULT_DIAGONAL, minimum=0, exclusive=True).check(
-            f"{where}.diagonal", table.get("diagonal", DEFAULT_DIAGONAL)
-        )
+        diagonal = DIAGONAL.check(f"{where}.diagonal", table.get("diagonal", DEFAULT_DIAGONAL))
         # Mesh files keep their own size (diagonal None, so their cell ids are unchanged) unless
         # the suite gives a diagonal, which then scales them as it does named objects.
         mesh_diagonal = diagonal if "diagonal" in table else None
@@ -151,6 +169,23 @@ class _Parser:
         variants = self.methods(f"{where}.methods", table["methods"])
         if max(ms) > min(contacts):
             raise OgcpError(f"{where}.m: m = {max(ms)} exceeds the contact count {min(contacts)}")
+        count = math.prod(map(len, (objects, contacts, seeds, ms, tips, variants)))
+        self.cell_count += count
+        if self.cell_count > MAX_CELLS:  # counted before the cells are made
+            raise OgcpError(
+                f"{where}: {count} cells ({len(objects)} objects x {len(contacts)} contact counts x {len(seeds)} "
+                f"seeds x {len(ms)} m x {len(tips)} tip radii x {len(variants)} method variants), "
+                f"{self.cell_count} with the groups before; at most {MAX_CELLS} per suite: split it into several suites"
+            )
+        try:
+            # Before any cell runs: the largest set of the group, and each exhaustive search's chunks.
+            check_contact_memory(max(contacts), edges)
+            for _, params, _, _ in variants:
+                if "chunk" in params:
+                    check_contact_memory(max(contacts), edges, max(ms), params["chunk"])
+        except OgcpError as exc:
+            raise OgcpError(f"{where}.contacts: {exc}") from exc
+        self.check_labels(variants)
         cells = []
         for obj, n, seed, m, tip, (method, params, label, vwhere) in itertools.product(
             objects, contacts, seeds, ms, tips, variants
@@ -214,9 +249,28 @@ class _Parser:
             variants.extend(self.variants(f"{where}[{i}]", table))
         return variants
 
+    def check_labels(self, variants: list[tuple[str, dict[str, Any], str, str]]) -> None:
+        """One label, one method variant: plots and tables merge everything under a label.
+
+        Variants that differ only in a seed (or in the search tree being recorded) are repeats
+        of one series and may share it; across groups, a label must name the same variant too.
+
+        Raises:
+            OgcpError: Naming both entries and what tells them apart.
+        """
+        for method, params, label, where in variants:
+            key = {k: v for k, v in params.items() if k not in UNLABELLED}
+            known = self.labels.setdefault(label, (where, method, key))
+            if (known[1], known[2]) != (method, key):
+                other, first = _variant(method, key, known[2]), _variant(known[1], known[2], key)
+                raise OgcpError(
+                    f"{where}.label: {label!r} already labels {known[0]} ({first}); this entry is {other}: "
+                    "give each method variant its own label (a {placeholder} fills in a swept value)"
+                )
+
     def variants(self, where: str, table: dict[str, Any]) -> list[tuple[str, dict[str, Any], str, str]]:
         method = table.get("method")
-        if method not in METHOD_PARAMS:
+        if not isinstance(method, str) or method not in METHOD_PARAMS:
             raise choice_error(f"{where}.method", method, METHOD_PARAMS)
         spec = METHOD_PARAMS[method]
         _no_unknown_keys(f"{where} (method {method})", table, ("label", "method", *spec))
@@ -236,9 +290,16 @@ class _Parser:
             raise OgcpError("simulation: expected a [simulation] table")
         if not isinstance(value.get("enabled", False), bool):
             raise OgcpError(f"simulation.enabled: expected true or false, got {value['enabled']!r}")
-        if value.get("enabled"):
-            _check_simulation_settings(value)
+        # Checked even while disabled: the table is part of the suite's hash, and a typo should not
+        # wait for the day the simulation is switched on.
+        _check_simulation_settings(value)
         return {"enabled": False, **value}
+
+
+def _variant(method: str, params: dict[str, Any], other: dict[str, Any]) -> str:
+    """``method wastar eps=0.5``: the method and the parameters where it differs from ``other``."""
+    differ = [f"{k}={v!r}" for k, v in sorted(params.items()) if other.get(k) != v]
+    return " ".join([f"method {method}", *differ])
 
 
 def _check_simulation_settings(table: dict[str, Any]) -> None:
@@ -247,7 +308,8 @@ def _check_simulation_settings(table: dict[str, Any]) -> None:
     if "max_grasps" in table:
         Option("int", None, minimum=1).check("simulation.max_grasps", table["max_grasps"])
     try:
-        from sim_eval.decomposition.decompose import DecompositionSettings  # lazy: loads MuJoCo
+        # The settings' own modules, light: MuJoCo loads only when a cell simulates.
+        from sim_eval.decomposition.settings import DecompositionSettings
         from sim_eval.settings import SimSettings
     except ImportError:
         return  # without the simulation installed every simulated cell records that error
@@ -269,12 +331,21 @@ def _check_simulation_settings(table: dict[str, Any]) -> None:
 def _format_label(where: str, label: str | None, method: str, params: dict[str, Any]) -> str:
     if label is None:
         return default_label(method, params)
+    placeholders = ", ".join("{" + k + "}" for k in params)
     try:
-        return label.format(**params)
-    except (KeyError, IndexError, ValueError) as exc:
-        raise OgcpError(
-            f"{where}.label: cannot fill {label!r} ({exc}); placeholders: {', '.join('{' + k + '}' for k in params)}"
-        ) from exc
+        for _, name, spec, _ in string.Formatter().parse(label):
+            # Plain parameter names only ({seed[0]} and {seed.real} reach into values), and no
+            # width or precision that would build a huge string before its length is known.
+            if name is not None and name not in params:
+                raise KeyError(name)
+            if spec and any(int(digits) > MAX_LABEL for digits in re.findall(r"\d+", spec)):
+                raise ValueError(f"width or precision in {{{name}:{spec}}} above {MAX_LABEL}")
+        text = label.format(**params)
+    except (KeyError, IndexError, ValueError, TypeError) as exc:
+        raise OgcpError(f"{where}.label: cannot fill {label!r} ({exc}); placeholders: {placeholders}") from exc
+    if len(text) > MAX_LABEL:
+        raise OgcpError(f"{where}.label: {len(text)} characters; at most {MAX_LABEL}")
+    return text
 
 
 def _merge(cells: dict[str, Cell], cell: Cell) -> None:

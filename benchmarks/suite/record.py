@@ -108,7 +108,8 @@ class CellRecord:
         id: The cell id (stable hash of its parameters).
         params: The cell's ``params`` block (:meth:`CellParams.to_dict`).
         groups: Names of the suite groups that list the cell.
-        status: ``"ok"`` or ``"error"``.
+        status: ``"ok"``, ``"error"``, or ``"stopped"`` (a search cell past the time limit:
+            its plan is the best grasp found, with a certified bound and gap).
         error: Why it failed (``status`` error), else None.
         plan: The ``ogcp.plan/1`` record, None when planning failed.
         simulation: The ``ogcp.sim/1`` record, None without simulation or when it failed.

@@ -23,6 +23,7 @@ from benchmarks.suite.manifest import ManifestSuite, first_commit, new_manifest,
 from benchmarks.suite.record import CellRecord
 from benchmarks.suite.select import Selection, is_selected, parse_selection
 from benchmarks.suite.store import LOCK, ResultStore
+from planner.config.options import JOBS, TIME_LIMIT
 from planner.infra.errors import OgcpError
 from planner.infra.parallel import run_tasks, validate_backend
 
@@ -105,16 +106,20 @@ class SuiteRunner:
                 of another suite, or a folder in use.
         """
         validate_backend(self.backend, self.address, self.jobs)
+        if self.backend != "dask":  # a Dask cluster decides its own workers
+            JOBS.check("jobs", self.jobs)
         if self.retry_errors and not self.resume:
             raise OgcpError("--retry-errors applies with --resume only")
         if self.max_cells is not None and (not isinstance(self.max_cells, int) or self.max_cells < 1):
             raise OgcpError(f"max_cells must be an integer >= 1, got {self.max_cells!r}")
         selection = parse_selection(self.only, self.suite.cells)
-        limit = self.time_limit
-        if limit is not None and (
-            isinstance(limit, bool) or not isinstance(limit, (int, float)) or not limit > 0 or limit == float("inf")
-        ):
-            raise OgcpError(f"time_limit must be a number of seconds > 0, got {limit!r}")
+        if self.time_limit is not None:
+            try:
+                TIME_LIMIT.check("time_limit", self.time_limit)
+            except OgcpError:
+                raise OgcpError(
+                    f"time_limit must be a number of seconds {TIME_LIMIT.bounds()}, got {self.time_limit!r}"
+                ) from None
         store = ResultStore(self.out)
         fresh = _is_fresh(self.out)
         if not fresh and not self.resume:
@@ -202,6 +207,13 @@ class SuiteRunner:
                         f"{record.error.type}: {record.error.message}",
                         file=sys.stderr,
                     )
+                elif record.status == "stopped" and record.plan_view is not None:
+                    view = record.plan_view
+                    tqdm.write(
+                        f"ogcp: cell {record.id} ({record.describe()}) stopped at its time limit: "
+                        f"best Q1 {_number(view.q1)}, optimum <= {_number(view.bound)}",
+                        file=sys.stderr,
+                    )
         finally:
             bar.close()
         errors = sum(1 for r in records.values() if _failed(r))
@@ -225,12 +237,16 @@ def summary_table(suite: Suite, records: dict[str, dict[str, Any]]) -> str:
         views = [r.plan_view for r in found if r.ok]
         values = [q1 for v in views if v is not None and (q1 := v.q1) is not None]
         best = f"{max(values):10.6f}" if values else f"{'-':>10}"
-        errors = sum(1 for r in found if r.status == "error")
+        errors = sum(1 for r in found if r.status in ("error", "stopped"))
         wall = sum(r.wall_seconds or 0.0 for r in found)
         lines.append(
             f"{obj:<12} {label:<{width}} {f'{len(done)}/{totals[(obj, label)]}':>9} {errors:>6} {best} {wall:9.2f}"
         )
     return "\n".join(lines)
+
+
+def _number(value: float | None) -> str:
+    return "-" if value is None else f"{value:.6f}"
 
 
 def _parsed(line: dict[str, Any]) -> CellRecord | None:
@@ -242,13 +258,16 @@ def _parsed(line: dict[str, Any]) -> CellRecord | None:
 
 
 def _failed(line: dict[str, Any]) -> bool:
-    """Whether a ``results.jsonl`` line records a failed cell."""
+    """Whether a ``results.jsonl`` line records a cell to rerun: an error, or a search that stopped."""
     record = _parsed(line)
-    return record is not None and record.status == "error"
+    return record is not None and record.status in ("error", "stopped")
 
 
 def _is_fresh(directory: Path) -> bool:
     """Absent, or holding nothing but a lock file left by an earlier attempt."""
     if directory.exists() and not directory.is_dir():
         raise OgcpError(f"--out {directory} is a file, not a folder")
-    return not directory.exists() or all(p.name == LOCK for p in directory.iterdir())
+    try:
+        return not directory.exists() or all(p.name == LOCK for p in directory.iterdir())
+    except OSError as exc:  # a path through a file, or a folder that cannot be listed
+        raise OgcpError(f"cannot use --out {directory}: {exc.strerror or exc}") from exc

@@ -4,13 +4,16 @@
 written with a single ``os.write`` on an ``O_APPEND`` descriptor and fsynced, so a crash
 leaves at most one partial line at the very end: the reader reports and ignores a last
 line without its newline (and any line that is not a JSON object with an ``id``), and a
-resumed run cuts that tail off before appending. ``manifest.json`` is written
-atomically. Only the runner's main process writes; workers return records to it.
+resumed run cuts that tail off before appending. A write that fails (a full disk, a file
+size limit) is cut off at once, so the file keeps every line written before it, whole, and
+the run ends with one error line; ``--resume`` continues from there. ``manifest.json`` is
+written atomically. Only the runner's main process writes; workers return records to it.
 """
 
 from __future__ import annotations
 
 import contextlib
+import errno
 import fcntl
 import json
 import math
@@ -99,6 +102,13 @@ def jsonable(value: Any) -> Any:
     return value
 
 
+def _cut(fd: int, size: int) -> None:
+    """Cut a file back to ``size`` bytes after a failed append (freeing what the torn line took)."""
+    with contextlib.suppress(OSError):
+        os.ftruncate(fd, size)
+        os.fsync(fd)
+
+
 class ResultStore:
     """A suite run's output folder.
 
@@ -145,33 +155,69 @@ class ResultStore:
         """Remove an incomplete last line; returns the bytes removed."""
         report = self.read()
         if report.partial_tail:
-            os.truncate(self.results_path, report.valid_end)
+            try:
+                os.truncate(self.results_path, report.valid_end)
+            except OSError as exc:
+                raise OgcpError(f"cannot cut the incomplete last line of {self.results_path}: {exc.strerror}") from exc
         return report.partial_tail
 
     def append(self, record: dict[str, Any]) -> None:
-        """Append one record as one line, durably.
+        """Append one record as one line, durably, or not at all.
 
         Raises:
-            OgcpError: When the line cannot be written in full.
+            OgcpError: When the line cannot be written in full (the file is then cut back to
+                the lines before it; were even that to fail, the torn tail is what a resume
+                cuts off).
         """
         line = (json.dumps(jsonable(record), separators=(",", ":"), allow_nan=False) + "\n").encode()
-        self.directory.mkdir(parents=True, exist_ok=True)
+        self.ensure_directory()
         created = not self.results_path.exists()
         try:
             fd = os.open(self.results_path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
-            try:
-                # One write call: the line lands whole, or (crash, full disk) as a torn
-                # tail that the reader ignores and a resume cuts off.
-                written = os.write(fd, line)
-                os.fsync(fd)
-            finally:
-                os.close(fd)
-            if created:
-                fsync_directory(self.directory)
         except OSError as exc:
             raise OgcpError(f"cannot append to {self.results_path}: {exc.strerror or exc}") from exc
-        if written != len(line):
-            raise OgcpError(f"short write to {self.results_path} ({written} of {len(line)} bytes); rerun with --resume")
+        try:
+            # The lock keeps other writers out, so the size now is where this line starts.
+            start = os.fstat(fd).st_size
+            try:
+                # One write call: the line lands whole, or (crash, full disk) as a torn tail.
+                written = os.write(fd, line)
+                if written != len(line):
+                    raise OSError(errno.ENOSPC, f"only {written} of {len(line)} bytes written")
+                os.fsync(fd)  # where the disk fills only now (delayed allocation), the line is not kept
+            except OSError as exc:
+                _cut(fd, start)
+                raise OgcpError(
+                    f"cannot append to {self.results_path}: {exc.strerror or exc}; the {self._count(start)} cells "
+                    "recorded before are kept: free space, then rerun with --resume"
+                ) from exc
+        finally:
+            os.close(fd)
+        if created:
+            with contextlib.suppress(OSError):  # the line is written; only its survival of a crash is at stake
+                fsync_directory(self.directory)
+
+    def _count(self, size: int) -> int:
+        """Lines in the first ``size`` bytes of ``results.jsonl`` (for messages; 0 if unreadable)."""
+        try:
+            with open(self.results_path, "rb") as handle:
+                return handle.read(size).count(b"\n")
+        except OSError:
+            return 0
+
+    def ensure_directory(self) -> None:
+        """Create the folder (and its parents) if missing.
+
+        Raises:
+            OgcpError: When it cannot be: a file in its place or on its path, a read-only or
+                missing file system.
+        """
+        try:
+            self.directory.mkdir(parents=True, exist_ok=True)
+        except FileExistsError:
+            raise OgcpError(f"--out {self.directory} is a file, not a folder") from None
+        except OSError as exc:
+            raise OgcpError(f"cannot create the results folder {self.directory}: {exc.strerror or exc}") from exc
 
     @contextlib.contextmanager
     def lock(self) -> Iterator[None]:
@@ -180,8 +226,11 @@ class ResultStore:
         Raises:
             OgcpError: When another process holds it.
         """
-        self.directory.mkdir(parents=True, exist_ok=True)
-        fd = os.open(self.directory / LOCK, os.O_RDWR | os.O_CREAT, 0o644)
+        self.ensure_directory()
+        try:
+            fd = os.open(self.directory / LOCK, os.O_RDWR | os.O_CREAT, 0o644)
+        except OSError as exc:
+            raise OgcpError(f"cannot write in {self.directory}: {exc.strerror or exc}") from exc
         try:
             try:
                 fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)

@@ -10,13 +10,13 @@ reports no histogram. The two are separate methods and never mixed.
 
 The argmax is the largest Q1, ties broken by the lexicographically smallest indices.
 With a checkpoint directory every finished chunk is written atomically as it completes,
-and a rerun with the same parameters resumes from them with the identical answer.
+and a rerun with the same parameters resumes from them with the identical answer; each
+chunk is checked before it is reused (:mod:`planner.baselines.es_checkpoint`).
 """
 
 from __future__ import annotations
 
 import hashlib
-import json
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -34,37 +34,19 @@ from planner.grasp.contact_set import ContactSet
 from planner.grasp.kernel import FALLBACK, OK, default_directions, support_table
 from planner.grasp.kernel.geometry import CUT_MARGIN
 from planner.grasp.quality import exact_q1_batch, q1_certificate
-from planner.infra.atomic import write_json_atomic
 from planner.infra.errors import OgcpError
 from planner.infra.parallel import DEFAULT_BACKEND, DEFAULT_JOBS, run_tasks, validate_backend
 from planner.infra.provenance import provenance
-from planner.records.plan import histogram_record, plan_record
+from planner.records.plan import check_result, histogram_record, plan_record
 
 from . import combinations
+from .es_checkpoint import ChunkResult, ChunkSpace, ChunkStore
 
 ES_METHODS = (ESConfig.method, ESPrunedConfig.method)
 #: Grasps handed to the compiled kernel in one call inside a chunk.
 BOUND_BLOCK = 50_000
 #: es-pruned: grasps per kernel call between updates of the cut.
 PRUNE_BATCH = 32
-
-
-@dataclass(frozen=True, eq=False)
-class ChunkResult:
-    """What one chunk contributes: its best grasp, histogram and counts."""
-
-    index: int
-    best_q1: float
-    best_grasp: tuple[int, ...] | None
-    counts: list[int]
-    zero: int
-    excluded: int
-    evaluated: int
-    exact_evaluations: int
-    cpu_seconds: float
-
-    def to_dict(self) -> dict[str, Any]:
-        return dict(self.__dict__)
 
 
 @dataclass(frozen=True, eq=False)
@@ -111,6 +93,10 @@ class ESResult:
     wall_seconds: float
     config: dict[str, Any]
 
+    def __post_init__(self) -> None:
+        """Refuse impossible values: OgcpError unless 0 <= q1 <= q_ows (``check_result``)."""
+        check_result(self.method, self.q1, self.q_ows, self.q1)
+
     @property
     def force_closure_fraction(self) -> float | None:
         """Fraction of the admissible grasps in force closure (``es`` only)."""
@@ -144,6 +130,8 @@ class ESResult:
             contact_set=contact_set,
             eps=0.0,
             histogram=histogram,
+            status="optimal",
+            gap=0.0,
         )
 
 
@@ -260,7 +248,8 @@ class ExhaustiveSearch:
         """Evaluate every grasp and return the best with the histogram.
 
         Raises:
-            OgcpError: For invalid parameters or a checkpoint of a different run.
+            OgcpError: For invalid parameters, a checkpoint of a different run, or one whose
+                chunks fail their checksum or consistency checks.
         """
         provenance()  # recorded now: the commit and versions of the code that runs
         validate_backend(self.backend, self.address, self.jobs)
@@ -283,11 +272,11 @@ class ExhaustiveSearch:
             "contact_set_digest": _digest(contacts),
             "constraints": [c.describe() for c in self.constraints],
         }
-        store = _ChunkStore(
+        store = ChunkStore(
             self.checkpoint,
             {k: config[k] for k in ("method", "m", "chunk", "bins", "contact_set_digest", "constraints")},
         )
-        done = store.load()
+        done = store.load(ChunkSpace(contacts, int(m), self.chunk, edges, q_ows, self.pruned, tuple(self.constraints)))
         todo = [i for i in range(n_chunks) if i not in done]
         args = [(contacts, int(m), i, self.chunk, edges, self.pruned, tuple(self.constraints)) for i in todo]
         bar = tqdm(total=total, unit="grasp", unit_scale=True, disable=not self.progress, desc=config["method"])
@@ -352,43 +341,3 @@ def _digest(contacts: ContactSet) -> str:
         h.update(np.ascontiguousarray(array).tobytes())
     h.update(repr((contacts.torque_scale, contacts.mu, contacts.cone_edges)).encode())
     return h.hexdigest()[:16]
-
-
-class _ChunkStore:
-    """Finished chunks on disk: one JSON file each, written atomically, plus a manifest."""
-
-    def __init__(self, directory: str | Path | None, key: dict[str, Any]) -> None:
-        self.directory = None if directory is None else Path(directory)
-        self.key = key
-
-    def load(self) -> dict[int, ChunkResult]:
-        if self.directory is None:
-            return {}
-        try:
-            self.directory.mkdir(parents=True, exist_ok=True)
-        except OSError as exc:
-            raise OgcpError(f"cannot create checkpoint directory {self.directory}: {exc.strerror}") from exc
-        manifest = self.directory / "manifest.json"
-        if manifest.exists():
-            stored = json.loads(manifest.read_text())
-            if stored != self.key:
-                raise OgcpError(
-                    f"checkpoint {self.directory} belongs to a different run ({stored}); use another directory"
-                )
-        else:
-            write_json_atomic(manifest, self.key, indent=None)
-        done = {}
-        for path in sorted(self.directory.glob("chunk_*.json")):
-            try:
-                data = json.loads(path.read_text())
-                result = ChunkResult(
-                    **{**data, "best_grasp": tuple(data["best_grasp"]) if data["best_grasp"] else None}
-                )
-            except (json.JSONDecodeError, TypeError, KeyError):
-                continue  # unreadable chunk: recomputed
-            done[result.index] = result
-        return done
-
-    def save(self, result: ChunkResult) -> None:
-        if self.directory is not None:
-            write_json_atomic(self.directory / f"chunk_{result.index:07d}.json", result.to_dict(), indent=None)

@@ -38,7 +38,7 @@ from planner.grasp.wrench import contact_wrenches
 from planner.infra.errors import OgcpError
 from planner.infra.parallel import DEFAULT_BACKEND, DEFAULT_JOBS, run_tasks, validate_backend
 from planner.infra.provenance import provenance
-from planner.records.plan import plan_record
+from planner.records.plan import check_result, plan_record
 from planner.search.partitions import KMeansPartitioner
 
 TOP_CLUSTERS = 12
@@ -77,6 +77,10 @@ class HFTSResult:
     wall_seconds: float
     config: dict[str, Any] = field(default_factory=dict)
 
+    def __post_init__(self) -> None:
+        """Refuse impossible values: OgcpError unless 0 <= q1 <= q_ows (``check_result``)."""
+        check_result(HFTSConfig.method, self.q1, self.q_ows, self.q_ows)
+
     @property
     def values(self) -> NDArray[np.float64]:
         """Q1 of every run [N]."""
@@ -103,13 +107,15 @@ class HFTSResult:
             self.grasp,
             self.q1,
             self.q_ows,
-            self.q1,
+            self.q_ows,  # a heuristic certifies nothing: the optimum is only known to be <= Q_OWS
             self.positions,
             self.normals,
             stats=self.summary(),
             config=self.config,
             contact_set=contact_set,
             runs=[r.to_dict() for r in self.runs],
+            status="heuristic",
+            gap=self.q_ows - self.q1,
         )
 
 

@@ -14,6 +14,7 @@ import math
 import warnings
 from dataclasses import dataclass, field
 from functools import cached_property
+from numbers import Real
 from pathlib import Path
 from typing import Any
 
@@ -22,7 +23,17 @@ import trimesh
 from numpy.typing import NDArray
 
 # The defaults live in a module without numpy and trimesh, for readers that need nothing else.
-from planner.grasp.defaults import DEFAULT_CONE_EDGES, DEFAULT_MU
+from planner.grasp.defaults import (
+    CONTACT_SEED,
+    DEFAULT_CONE_EDGES,
+    DEFAULT_MU,
+    MAX_CONE_EDGES,
+    MAX_DIAGONAL,
+    MAX_MU,
+    MIN_DIAGONAL,
+    TIP_RADIUS,
+    check_contact_memory,
+)
 from planner.grasp.reach import fill_reachable, reach_settings
 from planner.grasp.wrench import contact_wrenches
 from planner.infra.atomic import write_json_atomic
@@ -67,9 +78,16 @@ class ContactSet:
     source: dict[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        positions = np.asarray(self.positions, dtype=float)
-        normals = np.asarray(self.normals, dtype=float)
-        com = np.asarray(self.com, dtype=float)
+        try:
+            positions = np.asarray(self.positions, dtype=float)
+            normals = np.asarray(self.normals, dtype=float)
+            com = np.asarray(self.com, dtype=float)
+        except (TypeError, ValueError) as exc:
+            raise OgcpError(f"contact positions, normals and centre of mass must be numeric arrays ({exc})") from None
+        for name in ("torque_scale", "mu"):
+            # math.isfinite below would raise a bare TypeError for a string or None.
+            if not isinstance(getattr(self, name), Real):
+                raise OgcpError(f"{name} must be a number, got {getattr(self, name)!r}")
         if positions.ndim != 2 or positions.shape[1] != 3 or len(positions) == 0:
             raise OgcpError(f"contact positions must have shape (n, 3) with n >= 1, got {positions.shape}")
         if normals.shape != positions.shape:
@@ -86,10 +104,9 @@ class ContactSet:
             raise OgcpError(f"centre of mass must be 3 finite numbers, got {com.tolist()}")
         if not (math.isfinite(self.torque_scale) and self.torque_scale > 0):
             raise OgcpError(f"torque scale rho must be a positive number of metres, got {self.torque_scale!r}")
-        if not (math.isfinite(self.mu) and self.mu > 0):
-            raise OgcpError(f"friction coefficient mu must be positive, got {self.mu!r}")
-        if int(self.cone_edges) != self.cone_edges or self.cone_edges < 3:
-            raise OgcpError(f"cone_edges must be an integer >= 3, got {self.cone_edges!r}")
+        _check_friction(self.mu, self.cone_edges)
+        # A loaded set is checked too: its size was never asked for, but planning allocates by it.
+        check_contact_memory(len(positions), int(self.cone_edges))
         object.__setattr__(self, "positions", _readonly(positions))
         # Rows that are already unit length are kept bit-for-bit, so a JSON round trip
         # (or re-wrapping a set) reproduces the normals exactly.
@@ -111,8 +128,26 @@ class ContactSet:
         return w
 
     def subset_wrenches(self, indices: NDArray[np.intp]) -> NDArray[np.float64]:
-        """Wrenches of the given contacts stacked, shape (len(indices) * k, 6)."""
-        return self.wrenches[np.asarray(indices, dtype=np.intp)].reshape(-1, 6)
+        """Wrenches of the given contacts stacked, shape (len(indices) * k, 6).
+
+        Args:
+            indices: Contact indices, shape (m,), each in ``[0, n)``.
+
+        Raises:
+            OgcpError: For indices that are not integers, not of shape (m,), or out of range
+                (a negative index would silently pick a contact from the end).
+        """
+        idx = np.asarray(indices)
+        if idx.ndim != 1 or not (idx.dtype.kind in "iu" or idx.size == 0):
+            raise OgcpError(f"contact indices must be integers of shape (m,), got {idx.dtype} of shape {idx.shape}")
+        # The search calls this per Q1 evaluation, mostly with a few indices: a Python min over
+        # them costs a fifth of numpy's. Indices past the end fail numpy's own bounds check.
+        if idx.size and (min(idx.tolist()) if idx.size < 64 else idx.min()) < 0:
+            raise OgcpError(f"contact indices must be in [0, {len(self)}), got {int(idx.min())}")
+        try:
+            return self.wrenches[idx.astype(np.intp, copy=False)].reshape(-1, 6)
+        except IndexError:
+            raise OgcpError(f"contact indices must be in [0, {len(self)}), got {int(idx.max())}") from None
 
     def to_dict(self) -> dict[str, Any]:
         """JSON form (schema ``ogcp.contacts/1``)."""
@@ -185,6 +220,70 @@ class ContactSet:
         return cls.from_dict(data, where=str(path))
 
 
+def _real(value: Any) -> float | None:
+    """``value`` as a finite float if it is a number (numpy's included, booleans not), else None."""
+    if isinstance(value, bool) or not isinstance(value, Real):
+        return None
+    number = float(value)
+    return number if math.isfinite(number) else None
+
+
+def _count(value: Any) -> int | None:
+    """``value`` as an int if it is a finite whole number (20 and 20.0 alike), else None."""
+    number = _real(value)
+    return int(number) if number is not None and number.is_integer() else None
+
+
+def _check_friction(mu: Any, cone_edges: Any) -> None:
+    """mu in (0, MAX_MU] and k an integer in [3, MAX_CONE_EDGES] (see planner.grasp.defaults for why).
+
+    Raises:
+        OgcpError: Naming the value and its valid range.
+    """
+    friction = _real(mu)
+    if friction is None or friction <= 0:
+        raise OgcpError(f"friction coefficient mu must be positive, got {mu!r} (valid: > 0 and <= {MAX_MU:g})")
+    if friction > MAX_MU:
+        raise OgcpError(
+            f"friction coefficient mu must be at most {MAX_MU:g}, got {mu!r} (valid: > 0 and <= {MAX_MU:g})"
+        )
+    # int() of NaN, inf or a string would raise its own error; only a finite whole number is a count.
+    edges = _count(cone_edges)
+    if edges is None or edges < 3:
+        raise OgcpError(f"cone_edges must be an integer >= 3, got {cone_edges!r} (valid: 3 to {MAX_CONE_EDGES})")
+    if edges > MAX_CONE_EDGES:
+        raise OgcpError(
+            f"cone_edges must be at most {MAX_CONE_EDGES}, got {cone_edges!r} (valid: 3 to {MAX_CONE_EDGES})"
+        )
+
+
+def _check_sampling(
+    mesh: trimesh.Trimesh, n: Any, seed: Any, mu: Any, cone_edges: Any, tip_radius: float | None
+) -> None:
+    """Everything :func:`sample_contacts` is given, checked before it allocates anything of size n.
+
+    Raises:
+        OgcpError: For a bad count (or one whose memory exceeds the machine's), seed, friction
+            model, tip radius, or an object outside the diagonals ogcp works at.
+    """
+    count = _count(n)
+    if count is None or count < 1:
+        raise OgcpError(f"number of contacts must be a positive integer, got {n!r}")
+    CONTACT_SEED.check("seed", seed)
+    _check_friction(mu, cone_edges)
+    if tip_radius is not None:
+        TIP_RADIUS.check("tip radius [m]", tip_radius)
+    check_contact_memory(count, int(cone_edges))
+    diagonal = (
+        float(np.linalg.norm(np.ptp(np.asarray(mesh.vertices, dtype=float), axis=0))) if len(mesh.vertices) else 0.0
+    )
+    if not MIN_DIAGONAL <= diagonal <= MAX_DIAGONAL:
+        raise OgcpError(
+            f"the object's bounding-box diagonal is {diagonal:.3g} m; ogcp samples objects from {MIN_DIAGONAL:g} m to "
+            f"{MAX_DIAGONAL:g} m (scale it with --diagonal METRES, e.g. a mesh in millimetres)"
+        )
+
+
 def mass_properties(mesh: trimesh.Trimesh) -> tuple[NDArray[np.float64], float]:
     """Centre of mass and torque scale of a mesh.
 
@@ -247,13 +346,13 @@ def sample_contacts(
         The contact set; normals are the inward face normals at the samples.
 
     Raises:
-        OgcpError: For a bad n, seed, radius or tolerance, or when too little of the
-            surface is reachable by the tip to give n contacts.
+        OgcpError: For a bad n, seed, mu, cone edges, radius or tolerance (each has a finite
+            range, see :mod:`planner.grasp.defaults`), for n contacts whose estimated memory
+            exceeds this machine's, for an object outside the diagonals ogcp works at, or when
+            too little of the surface is reachable by the tip to give n contacts. All are
+            checked before anything of size n is allocated.
     """
-    if int(n) != n or n < 1:
-        raise OgcpError(f"number of contacts must be a positive integer, got {n!r}")
-    if int(seed) != seed or seed < 0:
-        raise OgcpError(f"seed must be a non-negative integer, got {seed!r}")
+    _check_sampling(mesh, n, seed, mu, cone_edges, tip_radius)
     n, seed = int(n), int(seed)
     reach = reach_settings(tip_radius, reach_tolerance)
     # trimesh logs a warning when even sampling falls short; the shortfall is filled below.

@@ -2,8 +2,12 @@
 
 Q1 of a wrench set W (N, 6) is the distance from the origin to the boundary of conv(W)
 when the origin lies strictly inside, else 0. "Strictly" means Q1 > ``TOL.force_closure``
-(1e-9): smaller values report 0. Degenerate sets (fewer than 7 wrenches, wrenches spanning
-an affine subspace of fewer than 6 dimensions, NaNs) give 0, never an exception.
+(1e-9): smaller values report 0. Degenerate but well-formed sets (fewer than 7 wrenches, none
+at all, wrenches spanning an affine subspace of fewer than 6 dimensions) give 0. An array of
+another shape (such as a contact set's (n, k, 6) wrenches, not stacked) or with NaN or infinite
+entries raises :class:`~planner.infra.errors.OgcpError`: it is a mistake, not a grasp of Q1 0.
+The public functions check their input (one pass over the array, as :func:`q1_certificate` always
+made to find NaNs) and from there run on unchecked internals.
 
 The fast path is the compiled expanding-polytope kernel of :mod:`planner.grasp.kernel`, whose
 answers carry a certificate (the facet complex it built provably encloses the ball of
@@ -21,6 +25,7 @@ origin is not strictly inside conv(W).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -28,6 +33,8 @@ from numpy.typing import NDArray
 from scipy.spatial import ConvexHull, QhullError
 
 from planner.grasp.kernel import FALLBACK, canonical_plane, evaluate_batch, kernel_q1, last_active
+from planner.grasp.wrench import check_finite, finite_array, shaped_array
+from planner.infra.errors import OgcpError
 from planner.infra.tolerance import TOL
 
 DIM = 6
@@ -68,6 +75,12 @@ class Q1Certificate:
     def force_closure(self) -> bool:
         """Whether the origin lies strictly inside the hull (Q1 > tolerance)."""
         return self.q1 > 0.0
+
+
+def _checked_wrenches(wrenches: object) -> NDArray[np.float64]:
+    """The wrench set as a float array of shape (N, 6), or an :class:`OgcpError` saying why not."""
+    # The commonest slip is a contact set's (n, k, 6) wrenches passed whole: say how to stack them.
+    return finite_array(wrenches, "wrenches", "(N, 6)", 2, DIM, hint="stack (n, k, 6) wrenches with .reshape(-1, 6)")
 
 
 def _degenerate() -> Q1Certificate:
@@ -125,10 +138,22 @@ def q1_certificate(
             is the same, bit for bit).
 
     Returns:
-        The :class:`Q1Certificate`.
+        The :class:`Q1Certificate` (Q1 = 0 for a degenerate set).
+
+    Raises:
+        OgcpError: For wrenches of another shape than (N, 6) or with NaN or infinite
+            entries, or hints of another shape than (j, 6) or not finite.
     """
-    w = np.asarray(wrenches, dtype=float)
-    if w.ndim != 2 or w.shape[1] != DIM or w.shape[0] <= DIM or not np.all(np.isfinite(w)):
+    w = _checked_wrenches(wrenches)
+    if hints is not None:
+        one = np.ndim(hints) == 1  # a single direction, which the active-set loop also takes
+        hints = finite_array(hints, "hints", "(j, 6)", 1 if one else 2, DIM)
+    return _q1_certificate(w, hints, kernel)
+
+
+def _q1_certificate(w: NDArray[np.float64], hints: NDArray[np.float64] | None, kernel: bool) -> Q1Certificate:
+    """:func:`q1_certificate` of a checked (N, 6) float array of finite wrenches."""
+    if w.shape[0] <= DIM:
         return _degenerate()
     seed = None
     if kernel and w.shape[0] <= KERNEL_MAX:
@@ -199,7 +224,7 @@ def _active_set_q1(
         hull = _hull(w[in_active])
         if hull is None:
             # A numerically flat active set: fall back to hulling everything.
-            cert = q1_certificate_direct(w)
+            cert = _direct_certificate(w)
             return Q1Certificate(cert.q1, cert.offset, cert.direction, hull_calls + cert.hull_calls)
         offsets = -hull.equations[:, DIM]
         nearest = np.argsort(offsets)[:FACETS_PER_ROUND]
@@ -225,11 +250,16 @@ def q1_certificate_direct(wrenches: NDArray[np.float64]) -> Q1Certificate:
 
     Returns:
         The :class:`Q1Certificate` computed from one full qhull call.
+
+    Raises:
+        OgcpError: For wrenches of another shape than (N, 6) or with NaN or infinite entries.
     """
-    w = np.asarray(wrenches, dtype=float)
-    if w.ndim != 2 or w.shape[1] != DIM or w.shape[0] <= DIM or not np.all(np.isfinite(w)):
-        return _degenerate()
-    return _full_hull_certificate(w)
+    return _direct_certificate(_checked_wrenches(wrenches))
+
+
+def _direct_certificate(w: NDArray[np.float64]) -> Q1Certificate:
+    """:func:`q1_certificate_direct` of checked wrenches."""
+    return _degenerate() if w.shape[0] <= DIM else _full_hull_certificate(w)
 
 
 def _full_hull_certificate(w: NDArray[np.float64]) -> Q1Certificate:
@@ -273,10 +303,30 @@ def exact_q1_batch(
         ``(q1, status)`` per grasp, shape (B,) each: the canonical Q1 (bit-identical to
         every other method) or a bound below the cut, and the kernel's status
         (``FALLBACK`` marks the grasps recomputed here).
+
+    Raises:
+        OgcpError: For wrenches of another shape than (n, k, 6), grasps that are not
+            integer indices of shape (B, m) below n, NaN or infinite wrenches of a contact
+            they use, a table without one row per contact, or a cut that is not finite. The compiled kernel does not check its
+            indices, so these checks are what keeps a bad grasp from reading stray memory.
     """
-    values, status = evaluate_batch(contact_wrenches, grasps, table=table, threshold=cut)
+    w = shaped_array(contact_wrenches, "contact wrenches", "(n, k, 6)", 3, DIM)
+    g = np.asarray(grasps)
+    if g.ndim != 2 or not (g.dtype.kind in "iu" or g.size == 0):
+        raise OgcpError(f"grasps must be integer contact indices of shape (B, m), got {g.dtype} of shape {g.shape}")
+    if g.size and (int(g.min()) < 0 or int(g.max()) >= len(w)):
+        raise OgcpError(f"grasps must index the {len(w)} contacts, got indices from {int(g.min())} to {int(g.max())}")
+    # es-pruned calls this 32 grasps at a time: check the wrenches those grasps use, not all n.
+    if not np.isfinite(w if g.size >= len(w) else w[g.ravel()]).all():
+        check_finite(w, "contact wrenches")  # names the first bad entry
+    t = np.asarray(table)
+    if t.ndim != 2 or t.shape[0] != len(w) or t.shape[1] == 0:
+        raise OgcpError(f"table must have shape ({len(w)}, D), one row per contact, got {t.shape}")
+    if not math.isfinite(cut):
+        raise OgcpError(f"cut must be a finite number, got {cut!r}")
+    values, status = evaluate_batch(w, g, table=t, threshold=cut)
     for i in np.flatnonzero(status == FALLBACK):
-        values[i] = q1(contact_wrenches[grasps[i]].reshape(-1, DIM))
+        values[i] = _q1_certificate(w[g[i]].reshape(-1, DIM), None, True).q1
     return values, status
 
 
@@ -290,11 +340,15 @@ def signed_q1(wrenches: NDArray[np.float64]) -> float:
 
     Returns:
         Q1 > 0, or the smallest facet offset (<= 1e-9) [N]; -inf for degenerate sets.
+
+    Raises:
+        OgcpError: For wrenches of another shape than (N, 6) or with NaN or infinite entries.
     """
-    cert = q1_certificate(wrenches)
+    w = _checked_wrenches(wrenches)
+    cert = _q1_certificate(w, None, True)
     if cert.q1 > 0:
         return cert.q1
-    full = q1_certificate_direct(wrenches)
+    full = _direct_certificate(w)
     return full.offset if np.isfinite(full.offset) else -np.inf
 
 
@@ -305,6 +359,11 @@ def q1(wrenches: NDArray[np.float64]) -> float:
         wrenches: Wrenches, shape (N, 6).
 
     Returns:
-        Q1 [N]; 0 when the origin is not strictly inside the hull or the set is degenerate.
+        Q1 [N]; 0 when the origin is not strictly inside the hull or the set is degenerate
+        (fewer than 7 wrenches, none, or all in a lower-dimensional affine subspace).
+
+    Raises:
+        OgcpError: For wrenches of another shape than (N, 6), e.g. a contact set's
+            (n, k, 6) wrenches not stacked, or with NaN or infinite entries.
     """
-    return q1_certificate(wrenches).q1
+    return _q1_certificate(_checked_wrenches(wrenches), None, True).q1

@@ -4,6 +4,10 @@ Every writer goes through :func:`write_atomic`: the data goes to a uniquely name
 file in the target's folder (so concurrent writers never share one), which is flushed and
 fsynced, renamed over the target, and the folder is fsynced so that the rename itself
 survives a crash. On any failure the temporary file is removed and the target is untouched.
+The file gets the permissions a plain ``open(path, "w")`` gives a new file: 0666 less the umask
+(0644 under the usual umask 022), applied by the kernel when the temporary file is created, so
+the umask is never read (``os.umask`` cannot be read without setting it, which races other
+threads) and a folder's default ACL applies as it would to a plain open.
 Other formats pass their writer: ``write_atomic(path, lambda handle: np.savez(handle, **arrays))``.
 """
 
@@ -21,6 +25,7 @@ from planner.infra.errors import OgcpError
 
 __all__ = [
     "fsync_directory",
+    "read_json",
     "write_atomic",
     "write_bytes_atomic",
     "write_json_atomic",
@@ -97,3 +102,24 @@ def write_json_atomic(path: str | Path, data: Any, indent: int | None = 1) -> No
         indent: ``json.dumps`` indentation; None writes a single line.
     """
     write_text_atomic(path, json.dumps(data, indent=indent) + "\n")
+
+
+def read_json(path: str | Path, what: str) -> Any:
+    """The JSON document in ``path``, or one-line :class:`OgcpError` saying why not.
+
+    Args:
+        path: The file.
+        what: What the file should hold, for the messages (``plan``, ``grasps``).
+
+    Raises:
+        OgcpError: For a missing or unreadable file, or text that is not JSON (with its line).
+    """
+    path = Path(path)
+    try:
+        return json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise OgcpError(f"{path}: no such {what} file") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise OgcpError(f"{path}: cannot read {what}: {exc}") from exc
+    except json.JSONDecodeError as exc:
+        raise OgcpError(f"{path}: not valid JSON ({exc.msg} at line {exc.lineno})") from exc

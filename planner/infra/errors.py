@@ -14,20 +14,25 @@ class OgcpError(ValueError):
 
 
 class SearchTimeout(OgcpError):
-    """A search stopped at its time limit before it could return a certified grasp.
+    """A search stopped (time limit or stop request) before it had a grasp to return.
+
+    A search that has a grasp when it stops returns it, with status ``stopped`` or
+    ``interrupted`` and its certified bound; this is raised only when it has none.
 
     Attributes:
-        seconds: The time limit that was reached [s].
+        seconds: The time limit that was reached [s]; None when stopped by a request.
         visited: States expanded until then.
         best_q1: Best exact Q1 of a grasp seen so far (None if no grasp was evaluated) [N].
         upper_bound: Certified upper bound on the optimal Q1 at that moment [N].
     """
 
-    def __init__(self, method: str, seconds: float, visited: int, best_q1: float | None, upper_bound: float) -> None:
+    def __init__(
+        self, method: str, seconds: float | None, visited: int, best_q1: float | None, upper_bound: float
+    ) -> None:
         best = "no grasp evaluated yet" if best_q1 is None else f"best Q1 found {best_q1:.6f}"
+        why = "by request" if seconds is None else f"at its time limit of {seconds:g} s"
         super().__init__(
-            f"{method} stopped at its time limit of {seconds:g} s after {visited} expansions "
-            f"({best}; the optimum is at most {upper_bound:.6f})"
+            f"{method} stopped {why} after {visited} expansions ({best}; the optimum is at most {upper_bound:.6f})"
         )
         self.seconds = seconds
         self.visited = visited

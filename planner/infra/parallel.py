@@ -3,19 +3,38 @@
 Tasks are independent and their results are merged by the caller in a deterministic
 order, so the serial path (``jobs=1``), local processes (``loky``) and a Dask cluster give
 identical answers.
+
+Local workers end with the process that started them (:mod:`planner.infra.lifetime`): a suite
+killed by SIGTERM or SIGKILL leaves no worker computing for nobody. Dask workers belong to their
+cluster and are left alone.
 """
 
 from __future__ import annotations
 
 import contextlib
+import os
 from collections.abc import Callable, Iterable, Iterator
 from typing import Any
 
 from planner.infra.errors import OgcpError, choice_error
+from planner.infra.lifetime import call_in_worker, guard_worker
 
 BACKENDS = ("dask", "loky")
 DEFAULT_BACKEND = "loky"
 DEFAULT_JOBS = 1
+#: The first joblib that passes a worker initializer through ``Parallel`` to loky.
+_INITIALIZER_SINCE = (1, 5)
+
+
+#: Local worker processes per CPU core at most: every worker loads numpy and the Q1 kernels
+#: (~150 MB) and more workers than cores only take turns; 10^5 of them stall the machine
+#: while they start.
+JOBS_PER_CORE = 4
+
+
+def max_jobs() -> int:
+    """The most local worker processes: :data:`JOBS_PER_CORE` per CPU core of this machine."""
+    return JOBS_PER_CORE * (os.cpu_count() or 1)
 
 
 def validate_backend(backend: str, address: str | None, jobs: int) -> None:
@@ -24,6 +43,8 @@ def validate_backend(backend: str, address: str | None, jobs: int) -> None:
         raise choice_error("backend", backend, BACKENDS)
     if not isinstance(jobs, int) or jobs < 1:
         raise OgcpError(f"jobs must be an integer >= 1, got {jobs!r}")
+    if backend == "loky" and jobs > max_jobs():
+        raise OgcpError(f"jobs must be at most {max_jobs()} ({JOBS_PER_CORE} per CPU core), got {jobs}")
     if backend == "dask" and not address:
         raise OgcpError("backend 'dask' needs --address HOST:PORT of a running Dask scheduler")
     if backend == "loky" and address:
@@ -81,5 +102,24 @@ def run_tasks(
     import joblib
 
     with _backend_context(backend, address):
-        parallel = joblib.Parallel(n_jobs=jobs if backend == "loky" else -1, return_as="generator_unordered")
-        yield from parallel(joblib.delayed(function)(*task) for task in tasks)
+        if backend == "dask":
+            parallel = joblib.Parallel(n_jobs=-1, return_as="generator_unordered")
+            yield from parallel(joblib.delayed(function)(*task) for task in tasks)
+            return
+        parent = os.getpid()
+        # Every task starts the parent watchdog in its worker; the initializer (where joblib has
+        # it) also covers a worker that gets no task before the parent dies, which would otherwise
+        # idle for loky's 300 s before it exits. No backend is named, so that a nested call keeps
+        # joblib's choice (threads inside a worker); those backends ignore the initializer.
+        options = {"initializer": guard_worker, "initargs": (parent,)} if _has_initializer(joblib.__version__) else {}
+        parallel = joblib.Parallel(n_jobs=jobs, return_as="generator_unordered", **options)
+        yield from parallel(joblib.delayed(call_in_worker)(parent, function, *task) for task in tasks)
+
+
+def _has_initializer(version: str) -> bool:
+    """Whether this joblib version passes ``Parallel(initializer=...)`` on to loky."""
+    try:
+        major, minor = (int(part) for part in version.split(".")[:2])
+    except ValueError:
+        return False
+    return (major, minor) >= _INITIALIZER_SINCE

@@ -8,7 +8,7 @@ import subprocess
 from functools import lru_cache
 from pathlib import Path
 
-TRACKED_PACKAGES = ("ogcp", "numpy", "scipy", "trimesh", "mujoco", "dm-control", "coacd", "joblib")
+TRACKED_PACKAGES = ("ogcp", "numpy", "scipy", "trimesh", "mujoco", "coacd", "joblib")
 
 
 def _version(package: str) -> str | None:

@@ -7,6 +7,7 @@ Everything a record holds beyond what the engine writes (the ``hand`` block, HFT
 
 from __future__ import annotations
 
+import threading
 from dataclasses import dataclass, fields
 from functools import lru_cache
 from pathlib import Path
@@ -48,6 +49,8 @@ class RunOptions:
         optimum: Also run A* and record its optimum next to HFTS's runs.
         contact_seed: Seed the contacts were sampled with; exhaustive search, which has no
             seed of its own, records it as ``config.seed``. None: not recorded.
+        stop: An event that stops A*, WA* and Dijkstra when set; they return their best
+            grasp with status ``interrupted``.
     """
 
     time_limit: float | None = None
@@ -58,6 +61,7 @@ class RunOptions:
     checkpoint: str | Path | None = None
     optimum: bool = False
     contact_seed: int | None = None
+    stop: threading.Event | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -111,13 +115,15 @@ def run_search(config: AStarConfig, contacts: ContactSet, m: int, options: RunOp
 
     Raises:
         OgcpError: For invalid parameters, or when no grasp satisfies the constraints.
-        SearchTimeout: When ``options.time_limit`` runs out first.
+        SearchTimeout: When the search stops (time limit or ``options.stop``) before it
+            found any valid grasp; with one, it is returned with status ``stopped`` or
+            ``interrupted``.
     """
     constraints, hand = constraints_of(config, m)
     planner = GraspPlanner(
         method=config.method, constraints=constraints, time_limit=options.time_limit, **engine_arguments(config)
     )
-    result = planner.plan(contacts, m, progress=options.progress)
+    result = planner.plan(contacts, m, progress=options.progress, stop=options.stop)
     return MethodRun(result, add_hand(result.to_dict(contact_set_record(contacts)), hand, contacts))
 
 

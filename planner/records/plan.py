@@ -8,7 +8,6 @@ through these, so every key is named here. Fields are only ever added.
 
 from __future__ import annotations
 
-import json
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -19,6 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from planner.grasp.contact_set import DEFAULT_CONE_EDGES, DEFAULT_MU, EVEN_SAMPLING, ContactSet
+from planner.infra.atomic import read_json
 from planner.infra.errors import OgcpError
 from planner.infra.provenance import provenance
 from planner.infra.tolerance import TOL
@@ -29,6 +29,42 @@ if TYPE_CHECKING:
 PLAN_SCHEMA = "ogcp.plan/1"
 #: Keys of a contact set's ``source`` that say how it was sampled (the rest describe the object).
 SAMPLING_KEYS = ("sampling", "n", "seed", "tip_radius", "reach_tolerance")
+#: Relative slack of :func:`check_result`: Q1 of a grasp and Q_OWS come from different hulls,
+#: so a grasp that holds every contact may round a last bit above Q_OWS.
+RESULT_RTOL = 1e-9
+
+
+def check_result(method: str, q1: float, q_ows: float, bound: float) -> None:
+    """Refuse a result that cannot be: 0 <= Q1 <= bound <= Q_OWS, all finite.
+
+    The Q1 of a grasp is at most the Q1 of all contacts (its hull lies inside theirs), and a
+    certified bound lies between the grasp it certifies and Q_OWS. A result outside that order
+    comes from a bug or from tampered input (a checkpoint), never from a search: it is refused
+    rather than written.
+
+    Args:
+        method: Method name, for the message.
+        q1: Q1 of the returned grasp [N].
+        q_ows: Q1 of the whole contact set [N].
+        bound: Certified upper bound on the optimum [N].
+
+    Raises:
+        OgcpError: One line naming the values that break the order.
+    """
+    values = {"Q1": q1, "Q_OWS": q_ows, "bound": bound}
+    for name, value in values.items():
+        if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
+            raise OgcpError(f"impossible {method} result: {name} is {value!r}, not a number")
+        if not math.isfinite(value) or value < 0:
+            raise OgcpError(f"impossible {method} result: {name} = {value!r} (expected finite and >= 0)")
+    slack = RESULT_RTOL * max(q1, q_ows, bound)
+    for (low, a), (high, b) in (
+        (("Q1", q1), ("Q_OWS", q_ows)),
+        (("Q1", q1), ("bound", bound)),
+        (("bound", bound), ("Q_OWS", q_ows)),
+    ):
+        if a > b + slack:
+            raise OgcpError(f"impossible {method} result: {low} {a:.12g} > {high} {b:.12g}")
 
 
 def plan_record(
@@ -58,7 +94,11 @@ def plan_record(
         config: Method parameters.
         contact_set: Description of the contact set (COM, rho, mu, k, source).
         **extra: Further method-specific top-level fields.
+
+    Raises:
+        OgcpError: For values that cannot be (see :func:`check_result`).
     """
+    check_result(method, q1, q_ows, bound)
     return {
         "schema": PLAN_SCHEMA,
         "method": method,
@@ -169,14 +209,7 @@ def load_plan(path: str | Path) -> dict[str, Any]:
         OgcpError: For a missing or unreadable file, invalid JSON or another schema.
     """
     path = Path(path)
-    try:
-        record = json.loads(path.read_text())
-    except FileNotFoundError:
-        raise OgcpError(f"{path}: no such plan file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise OgcpError(f"{path}: cannot read plan: {exc}") from exc
-    except json.JSONDecodeError as exc:
-        raise OgcpError(f"{path}: not valid JSON ({exc.msg} at line {exc.lineno})") from exc
+    record = read_json(path, "plan")
     if not isinstance(record, dict) or record.get("schema") != PLAN_SCHEMA:
         found = record.get("schema") if isinstance(record, dict) else type(record).__name__
         raise OgcpError(f"{path}: expected a plan with schema {PLAN_SCHEMA!r}, got {found!r}")

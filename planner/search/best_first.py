@@ -15,17 +15,23 @@ terminal state or as a terminal heuristic child. When a goal is popped the incum
 returned: the goal itself, or (WA* only; A*'s goal is optimal) a strictly better grasp,
 which keeps the guarantee and costs nothing but the expansion of the state whose branch
 and bound found it, so that the returned grasp is a state of the tree.
+
+A search stopped by its time limit or by a stop request is a result too: the incumbent
+(or, when none was evaluated yet, the first valid grasp of a depth-first dive below the
+most promising open states) with the certificate the open list gives at that moment.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import heapq
 import itertools
 import math
+import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, NoReturn
+from typing import Any
 
 import numpy as np
 
@@ -34,7 +40,13 @@ from planner.grasp.contact_set import ContactSet
 from planner.grasp.subset_quality import PackedMask
 from planner.grasp.support_bound import Vector
 from planner.infra.errors import OgcpError, SearchTimeout
-from planner.search.result import SearchResult, SearchStats, SearchTree, effective_branching_factor
+from planner.search.result import (
+    SearchResult,
+    SearchStats,
+    SearchTree,
+    effective_branching_factor,
+    peak_rss_bytes,
+)
 from planner.search.search_space import SearchSpace, State
 
 BOUND, EXACT_G, PARTIAL, EXACT = 0, 1, 2, 3
@@ -42,6 +54,13 @@ BOUND, EXACT_G, PARTIAL, EXACT = 0, 1, 2, 3
 Entry = tuple[float, int, int, State, float, int, float, int]
 #: Heuristic children ranked by decreasing U: (U, masks, support vectors, state or None).
 Ranked = list[tuple[float, list[PackedMask], list[Vector], State | None]]
+#: Iterations between two looks at the clock for progress reports (a report costs nothing
+#: but a clock reading; the clock is read every iteration for the deadline anyway).
+PROGRESS_SECONDS = 0.5
+#: States a dive may visit before it gives up (each costs one successor generation).
+DIVE_BUDGET = 20_000
+#: Open states a dive starts from, most promising first.
+DIVE_STARTS = 16
 
 
 @dataclass(frozen=True)
@@ -72,6 +91,8 @@ class Search(SearchSpace):
         constraints: Grasp constraints, distinct contacts included.
         record_tree: Keep every created state for :attr:`SearchResult.tree`.
         time_limit: Wall-clock budget [s]; None: unlimited.
+        stop: Set by another thread (or a signal handler) to stop the search; it then
+            returns like at its time limit, with status ``interrupted``.
     """
 
     def __init__(
@@ -82,10 +103,14 @@ class Search(SearchSpace):
         constraints: list[Constraint],
         record_tree: bool = False,
         time_limit: float | None = None,
+        stop: threading.Event | None = None,
     ) -> None:
         super().__init__(contacts, m, config, constraints)
         self.eps = config["eps"]
         self.time_limit = time_limit
+        self.stop = stop
+        #: Called about every :data:`PROGRESS_SECONDS` with (best Q1 or None, certified bound) [N].
+        self.on_progress: Callable[[float | None, float], object] = lambda best, bound: None
         self._pending: dict[State, tuple[Ranked, int, float]] = {}
         # Heuristic children are successors only on the expansion tree and without the
         # symmetry filter; otherwise only created terminal states become incumbents.
@@ -133,12 +158,18 @@ class Search(SearchSpace):
         open_list: list[Entry] = []
         self.push(open_list, 0.0, 0, root, EXACT_G, 0.0, 0)
         deadline = math.inf if self.time_limit is None else wall0 + self.time_limit
+        next_report = wall0 + PROGRESS_SECONDS
+        stop = self.stop
         while open_list:
+            now = time.perf_counter()  # one reading per iteration (tests drive a fake clock)
+            if now > deadline or (stop is not None and stop.is_set()):
+                return self.stopped(open_list, wall0, cpu0)
+            if now >= next_report:
+                next_report = now + PROGRESS_SECONDS
+                self.on_progress(None if self.incumbent is None else self.incumbent.q, self.quick_bound(open_list))
             entry = heapq.heappop(open_list)
             key, neg_depth, _, state, lower, stage, g, ident = entry
             depth = -neg_depth
-            if time.perf_counter() > deadline:
-                self.stop_at_deadline(lower, open_list)
             if stage == BOUND:
                 q = self.exact(state)
                 g = q0 - q
@@ -163,15 +194,59 @@ class Search(SearchSpace):
             self.expand(open_list, state, depth, key, lower, g, ident)
         raise OgcpError("no grasp satisfies the constraints")
 
-    def stop_at_deadline(self, lower: float, open_list: list[Entry]) -> NoReturn:
-        """Raise :class:`SearchTimeout` with the best grasp so far and the certified bound."""
-        assert self.time_limit is not None  # without a limit the deadline is infinite
-        # Every unexplored grasp lies below an open state whose stored lower bound of f
-        # bounds its cost (the popped state included), so q0 - min bounds the optimum.
-        lowest = min([lower] + [entry[4] for entry in open_list])
-        best = None if self.incumbent is None else self.incumbent.q
-        upper = max(self.q0 - lowest, best if best is not None else 0.0)
-        raise SearchTimeout(self.config["method"], float(self.time_limit), sum(self.visited.values()), best, upper)
+    def quick_bound(self, open_list: list[Entry]) -> float:
+        """A certified upper bound on the optimum in O(1), looser than the final one for WA*.
+
+        Every open key is at most (1 + eps) times its state's lower bound of f, so the
+        smallest key over 1 + eps bounds the smallest f from below.
+        """
+        best = 0.0 if self.incumbent is None else self.incumbent.q
+        if not open_list:
+            return best
+        return min(self.q0, max(best, self.q0 - open_list[0][0] / (1.0 + self.eps)))
+
+    def stopped(self, open_list: list[Entry], wall0: float, cpu0: float) -> SearchResult:
+        """The result of a search stopped before its goal test: the best grasp and its certificate.
+
+        Raises:
+            SearchTimeout: When no valid grasp could be found in time (none was evaluated
+                and the dive found none).
+        """
+        status = "interrupted" if self.stop is not None and self.stop.is_set() else "stopped"
+        if self.incumbent is None:
+            self.dive(open_list)
+        inc = self.incumbent
+        if inc is None:
+            # Every unexplored grasp lies below an open state, so q0 - min bounds the optimum.
+            upper = self.q0 - min(entry[4] for entry in open_list)
+            seconds = None if status == "interrupted" or self.time_limit is None else float(self.time_limit)
+            raise SearchTimeout(self.config["method"], seconds, sum(self.visited.values()), None, upper)
+        result = self.result(inc, self.q0 - inc.q, open_list, wall0, cpu0)
+        # The incumbent may already beat every open bound: then it is proven optimal.
+        if result.bound <= result.q1:
+            return result  # the incumbent already beats every open bound: proven, as if finished
+        return dataclasses.replace(result, status=status)
+
+    def dive(self, open_list: list[Entry]) -> None:
+        """Find valid grasps below the most promising open states: depth first, highest U first.
+
+        Each of the :data:`DIVE_STARTS` open states with the smallest bounds is descended
+        until its first valid terminal state, which is offered as the incumbent (found by
+        the open state it lies below, so the certificate is unchanged). The incumbent stays
+        None when :data:`DIVE_BUDGET` states hold no valid grasp.
+        """
+        budget = DIVE_BUDGET
+        for entry in heapq.nsmallest(DIVE_STARTS, open_list, key=lambda e: e[4]):
+            stack = [entry[3]]
+            while stack and budget > 0:
+                state = stack.pop()
+                budget -= 1
+                if self.is_terminal(state):
+                    self.offer(self.exact(state), tuple(sorted(state)), entry[3], entry[7])
+                    break
+                children = self.successors(state)
+                # Ascending U, so the child with the highest bound is popped next.
+                stack.extend(sorted(children, key=lambda child: self.upper(self.node_vectors(child))))
 
     def expand(
         self, open_list: list[Entry], state: State, depth: int, key: float, lower: float, g: float, ident: int
@@ -281,7 +356,7 @@ class Search(SearchSpace):
         eps_bound = q0 - (q0 - q) / (1.0 + self.eps)
         grasp = tuple(sorted(int(self.tree.members[node][0]) for node in state))
         created, visited = self.created, self.visited
-        levels = max(max(created), max(visited)) + 1
+        levels = max(max(created), max(visited, default=0)) + 1
         solution_depth = self.depth(state)
         stats = SearchStats(
             created=sum(created.values()),
@@ -300,6 +375,7 @@ class Search(SearchSpace):
             trace=tuple(self.trace),
             wall_seconds=time.perf_counter() - wall0,
             cpu_seconds=time.process_time() - cpu0,
+            peak_rss_bytes=peak_rss_bytes(),
         )
         idx = np.array(grasp, dtype=np.intp)
         return SearchResult(
@@ -316,7 +392,14 @@ class Search(SearchSpace):
             config=self.config,
             contact_source=self.contacts.source,
             tree=self.search_tree(inc.ident) if self.record_tree else None,
+            status=self.finished_status(q, bound),
         )
+
+    def finished_status(self, q1: float, bound: float) -> str:
+        """What a finished search certifies (see :data:`~planner.search.result.SEARCH_STATUSES`)."""
+        if self.symmetry is not None:
+            return "approximate"  # the bound covers the symmetry-reduced space only
+        return "optimal" if bound <= q1 else "bounded"
 
     def search_tree(self, goal: int) -> SearchTree:
         """The recorded tree, with the path from the root to ``goal``."""

@@ -36,6 +36,7 @@ Design points:
 from __future__ import annotations
 
 import math
+import threading
 from collections.abc import Sequence
 from typing import Any
 
@@ -50,7 +51,7 @@ from planner.config.methods import (
     SearchConfig,
     WAStarConfig,
 )
-from planner.config.options import options_of
+from planner.config.options import TIME_LIMIT, options_of
 from planner.grasp.constraints import Constraint, DistinctContacts
 from planner.grasp.contact_set import ContactSet
 from planner.infra.errors import OgcpError, choice_error
@@ -86,9 +87,9 @@ class GraspPlanner:
         record_tree: Keep the search tree (every created state's parent, level, f and
             whether it was expanded, and the solution path) in ``SearchResult.tree``,
             e.g. for the paper's circular plot (Fig. 5).
-        time_limit: Wall-clock budget of :meth:`plan` [s]; past it the search raises
-            :class:`~planner.infra.errors.SearchTimeout` with the best grasp found and a certified
-            upper bound on the optimum. None: unlimited.
+        time_limit: Wall-clock budget of :meth:`plan` [s]; past it the search returns the
+            best grasp found with status ``stopped`` and the certified upper bound on the
+            optimum (``bound``, ``gap``). None: unlimited.
     """
 
     def __init__(
@@ -159,20 +160,27 @@ class GraspPlanner:
             "constraints": [c.describe() for c in self.constraints],
         }
 
-    def plan(self, contacts: ContactSet, m: int, progress: bool = False) -> SearchResult:
+    def plan(
+        self, contacts: ContactSet, m: int, progress: bool = False, stop: threading.Event | None = None
+    ) -> SearchResult:
         """Find the best m-contact grasp (or one within the WA* bound).
 
         Args:
             contacts: The contact set C.
             m: Number of contacts (fingers), 2 <= m <= |C|.
-            progress: Show expansions and the current f on stderr (tqdm).
+            progress: Show expansions, the best Q1 so far, the certified bound and the gap
+                on stderr (tqdm).
+            stop: An event that stops the search when set (from another thread or a signal
+                handler); the result then has status ``interrupted``.
 
         Returns:
-            The :class:`SearchResult`.
+            The :class:`SearchResult`; its ``status`` says what it certifies (``optimal``,
+            ``bounded``, ``approximate``, ``stopped`` or ``interrupted``).
 
         Raises:
             OgcpError: For invalid parameters, or when no grasp satisfies the constraints.
-            SearchTimeout: When ``time_limit`` runs out first (a subclass of OgcpError).
+            SearchTimeout: When the search stops (time limit or ``stop``) before any valid
+                grasp was found (a subclass of OgcpError).
         """
         provenance()  # recorded now: the commit and versions of the code that runs
         config = self.resolved_config()
@@ -184,6 +192,8 @@ class GraspPlanner:
         limit = self.time_limit
         if limit is not None and not (isinstance(limit, (int, float)) and math.isfinite(limit) and limit > 0):
             raise OgcpError(f"time_limit must be a number of seconds > 0 or None, got {limit!r}")
+        if limit is not None:
+            TIME_LIMIT.check("time_limit", limit)
         search = Search(
             contacts,
             int(m),
@@ -191,7 +201,17 @@ class GraspPlanner:
             [DistinctContacts(), *self.constraints],
             self.record_tree,
             None if limit is None else float(limit),
+            stop,
         )
         with tqdm(desc=config["method"], unit=" expansions", disable=not progress, leave=False) as bar:
-            search.on_expand = lambda f: (bar.update(), bar.set_postfix(f=f"{f:.6f}", refresh=False))
+            search.on_expand = lambda f: bar.update()
+            search.on_progress = lambda best, bound: bar.set_postfix_str(progress_text(best, bound))
             return search.run()
+
+
+def progress_text(best: float | None, bound: float) -> str:
+    """``best``, ``bound`` and relative ``gap`` of a running search, for a progress line."""
+    if best is None:
+        return f"best -, bound {bound:.6f}"
+    gap = (bound - best) / bound if bound > 0 else 0.0
+    return f"best {best:.6f}, bound {bound:.6f}, gap {100 * gap:.2f} %"

@@ -6,13 +6,23 @@ Their JSON form is the ``ogcp.plan/1`` record of :mod:`planner.records.plan`.
 from __future__ import annotations
 
 import math
+import sys
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from planner.records.plan import plan_record
+from planner.records.plan import check_result, plan_record
+
+#: What a search result certifies. ``optimal``: no grasp beats it (bound = Q1);
+#: ``bounded``: WA* finished, its cost within 1 + eps of the optimum's; ``approximate``:
+#: optimal over the symmetry-reduced space only; ``stopped``: the time limit ran out, the
+#: best grasp found so far is returned with the certified bound; ``interrupted``: the same,
+#: stopped by a request (Ctrl-C in the CLI).
+SEARCH_STATUSES = ("optimal", "bounded", "approximate", "stopped", "interrupted")
+#: The statuses of a search that did not finish.
+UNFINISHED = ("stopped", "interrupted")
 
 
 @dataclass(frozen=True)
@@ -37,6 +47,9 @@ class SearchStats:
         trace: (iteration, f of the expanded state) per expansion.
         wall_seconds: Wall-clock time [s].
         cpu_seconds: CPU time of this process [s].
+        peak_rss_bytes: Peak resident memory of the process when the search ended [bytes]
+            (the operating system's high-water mark: it includes whatever the process held
+            before the search; 0 where the platform does not report it).
     """
 
     created: int
@@ -55,6 +68,7 @@ class SearchStats:
     trace: tuple[tuple[int, float], ...]
     wall_seconds: float
     cpu_seconds: float
+    peak_rss_bytes: int = 0
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready form."""
@@ -75,7 +89,19 @@ class SearchStats:
             "trace": [[i, f] for i, f in self.trace],
             "wall_seconds": self.wall_seconds,
             "cpu_seconds": self.cpu_seconds,
+            "peak_rss_bytes": self.peak_rss_bytes,
         }
+
+
+def peak_rss_bytes() -> int:
+    """The process's peak resident memory so far [bytes]; 0 where it is not reported."""
+    try:
+        import resource  # POSIX only
+    except ImportError:
+        return 0
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    # Linux reports kilobytes, macOS bytes.
+    return int(peak if sys.platform == "darwin" else peak * 1024)
 
 
 @dataclass(frozen=True)
@@ -130,6 +156,7 @@ class SearchResult:
         config: Resolved search parameters (seed included).
         contact_source: Provenance of the contact set.
         tree: The search tree, when the planner was asked to record it.
+        status: What the result certifies, one of :data:`SEARCH_STATUSES`.
     """
 
     method: str
@@ -145,6 +172,16 @@ class SearchResult:
     config: dict[str, Any] = field(default_factory=dict)
     contact_source: dict[str, Any] = field(default_factory=dict)
     tree: SearchTree | None = None
+    status: str = "optimal"
+
+    def __post_init__(self) -> None:
+        """Refuse impossible values: OgcpError unless 0 <= q1 <= bound <= q_ows (``check_result``)."""
+        check_result(self.method, self.q1, self.q_ows, self.bound)
+
+    @property
+    def gap(self) -> float:
+        """Certified optimality gap: ``bound - q1`` [N]; 0 for a proven optimum."""
+        return max(0.0, self.bound - self.q1)
 
     def to_dict(self, contact_set: dict[str, Any] | None = None) -> dict[str, Any]:
         """JSON form, schema ``ogcp.plan/1``.
@@ -167,6 +204,8 @@ class SearchResult:
             eps=self.eps,
             eps_bound=self.eps_bound,
             source=self.contact_source,
+            status=self.status,
+            gap=self.gap,
             **({} if self.tree is None else {"tree": self.tree.to_dict()}),
         )
 

@@ -3,15 +3,19 @@
 The child runs :func:`_child_main` from its source with ``python -c``: importing ``sim_eval``
 would load the whole package (MuJoCo included) just to call CoACD. Arrays travel through
 ``.npz`` files in a temporary folder; CoACD's log goes to a file the parent reads.
+
+The child ends with its parent, even one killed by SIGKILL (:mod:`planner.infra.lifetime`:
+``PR_SET_PDEATHSIG`` on Linux, where the starting thread waits for the child, and a watchdog
+thread everywhere), and the folder of a killed run is removed by a later one.
 """
 
 from __future__ import annotations
 
 import inspect
 import json
+import os
 import subprocess
 import sys
-import tempfile
 import time
 import zipfile
 from pathlib import Path
@@ -22,15 +26,20 @@ from numpy.typing import NDArray
 from tqdm import tqdm
 
 from planner.infra.errors import OgcpError
+from planner.infra.lifetime import owned_tempdir, set_parent_death_signal, watch_parent
 
 _POLL_S = 0.2  # [s] how often the parent checks on the child
+#: Prefix of the temporary folders; a folder is ``<prefix><owner pid>-<random>``.
+TEMP_PREFIX = "ogcp-coacd-"
 
 
 def _child_command(workdir: Path) -> list[str]:
     # The child runs this module's _child_main from source: importing sim_eval would load the
-    # whole package (MuJoCo included) just to call CoACD.
-    source = inspect.getsource(_child_main) + "\nimport sys\nsys.exit(_child_main(sys.argv[1]))\n"
-    return [sys.executable, "-c", source, str(workdir)]
+    # whole package (MuJoCo included) just to call CoACD. The lifetime guards travel with it.
+    functions = (set_parent_death_signal, watch_parent, _child_main)
+    source = "\n\n".join(inspect.getsource(function) for function in functions)
+    source += "\nimport sys\nsys.exit(_child_main(sys.argv[1], int(sys.argv[2])))\n"
+    return [sys.executable, "-c", source, str(workdir), str(os.getpid())]
 
 
 def _wait(proc: subprocess.Popen[bytes], timeout: float, name: str, progress: bool) -> None:
@@ -80,8 +89,7 @@ def run_coacd_child(
     Raises:
         OgcpError: Timeout, a Python error in CoACD, a native crash or an unreadable result.
     """
-    with tempfile.TemporaryDirectory(prefix="ogcp-coacd-") as tmp:
-        workdir = Path(tmp)
+    with owned_tempdir(TEMP_PREFIX) as workdir:
         np.savez(workdir / "input.npz", vertices=vertices, faces=faces.astype(np.int32))
         (workdir / "job.json").write_text(json.dumps(kwargs))
         with open(workdir / "coacd.log", "wb") as log:
@@ -106,12 +114,16 @@ def run_coacd_child(
     return parts, seconds, text
 
 
-def _child_main(workdir: str) -> int:
+def _child_main(workdir: str, parent_pid: int) -> int:
     """Child process: CoACD on ``input.npz`` with ``job.json``; writes ``parts.npz``, ``result.json``.
 
     Runs from its own source (see :func:`_child_command`), so it imports what it uses itself
-    and touches no module globals.
+    and uses no module globals but the lifetime guards sent along with it. It ends with
+    ``parent_pid``: nobody would read its result.
     """
+    set_parent_death_signal()  # Linux: the parent thread that started us waits for us
+    watch_parent(parent_pid)  # elsewhere, and if the parent died before the line above
+
     import json
     import os
     import time

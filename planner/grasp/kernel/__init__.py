@@ -61,6 +61,9 @@ Statuses: ``OK`` (exact, canonical), ``FALLBACK`` (not certified: use qhull), ``
 (threshold mode: an upper bound at least ``CUT_MARGIN`` below the threshold), ``ZERO``
 (batch: Q1 = 0 proven by the support table).
 
+Compiled code is cached on disk as numba caches it, with every file checked on load
+(:mod:`planner.grasp.kernel.jit`): a damaged cache costs one compilation, never a failed run.
+
 Numerical tolerances: eps = 1e-11 * max|w| for visibility / convergence (points within
 eps of a facet hyperplane are treated as on it, which moves Q1 by at most eps), 1e-9 for
 force closure and rank (identical to ``planner.infra.tolerance.TOL``).

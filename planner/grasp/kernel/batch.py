@@ -6,11 +6,12 @@ import functools
 import threading
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
 from numpy.typing import NDArray
 
 from planner.grasp.kernel.epa import Workspace, _q1_kernel
 from planner.grasp.kernel.geometry import BOUND, CUT_MARGIN, DIM, FALLBACK, FC_TOL, MAX_FACETS, OK, ZERO
+from planner.grasp.kernel.jit import cached_njit
 from planner.grasp.kernel.refit import _canonical_plane
 
 # --------------------------------------------------------------------------------------
@@ -18,7 +19,7 @@ from planner.grasp.kernel.refit import _canonical_plane
 # --------------------------------------------------------------------------------------
 
 
-@njit(cache=True)
+@cached_njit()
 def _batch_kernel(
     wc: np.ndarray,
     grasps: np.ndarray,
@@ -64,7 +65,7 @@ def _batch_kernel(
         status[g] = st
 
 
-@njit(cache=True)
+@cached_njit()
 def _new_workspace(max_points: int, max_facets: int) -> tuple:
     """The :class:`Workspace` arrays, allocated inside compiled code (one per thread)."""
     size = 1 << 16
@@ -90,7 +91,7 @@ def _new_workspace(max_points: int, max_facets: int) -> tuple:
     )
 
 
-@njit(cache=True, parallel=True)
+@cached_njit(parallel=True)
 def _batch_parallel(
     wc: np.ndarray,
     grasps: np.ndarray,

@@ -6,18 +6,18 @@ See :mod:`planner.grasp.kernel` for why these checks prove that no facet is miss
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
 from planner.grasp.kernel.geometry import (
     DIM,
 )
+from planner.grasp.kernel.jit import cached_njit
 
 # --------------------------------------------------------------------------------------
 # The kernel
 # --------------------------------------------------------------------------------------
 
 
-@njit(cache=True)
+@cached_njit()
 def _flat_pair_ok(
     P: np.ndarray, FV: np.ndarray, FU: np.ndarray, f: int, j: int, g: int, jg: int, scale: float, B: np.ndarray
 ) -> bool:
@@ -83,7 +83,7 @@ def _flat_pair_ok(
     return nf > 1e-9 * scale and ng > 1e-9 * scale and dd < -0.5 * nf * ng
 
 
-@njit(cache=True)
+@cached_njit()
 def _certify(
     P: np.ndarray,
     FV: np.ndarray,

@@ -6,7 +6,6 @@ See :mod:`planner.grasp.kernel` for the design and the tolerances.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
 from planner.grasp.kernel.certify import _certify
 from planner.grasp.kernel.geometry import (
@@ -25,6 +24,7 @@ from planner.grasp.kernel.geometry import (
     _ridge_key,
     _support,
 )
+from planner.grasp.kernel.jit import cached_njit
 from planner.grasp.kernel.refit import _canonical_plane
 
 # --------------------------------------------------------------------------------------
@@ -94,7 +94,7 @@ class Workspace:
         )
 
 
-@njit(cache=True, inline="always")
+@cached_njit(inline="always")
 def _alloc(alive: np.ndarray, free: np.ndarray, nfree: int, hw: int) -> tuple[int, int, int]:
     """A facet slot: reuse a freed one or extend the high-water mark. Returns (slot, nfree, hw)."""
     if nfree > 0:
@@ -107,7 +107,7 @@ def _alloc(alive: np.ndarray, free: np.ndarray, nfree: int, hw: int) -> tuple[in
     return s, nfree, hw
 
 
-@njit(cache=True)
+@cached_njit()
 def _q1_kernel(
     P: np.ndarray, n: int, ws: tuple, certify: bool, stats: np.ndarray, threshold: float, direction: np.ndarray
 ) -> tuple[int, float]:

@@ -7,7 +7,8 @@ Shared by :mod:`planner.grasp.kernel.epa` (the expanding polytope and its certif
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+
+from planner.grasp.kernel.jit import cached_njit
 
 DIM = 6
 #: Same as planner.infra.tolerance.TOL.force_closure: Q1 at or below this reports 0.
@@ -38,7 +39,7 @@ CUT_MARGIN = 1e-9
 # --------------------------------------------------------------------------------------
 
 
-@njit(cache=True, inline="always")
+@cached_njit(inline="always")
 def _ridge_key(v: np.ndarray, skip: int) -> np.int64:
     """Pack the 5 sorted vertex indices of facet ``v`` other than position ``skip``.
 
@@ -52,7 +53,7 @@ def _ridge_key(v: np.ndarray, skip: int) -> np.int64:
     return key
 
 
-@njit(cache=True)
+@cached_njit()
 def _facet_plane(
     P: np.ndarray, v: np.ndarray, c: np.ndarray, M: np.ndarray, perm: np.ndarray, u: np.ndarray
 ) -> tuple[float, bool]:
@@ -136,7 +137,7 @@ def _facet_plane(
     return d, True
 
 
-@njit(cache=True)
+@cached_njit()
 def _support(P: np.ndarray, n: int, u: np.ndarray) -> tuple[float, int]:
     """Support value ``max_i P[i].u`` and its argmax over the first ``n`` points."""
     best = -np.inf
@@ -151,7 +152,7 @@ def _support(P: np.ndarray, n: int, u: np.ndarray) -> tuple[float, int]:
     return best, arg
 
 
-@njit(cache=True)
+@cached_njit()
 def _reference_rank_ok(P: np.ndarray, n: int) -> bool:
     """planner.grasp.quality._affine_rank_ok verbatim: SVD of the centred points."""
     X = P[:n].copy()
@@ -168,14 +169,14 @@ def _reference_rank_ok(P: np.ndarray, n: int) -> bool:
     return sv.size == DIM and sv[-1] > RANK_TOL * max(sv[0], 1e-300)
 
 
-@njit(cache=True, inline="always")
+@cached_njit(inline="always")
 def _slot(key: np.int64, mask: np.int64) -> np.int64:
     """Fibonacci hash of a ridge key into an open-addressing table of size mask + 1."""
     h = np.uint64(key) * np.uint64(0x9E3779B97F4A7C15)
     return np.int64(h >> np.uint64(40)) & mask
 
 
-@njit(cache=True, inline="always")
+@cached_njit(inline="always")
 def _mask_for(count: int) -> np.int64:
     """Smallest power-of-two-minus-one mask with at least 2 * count slots."""
     size = 16
@@ -184,7 +185,7 @@ def _mask_for(count: int) -> np.int64:
     return np.int64(size - 1)
 
 
-@njit(cache=True)
+@cached_njit()
 def _hash_insert(
     key: np.int64,
     owner: int,

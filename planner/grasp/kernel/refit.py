@@ -13,15 +13,15 @@ the bits do not depend on the machine's linear-algebra library either.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
 from planner.grasp.kernel.geometry import DIM, RANK_TOL
+from planner.grasp.kernel.jit import cached_njit
 
 #: Wrenches this close to a certified facet's hyperplane are taken to lie on it [N].
 ON_FACET = 1e-11
 
 
-@njit(cache=True)
+@cached_njit()
 def _canonical_plane(
     P: np.ndarray, n: int, u: np.ndarray, d: float, X: np.ndarray, out: np.ndarray
 ) -> tuple[float, bool]:

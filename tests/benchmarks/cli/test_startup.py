@@ -23,7 +23,6 @@ HEAVY = (
     "numba",
     "llvmlite",
     "mujoco",
-    "dm_control",
     "matplotlib",
     "coacd",
     "joblib",

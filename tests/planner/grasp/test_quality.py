@@ -119,9 +119,7 @@ def test_degenerate_inputs_give_zero():
     flat = rng.normal(size=(40, 6))
     flat[:, 5] = 0.3  # all wrenches on an affine hyperplane
     assert q1(flat) == 0.0
-    nan = rng.normal(size=(30, 6))
-    nan[3, 2] = np.nan
-    assert q1(nan) == 0.0
+    # NaN or infinite wrenches are an error, not a degenerate set: tests/planner/grasp/test_api_shapes.py.
     positions = np.tile([[0.05, 0.0, 0.0]], (3, 1))  # one contact repeated
     normals = np.tile([[-1.0, 0.0, 0.0]], (3, 1))
     assert q1(contact_wrenches(positions, normals, np.zeros(3), 0.05, 0.5, 8).reshape(-1, 6)) == 0.0

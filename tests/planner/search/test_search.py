@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import threading
 import types
 
 import numpy as np
@@ -16,6 +17,23 @@ from planner.search import best_first as search_run
 from tests.conftest import exhaustive_best
 
 OBJECTS = ("box", "sphere", "donut", "amphora")
+
+
+class _Nothing:
+    """A constraint that admits every super-contact and accepts no grasp."""
+
+    name = "nothing"
+
+    def accepts(self, grasp, contacts):
+        return False
+
+    def admits(self, super_contacts, contacts):
+        return True
+
+    def describe(self):
+        return {"name": self.name}
+
+
 # (n, m, seed) instances per object: 4 objects x 3 = 12 contact sets.
 INSTANCES = ((20, 3, 1), (26, 3, 2), (13, 4, 3))
 VARIANTS = (  # (successor, heuristic, branching)
@@ -174,11 +192,15 @@ def test_invalid_parameters_are_rejected(kwargs, m, message, object_contacts):
 
 @pytest.mark.parametrize("method, eps", [("astar", None), ("wastar", 0.5), ("dijkstra", None)])
 def test_time_limit_stops_with_a_sound_bound(method, eps, object_contacts, optimum, monkeypatch):
-    """A fake clock ticks 1 s per reading, so the limit cuts the search at every depth in turn."""
+    """A fake clock ticks 1 s per reading, so the limit cuts the search at every depth in turn.
+
+    A stopped search returns a valid grasp (found by the search or by the dive below its best
+    open states) with a bound that the brute-force optimum never exceeds.
+    """
     contacts = object_contacts("amphora", 26, 2)
     best = optimum("amphora", 26, 3, 2)
     full = GraspPlanner(method=method, eps=eps, seed=2).plan(contacts, 3)
-    stops = 0
+    statuses = []
     for limit in (1, 2, 5, 10, 20, 40, 80, 10_000):
         ticks = itertools.count()
         monkeypatch.setattr(
@@ -186,14 +208,37 @@ def test_time_limit_stops_with_a_sound_bound(method, eps, object_contacts, optim
             "time",
             types.SimpleNamespace(perf_counter=lambda clock=ticks: float(next(clock)), process_time=lambda: 0.0),
         )
-        try:
-            result = GraspPlanner(method=method, eps=eps, seed=2, time_limit=limit).plan(contacts, 3)
-        except SearchTimeout as stop:
-            stops += 1
-            assert stop.seconds == limit and stop.visited <= full.stats.visited
-            assert stop.upper_bound >= best - 1e-12
-            assert stop.best_q1 is None or stop.best_q1 <= best + 1e-12
-            assert f"time limit of {limit} s" in str(stop) and isinstance(stop, OgcpError)
+        result = GraspPlanner(method=method, eps=eps, seed=2, time_limit=limit).plan(contacts, 3)
+        statuses.append(result.status)
+        assert len(set(result.grasp)) == 3 and result.q1 == pytest.approx(
+            q1(contacts.subset_wrenches(np.array(result.grasp)))
+        )
+        assert result.q1 <= best + 1e-12 <= result.bound + 2e-12 and result.bound <= result.q_ows
+        assert result.gap == pytest.approx(result.bound - result.q1)
+        if result.status == "stopped":
+            assert result.stats.visited <= full.stats.visited
         else:
-            assert result.grasp == full.grasp and result.q1 == full.q1
-    assert 1 <= stops < 8  # the smallest limits stop it, the largest does not
+            assert result.status == full.status and result.grasp == full.grasp and result.q1 == full.q1
+    assert statuses[0] == "stopped" and statuses[-1] != "stopped"  # the smallest limit stops it, the largest not
+
+
+def test_a_stop_request_returns_the_best_grasp_so_far(object_contacts, optimum):
+    """A stop event set before the search starts: the dive's grasp, status interrupted, a sound bound."""
+    contacts = object_contacts("amphora", 26, 2)
+    best = optimum("amphora", 26, 3, 2)
+    stop = threading.Event()
+    stop.set()
+    result = GraspPlanner(seed=2).plan(contacts, 3, stop=stop)
+    assert result.status == "interrupted" and result.stats.visited == 0
+    assert result.q1 <= best <= result.bound and result.gap > 0
+    record = result.to_dict()
+    assert record["status"] == "interrupted" and record["gap"] == result.gap and record["bound"] == result.bound
+
+
+def test_a_search_stopped_before_any_valid_grasp_raises(object_contacts):
+    """No valid grasp within reach of the dive: the stop is an error naming the bound."""
+    contacts = object_contacts("box", 12, 0)
+    stop = threading.Event()
+    stop.set()
+    with pytest.raises(SearchTimeout, match="stopped by request after 0 expansions"):
+        GraspPlanner(constraints=[_Nothing()]).plan(contacts, 3, stop=stop)
