@@ -12,7 +12,10 @@ guarantee inside RUN:
   directions) dropped by more than the resistance tolerance (relative);
 * ``gates``: a simulated grasp that passed the validity gates in BASELINE fails them in RUN;
 * ``time``: a cell's time (default: the method's CPU seconds) grew beyond the ratio (both
-  times raised to a noise floor first);
+  times raised to a noise floor first). Runs of ``ogcp suite`` compile the numba kernels in
+  each process before its first cell, so a cold cache is not in any cell's time; the report
+  notes a run that compiled (warm-up above :data:`COMPILE_SECONDS`) and a run made before
+  the warm-up, whose first cell in each process may include the compilation;
 * ``error``: a cell that succeeded in BASELINE failed in RUN;
 * ``missing``: a BASELINE cell absent from RUN (a finding unless allowed).
 
@@ -27,7 +30,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from benchmarks.suite.manifest import suite_hash
+from benchmarks.suite.manifest import kernel_warmups, suite_hash
 from benchmarks.suite.params import EXHAUSTIVE_METHODS, OPTIMAL_METHODS
 from benchmarks.suite.record import CellRecord
 from benchmarks.suite.store import ResultStore
@@ -36,6 +39,8 @@ from sim_eval.result import SimGraspRecord, SimRecord
 
 TIME_KEYS = ("cpu", "plan", "wall")
 CONSTRAINT_KEYS = ("max_spread", "hand", "hand_threshold")
+#: A kernel warm-up longer than this [s] compiled the kernels (loading numba's cache takes < 1 s).
+COMPILE_SECONDS = 2.0
 
 
 @dataclass(frozen=True)
@@ -320,6 +325,7 @@ class Comparison:
             lines.append(f"note: {extra} cells of RUN are not in BASELINE (not compared)")
         for name, data in (("RUN", self.run), ("BASELINE", self.baseline)):
             lines.extend(f"note: {name}: {problem}" for problem in data.problems)
+            lines.extend(f"note: {name}: {text}" for text in _warmup_notes(data.manifest))
         missing = [f for f in self.findings() if f.kind == "missing"]
         if missing and self.tolerances.allow_missing:
             lines.append(f"note: {len(missing)} cells of BASELINE missing from RUN (allowed)")
@@ -340,6 +346,20 @@ def compare_dirs(run: str | Path, baseline: str | Path, tolerances: Tolerances |
     tolerances = tolerances or Tolerances()
     tolerances.validate()
     return Comparison(load_run(run), load_run(baseline), tolerances).report()
+
+
+def _warmup_notes(manifest: dict[str, Any] | None) -> list[str]:
+    """What a run's kernel warm-up says about its times: nothing when its processes ran warm."""
+    if manifest is None:
+        return []
+    seconds = kernel_warmups(manifest)
+    if seconds is None:
+        note = "no kernel warm-up recorded (a run made before it): the first cell of each process may include"
+        return [f"{note} numba's compilation in its time"]
+    slowest = max(seconds, default=0.0)
+    if slowest > COMPILE_SECONDS:
+        return [f"compiled the kernels (warm-up up to {slowest:.1f} s per process, kept out of the cell times)"]
+    return []
 
 
 def _problem(record: CellRecord) -> tuple[Any, ...]:

@@ -235,13 +235,16 @@ def evaluate_plan(
         settings: Simulation settings or a mapping of them (unknown keys are errors).
         decomposition: Decomposition settings or a mapping of them.
         progress: Show progress bars on stderr.
-        max_grasps: Simulate at most this many of the plan's distinct grasps (best first).
+        max_grasps: Simulate at most this many of the plan's distinct grasps (best first), >= 1;
+            None: all.
 
     Returns:
         The simulation result.
     """
     from sim_eval.plan_input import plan_input
 
+    if max_grasps is not None and (isinstance(max_grasps, bool) or not isinstance(max_grasps, int) or max_grasps < 1):
+        raise OgcpError(f"max_grasps must be an integer >= 1 or None, got {max_grasps!r}")
     if not isinstance(settings, SimSettings):
         settings = SimSettings.from_dict(settings)
     if decomposition is not None and not isinstance(decomposition, DecompositionSettings):

@@ -55,7 +55,7 @@ def export_grasps(
     """Write a plan's distinct grasps (best first) as an ``ogcp.grasps/1`` file.
 
     Each grasp keeps the plan's label (``best``, ``top-<i>``, ``hfts-run-<i>``) and method, and
-    its ogcp Q1 [N] as its score. A grasp that repeats a contact (HFTS scores those 0 by
+    its ogcp Q1 [-] as its score. A grasp that repeats a contact (HFTS scores those 0 by
     convention) has no fingertip placement and is left out with a warning.
 
     Args:

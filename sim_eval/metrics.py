@@ -211,7 +211,7 @@ def set_metrics(q1: object, predicted_min: object, measured_min: object, holds: 
     """Set-level agreement of Q1 and of the analytic prediction with the simulation.
 
     Args:
-        q1: Q1 of each grasp, shape (n,) [N].
+        q1: Q1 of each grasp, shape (n,) [-].
         predicted_min: Minimum predicted resistance over the directions, shape (n,) [N].
         measured_min: Minimum measured resistance over the directions, shape (n,) [N];
             NaN for grasps whose simulation failed (left out of the correlations).

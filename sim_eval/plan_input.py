@@ -33,7 +33,7 @@ from planner.records.plan import SAMPLING_KEYS, ContactSampling, contact_samplin
 
 POSITION_TOLERANCE = 1e-9  # [m] recorded vs re-sampled contact positions, COM and rho
 NORMAL_TOLERANCE = 1e-9  # recorded vs re-sampled unit normals (per component)
-#: [N] recorded vs recomputed Q1 and Q_OWS. Each value is certified to TOL.q1_gap, and
+#: [-] recorded vs recomputed Q1 and Q_OWS. Each value is certified to TOL.q1_gap, and
 #: contacts that agree to POSITION_TOLERANCE move Q1 by about that much over rho (~0.1 m).
 Q1_TOLERANCE = 2 * TOL.q1_gap + 1e-8
 
@@ -299,7 +299,7 @@ def _check_geometry(
 
 
 def _qualities(contacts: ContactSet, best: Sequence[int], mu: float, k: int) -> tuple[float, float]:
-    """Q1 of the best grasp and of the whole set [N] under friction ``mu`` with ``k`` cone edges."""
+    """Q1 of the best grasp and of the whole set [-] under friction ``mu`` with ``k`` cone edges."""
     if (mu, k) != (contacts.mu, contacts.cone_edges):
         contacts = ContactSet(contacts.positions, contacts.normals, contacts.com, contacts.torque_scale, mu, k)
     return q1(contacts.subset_wrenches(np.asarray(best, dtype=np.intp))), q1(contacts.wrenches.reshape(-1, 6))
@@ -326,13 +326,13 @@ def _check_quality(record: dict[str, Any], contacts: ContactSet, best: Sequence[
             if trial is not None and all(r is None or abs(r - t) <= Q1_TOLERANCE for r, t in zip(recorded, trial)):
                 raise _misfit(field, value, default, "its q1 and q_ows")
         raise _mismatch(
-            "(q1, q_ows) [N]",
+            "(q1, q_ows)",
             list(recorded),
             list(rebuilt),
             f"recomputed with the recorded mu {contacts.mu:g} and cone_edges {contacts.cone_edges}: "
             "was mu or cone_edges changed?",
         )
-    field = "q1 [N] of the best grasp" if wrong[0] else "q_ows [N] of the contact set"
+    field = "q1 of the best grasp" if wrong[0] else "q_ows of the contact set"
     raise _mismatch(field, recorded[0 if wrong[0] else 1], rebuilt[0 if wrong[0] else 1])
 
 

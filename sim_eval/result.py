@@ -51,12 +51,12 @@ class GraspSimResult:
     Attributes:
         grasp: Contact indices into the contact set.
         label: Where the grasp came from (``best``, ``hfts-run-3``, ``random-7``, ...).
-        q1: Ferrari-Canny Q1 of the grasp [N].
+        q1: Ferrari-Canny Q1 of the grasp [-].
         directions: Disturbance directions (scaled wrench space), shape (D, 6).
         direction_labels: Their labels, length D.
         predicted: Analytic resistance of the same actuation model at the realized contacts,
             shape (D,) [N].
-        measured: Load at which the object moved beyond the thresholds, shape (D,) [N]; for
+        measured: Load at which the object moved beyond the thresholds, shape (D,) [-]; for
             censored directions the ramp's final load (a lower bound); NaN when not simulated.
         censored: Directions where the object never moved before the ramp ended, shape (D,).
         fidelity: ``|measured / predicted - 1|`` per direction, shape (D,); NaN where the
@@ -217,7 +217,7 @@ class SimGraspRecord:
     Attributes:
         label: Where the grasp came from (``"None"`` when the record has no label).
         grasp: Contact indices, or None when not recorded.
-        q1: Ferrari-Canny Q1 [N], None when not finite.
+        q1: Ferrari-Canny Q1 [-], None when not finite.
         valid: Whether the preload passed every gate; None when not recorded.
         error: Why the grasp could not be simulated, if it could not.
         gates: Validity gates of the preload.
@@ -269,7 +269,7 @@ class SimGraspRecord:
 
     @property
     def q1_realized(self) -> float | None:
-        """Q1 of the realized contacts [N] (None when not recorded)."""
+        """Q1 of the realized contacts [-] (None when not recorded)."""
         return _number(self.realized.get("q1"))
 
     @property

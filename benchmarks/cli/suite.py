@@ -59,7 +59,7 @@ def register(commands: Any) -> None:
         action="append",
         default=[],
         metavar="KEY=VALUE[,VALUE]",
-        help="run only matching cells; keys object, method, group, label, m, contacts; "
+        help="run only matching cells; keys object, method, group, label, m, mu, contacts; "
         "repeat to narrow (the rest: a later run with --resume)",
     )
     suite.add_argument(
@@ -75,6 +75,19 @@ def register(commands: Any) -> None:
         "--no-simulation",
         action="store_true",
         help="skip the simulation even if the suite enables it (a different suite hash)",
+    )
+    chatter = suite.add_mutually_exclusive_group()
+    chatter.add_argument(
+        "-q",
+        "--quiet",
+        action="store_true",
+        help="no progress on stderr (failed cells and the final summary still print)",
+    )
+    chatter.add_argument(
+        "-v",
+        "--verbose",
+        action="store_true",
+        help="one line per finished cell: the cell, its status, Q1 and wall seconds",
     )
     suite.set_defaults(handler=run_suite)
 
@@ -127,6 +140,9 @@ def run_suite(args: argparse.Namespace) -> int:
     suite = load_suite(args.suite)
     if args.no_simulation:
         suite = suite.without_simulation()
+    # A bar on a terminal; off one (CI, nohup) a line per finished cell, at most every 10 s.
+    terminal = sys.stderr.isatty()
+    lines = "none" if args.quiet else "each" if args.verbose else "none" if terminal else "periodic"
     runner = SuiteRunner(
         suite,
         args.out,
@@ -138,7 +154,8 @@ def run_suite(args: argparse.Namespace) -> int:
         max_cells=args.max_cells,
         only=args.only,
         time_limit=args.time_limit,
-        progress=sys.stderr.isatty(),
+        progress=terminal and not args.quiet,
+        lines=lines,
     )
     summary = runner.run()
     print(summary_table(suite, summary.records))

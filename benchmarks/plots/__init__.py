@@ -29,6 +29,7 @@ if TYPE_CHECKING:
         fig7_iterations_f,
         fig8_wastar_tradeoff,
     )
+    from benchmarks.plots.grasp_figures import fig3_grasps
     from benchmarks.plots.names import NAMES, TABLE
     from benchmarks.plots.report import FIGURES, PlotReport, plot_run
     from benchmarks.plots.simulation import sim_fidelity, sim_q1_vs_resistance, sim_survival, survival
@@ -48,6 +49,7 @@ _EXPORTS = {
     "RunData": "benchmarks.plots.data",
     "SkipFigure": "benchmarks.plots.data",
     "TimeTable": "benchmarks.plots.tables",
+    "fig3_grasps": "benchmarks.plots.grasp_figures",
     "fig4_q1_histograms": "benchmarks.plots.figures",
     "fig5_search_tree": "benchmarks.plots.tree",
     "fig6_states_per_level": "benchmarks.plots.figures",
@@ -76,6 +78,7 @@ __all__ = [
     "RunData",
     "SkipFigure",
     "TimeTable",
+    "fig3_grasps",
     "fig4_q1_histograms",
     "fig5_search_tree",
     "fig6_states_per_level",

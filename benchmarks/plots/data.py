@@ -186,7 +186,7 @@ def problem_names(problems: Iterable[Problem]) -> dict[Problem, str]:
         siblings = [p for p in unique if p[0] == problem[0]]
         parts = [str(problem[0])]
         for index, name in enumerate(PROBLEM_FIELDS[1:], start=1):
-            if len({p[index] for p in siblings}) > 1:
+            if len({p[index] for p in siblings}) > 1 and problem[index] is not None:  # external: no seed
                 parts.append(short[name].format(problem[index]))
         names[problem] = " ".join(parts)
     return names

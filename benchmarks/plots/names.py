@@ -6,6 +6,7 @@
 
 #: File stems of the figures, in the order they are drawn (each builder is named after its stem).
 FIGURE_NAMES = (
+    "fig3_grasps",
     "fig4_q1_histograms",
     "fig5_search_tree",
     "fig6_states_per_level",

@@ -11,6 +11,7 @@ from planner.infra.errors import OgcpError
 
 from .data import RunData, SkipFigure, load_run
 from .figures import fig4_q1_histograms, fig6_states_per_level, fig7_iterations_f, fig8_wastar_tradeoff
+from .grasp_figures import NoGraspCells, fig3_grasps
 from .names import FIGURE_NAMES, NAMES, TABLE
 from .simulation import sim_fidelity, sim_q1_vs_resistance, sim_survival
 from .style import DEFAULT_DPI, FORMATS, SAVE_FORMATS, save_figure
@@ -28,6 +29,7 @@ FIGURES: dict[str, FigureBuilder] = dict(
     zip(
         FIGURE_NAMES,
         (
+            fig3_grasps,
             fig4_q1_histograms,
             fig5_search_tree,
             fig6_states_per_level,
@@ -105,7 +107,9 @@ def plot_run(
         try:
             figure = FIGURES[name](data, notes)
         except SkipFigure as skip:
-            notes.append(f"{name}: skipped, {skip}")
+            # The grasp pictures are an extra of runs with A* cells: a note only when asked for.
+            if not (isinstance(skip, NoGraspCells) and only is None):
+                notes.append(f"{name}: skipped, {skip}")
             continue
         except (ArithmeticError, IndexError, KeyError, TypeError, ValueError) as exc:
             # A record with an unexpected shape costs its figure, not the other figures.

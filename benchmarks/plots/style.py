@@ -67,9 +67,10 @@ METHOD_COLOURS: dict[str, str] = {
     "es": "#0072B2",
     "es-pruned": "#56B4E9",
     "hfts": "#E69F00",
+    "external": "#000000",  # another planner's grasps (suites' method = "external")
 }
 #: Method name -> its title in labels and legends (the registry's).
-METHOD_TITLES: dict[str, str] = {name: spec.title for name, spec in METHODS.items()}
+METHOD_TITLES: dict[str, str] = {name: spec.title for name, spec in METHODS.items()} | {"external": "external"}
 #: Qualitative colours for series that are not methods (objects, successor variants).
 SERIES_COLOURS = (
     "#0072B2",

@@ -4,6 +4,11 @@
 or simulation: the failure is recorded in the cell (``status = "error"``, the message and
 the traceback's tail) and the suite goes on. Contact sets and hand models are cached per
 process, so a worker that runs many cells on one object samples its contacts once.
+
+An external cell (``method = "external"``) plans nothing: its grasps come from an
+``ogcp.grasps/1`` file, scored with ogcp's Q1 and simulated by ``sim_eval.evaluate_grasps``,
+and its plan record (:func:`external_plan`) reports the best of them, so every reader of
+plan records takes it as it takes a planner's.
 """
 
 from __future__ import annotations
@@ -11,19 +16,27 @@ from __future__ import annotations
 import datetime
 import time
 from functools import lru_cache
+from pathlib import Path
 from typing import Any
 
-from benchmarks.suite.config import Cell
+from benchmarks.suite.config import EXTERNAL_METHOD, Cell, best_grasp
 from benchmarks.suite.record import CellError, CellRecord
 from planner.grasp.contact_set import ContactSet, sample_contacts
+from planner.grasp.quality import q1_certificate
 from planner.grasp.reach import default_tip_radius
+from planner.infra.errors import OgcpError
 from planner.methods.registry import method_spec
 from planner.methods.runners import RunOptions
-from planner.objects import resolve_object
+from planner.objects import file_sha256, resolve_object
+from planner.records.grasps import ExternalGrasps, load_grasps
+from planner.records.plan import contact_set_record
+from planner.records.plan import plan_record as build_plan_record
 from planner.search.result import UNFINISHED
 
 #: Keys of the [simulation] table that are arguments of evaluate_plan, not simulation settings.
 SIMULATION_ARGUMENTS = ("decomposition", "max_grasps")
+#: ``status`` of an external cell's plan: grasps given, not searched (nothing is certified).
+EXTERNAL_STATUS = "external"
 
 
 def run_cell(cell: Cell, simulation: dict[str, Any] | None = None, time_limit: float | None = None) -> dict[str, Any]:
@@ -44,8 +57,11 @@ def run_cell(cell: Cell, simulation: dict[str, Any] | None = None, time_limit: f
     wall0, cpu0 = time.perf_counter(), time.process_time()
     plan = sim = sim_seconds = error = None
     try:
-        plan = plan_record(cell, contact_set(cell), time_limit)
-        if simulation is not None:
+        if cell.method == EXTERNAL_METHOD:
+            plan, sim, sim_seconds = run_external(cell, simulation)
+        else:
+            plan = plan_record(cell, contact_set(cell), time_limit)
+        if simulation is not None and sim is None:
             sim0 = time.perf_counter()
             sim = simulate(plan, simulation)
             sim_seconds = time.perf_counter() - sim0
@@ -103,6 +119,98 @@ def plan_record(cell: Cell, contacts: ContactSet, time_limit: float | None = Non
     spec = method_spec(cell.method)
     options = RunOptions(time_limit=time_limit, contact_seed=cell.contact_seed)
     return spec.run(spec.config(**dict(cell.variant)), contacts, cell.m, options).record
+
+
+def external_grasps(cell: Cell) -> ExternalGrasps:
+    """The grasps file of an external cell, as the suite read it.
+
+    Raises:
+        OgcpError: For a cell of a planner, or a file that changed since the suite was read (its
+            results would be recorded under the old content's id).
+    """
+    if cell.grasps_path is None:
+        raise OgcpError(f"cell {cell.id} ({cell.method}) has no grasps file; only method {EXTERNAL_METHOD!r} has one")
+    sha = dict(cell.variant)["grasps"]
+    if file_sha256(Path(cell.grasps_path)) != sha:
+        raise OgcpError(f"grasps file {cell.grasps_path} changed since the suite was read; run the suite again")
+    return load_grasps(cell.grasps_path)
+
+
+def run_external(
+    cell: Cell, simulation: dict[str, Any] | None
+) -> tuple[dict[str, Any], dict[str, Any] | None, float | None]:
+    """An external cell's plan record, and its simulation unless ``simulation`` is None.
+
+    Returns:
+        The plan record, the ``ogcp.sim/2`` record of every grasp (None unsimulated) and its
+        wall time [s] (None unsimulated).
+
+    Raises:
+        OgcpError: For a changed or invalid file, or contacts off the object's surface.
+    """
+    # Lazy: MuJoCo loads only when a suite has external grasps (their Q1 needs the surface checks).
+    from sim_eval.evaluate import object_diagonal, tip_radius
+    from sim_eval.external import evaluate_grasps, external_input
+    from sim_eval.settings import SimSettings
+
+    grasps = external_grasps(cell)
+    wall0, cpu0 = time.perf_counter(), time.process_time()
+    options = dict(simulation or {})
+    extra = {key: options.pop(key) for key in SIMULATION_ARGUMENTS if key in options}
+    mesh, source = grasps.load_object()
+    # The same fingertip and surface tolerance as the simulation, so the plan's contacts are the simulated ones.
+    radius = tip_radius(mesh, SimSettings.from_dict(options).scaled(object_diagonal(mesh)))
+    given = external_input(mesh, grasps, radius, source=source)
+    plan = external_plan(cell, grasps, given.contacts, given.grasps, given.q1)
+    plan["stats"] = {"wall_seconds": time.perf_counter() - wall0, "cpu_seconds": time.process_time() - cpu0}
+    if simulation is None:
+        return plan, None, None
+    sim0 = time.perf_counter()
+    sim = evaluate_grasps(None, grasps, options, extra.get("decomposition"), max_grasps=extra.get("max_grasps"))
+    return plan, sim.to_dict(), time.perf_counter() - sim0
+
+
+def external_plan(
+    cell: Cell,
+    grasps: ExternalGrasps,
+    contacts: ContactSet,
+    indices: tuple[tuple[int, ...], ...],
+    q1: tuple[float, ...],
+) -> dict[str, Any]:
+    """The ``ogcp.plan/1`` record of external grasps: the best one (by score, else the first) as the grasp.
+
+    Its ``bound`` is Q_OWS, the Q1 of every given contact together: nothing is certified.
+
+    Args:
+        cell: The external cell.
+        grasps: Its grasps file.
+        contacts: Every grasp's contacts in one set (``sim_eval.external.external_input``).
+        indices: Each grasp's indices into ``contacts``.
+        q1: ogcp's Q1 of each grasp [N].
+    """
+    best = best_grasp(grasps)
+    grasp = indices[best]
+    q_ows = q1_certificate(contacts.wrenches.reshape(-1, 6)).q1
+    rows = list(grasp)
+    top = [
+        {"grasp": list(g), "q1": q, "label": given.label, "method": grasps.method_of(given), "score": given.score}
+        for g, q, given in zip(indices, q1, grasps.grasps, strict=True)
+    ]
+    return build_plan_record(
+        EXTERNAL_METHOD,
+        grasp,
+        q1[best],
+        q_ows,
+        q_ows,
+        contacts.positions[rows],
+        contacts.normals[rows],
+        {},
+        {"grasps": dict(cell.variant)["grasps"], "file": cell.grasps_path, "index": best},
+        contact_set_record(contacts),
+        status=EXTERNAL_STATUS,
+        label=grasps.grasps[best].label,
+        external=top,
+    )
 
 
 def simulate(plan: dict[str, Any], settings: dict[str, Any]) -> dict[str, Any]:

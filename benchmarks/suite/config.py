@@ -1,9 +1,10 @@
 """Benchmark suites as values: objects, cells (with their ids) and the suite (read by :mod:`benchmarks.suite.parse`).
 
-A suite names objects, contact counts, contact seeds, m values and method variants,
-either at the top level or in ``[[group]]`` tables that inherit unset keys from the top
-level. Cells are the cartesian product object x contacts x contact seed x m x variant of
-every group; a cell's id is a hash of its canonical parameters (defaults filled in), so
+A suite names objects, contact counts, contact seeds, m values, friction coefficients and
+method variants, either at the top level or in ``[[group]]`` tables that inherit unset keys
+from the top level. Cells are the cartesian product object x contacts x contact seed x m x
+mu x tip radius x variant of every group, plus one cell per external grasps file
+(``method = "external"``), which brings its own contacts, m and mu; a cell's id is a hash of its canonical parameters (defaults filled in), so
 it does not depend on the order of anything in the file, and a cell listed by two groups
 runs once. Everything is validated on load; errors name the key path and the valid
 values.
@@ -14,10 +15,14 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import json
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from benchmarks.suite.record import CellParams
+from planner.methods.registry import EXTERNAL
 from planner.objects.fetchable import FETCHABLE_OBJECTS
+
+if TYPE_CHECKING:
+    from planner.records.grasps import ExternalGrasps
 
 SCHEMA_VERSION = 1
 # Built-in suites: assets/suites/NAME.toml (see planner.infra.assets).
@@ -39,8 +44,20 @@ GROUP_KEYS = (
 TOP_KEYS = (*GROUP_KEYS, "group", "schema_version", "simulation")
 #: ``tip_radius`` of a cell's id and params when the contacts are kept for the default fingertip.
 DEFAULT_TIP = "default"
+#: The method name of external grasps in a suite (``method = "external"``, ``grasps = "file.json"``):
+#: not a planner of :mod:`planner.methods`, whose ``method_spec`` refuses it with this hint.
+EXTERNAL_METHOD = EXTERNAL
 #: Version of the canonical cell form; part of every id so a change of form never matches old ids.
 CELL_FORM = 1
+
+
+def best_grasp(grasps: ExternalGrasps) -> int:
+    """Index of the grasp an external cell reports (its plan's grasp and m): the highest score, else the first.
+
+    Scores are the planner's own, on any scale, higher taken as better; ties go to the earlier grasp.
+    """
+    scored = [(g.score, -i) for i, g in enumerate(grasps.grasps) if g.score is not None]
+    return -max(scored)[1] if scored else 0
 
 
 @dataclasses.dataclass(frozen=True)
@@ -70,13 +87,13 @@ class Cell:
     Attributes:
         object: The object.
         contacts: Number of contacts n.
-        contact_seed: Seed of the contact sampling.
+        contact_seed: Seed of the contact sampling (None for external grasps: nothing is sampled).
         m: Number of fingers.
         mu: Friction coefficient.
         cone_edges: Friction-cone edges k.
         diagonal: Bounding-box diagonal [m] (None for a mesh file at its own size).
         method: Method name.
-        variant: Canonical method parameters, sorted by name.
+        variant: Canonical method parameters, sorted by name (external grasps: the file's sha256).
         label: Label for plots (not part of the id).
         groups: Names of the suite groups that list this cell (not part of the id).
         simulate: Whether the cell is simulated when the suite's simulation is enabled
@@ -84,11 +101,13 @@ class Cell:
         tip_radius: Fingertip radius the contacts are sampled for [m]: 0 = the paper's plain
             sampling of the whole surface, None = the simulation's default fingertip
             (:func:`planner.grasp.reach.default_tip_radius` of the object, resolved when sampling).
+        grasps_path: Absolute path of the ``ogcp.grasps/1`` file of an external cell, else None
+            (not part of the id: its content hash, in ``variant``, is).
     """
 
     object: ObjectSpec
     contacts: int
-    contact_seed: int
+    contact_seed: int | None
     m: int
     mu: float
     cone_edges: int
@@ -99,6 +118,7 @@ class Cell:
     groups: tuple[str, ...] = ()
     simulate: bool = True
     tip_radius: float | None = None
+    grasps_path: str | None = None
 
     @property
     def tip_radius_key(self) -> float | str | None:
@@ -200,4 +220,5 @@ class Suite:
     def seeds(self) -> dict[str, list[int]]:
         """Every contact seed and method seed the suite uses."""
         method = {dict(c.variant)["seed"] for c in self.cells if "seed" in dict(c.variant)}
-        return {"contact_seeds": sorted({c.contact_seed for c in self.cells}), "method_seeds": sorted(method)}
+        contact = {c.contact_seed for c in self.cells if c.contact_seed is not None}  # external grasps have none
+        return {"contact_seeds": sorted(contact), "method_seeds": sorted(method)}

@@ -82,6 +82,36 @@ def with_session(manifest: dict[str, Any], session: dict[str, Any]) -> dict[str,
     return {**manifest, "sessions": [*(sessions if isinstance(sessions, list) else []), session]}
 
 
+def with_kernel_warmup(manifest: dict[str, Any], seconds: Sequence[float]) -> dict[str, Any]:
+    """The manifest with its last session's ``kernel_warmup_seconds``: one entry per process.
+
+    Each process that ran cells compiled (or loaded from numba's cache) the kernels once,
+    before its first cell, so no cell's times include it; these are those seconds [s].
+    """
+    sessions = manifest.get("sessions")
+    if not isinstance(sessions, list) or not sessions or not isinstance(sessions[-1], dict):
+        return manifest
+    last = {**sessions[-1], "kernel_warmup_seconds": [round(float(s), 6) for s in seconds]}
+    return {**manifest, "sessions": [*sessions[:-1], last]}
+
+
+def kernel_warmups(manifest: dict[str, Any] | None) -> list[float] | None:
+    """Every process's kernel warm-up seconds over the manifest's sessions [s].
+
+    None when no session records them: a run made before the runner warmed the kernels, whose
+    first cell in each process may include numba's compilation in its times.
+    """
+    sessions = (manifest or {}).get("sessions")
+    found = None
+    for session in sessions if isinstance(sessions, list) else []:
+        values = session.get("kernel_warmup_seconds") if isinstance(session, dict) else None
+        if isinstance(values, list):
+            found = (found or []) + [
+                float(v) for v in values if isinstance(v, (int, float)) and not isinstance(v, bool)
+            ]
+    return found
+
+
 def session_record(
     jobs: int,
     backend: str,

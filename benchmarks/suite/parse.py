@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from benchmarks.suite.config import (
+    EXTERNAL_METHOD,
     GROUP_KEYS,
     SCHEMA_VERSION,
     SUITES_FOLDER,
@@ -23,6 +24,7 @@ from benchmarks.suite.config import (
     Cell,
     ObjectSpec,
     Suite,
+    best_grasp,
 )
 from benchmarks.suite.params import METHOD_PARAMS, UNLABELLED, complete, default_label, seed_values, values_of
 from planner.config.methods import DEFAULT_FINGERS, DEFAULT_SEED, HAND_FINGERS
@@ -41,6 +43,7 @@ from planner.infra.assets import asset_path, assets_dir
 from planner.infra.errors import OgcpError, choice_error
 from planner.objects import BUILTIN_OBJECTS, DEFAULT_DIAGONAL, MESH_SUFFIXES, file_sha256
 from planner.objects.fetchable import FETCHABLE_OBJECTS
+from planner.records.grasps import ExternalGrasps, is_object_name, load_grasps
 
 #: Most cells of one suite. Every cell is a planning run of a second or more and a line of
 #: results; a million cells took more than 20 s to list before the first one ran. Split larger
@@ -49,6 +52,8 @@ MAX_CELLS = 100_000
 #: Longest label: a plot legend or a table column, not a text (and a format width of 10^12
 #: asked for terabytes).
 MAX_LABEL = 200
+#: Keys of an external method table (``method = "external"``).
+EXTERNAL_KEYS = ("grasps", "label", "method")
 #: Contact counts and m of a suite: a grasp has m >= 2 contacts, so a set has at least 2.
 CONTACT_COUNT = Option("int", DEFAULT_CONTACTS, minimum=2)
 FINGERS = Option("int", DEFAULT_FINGERS, minimum=2)
@@ -109,6 +114,8 @@ class _Parser:
         self.labels: dict[str, tuple[str, str, dict[str, Any]]] = {}
         #: Cells of the groups read so far (a cell two groups list counts twice).
         self.cell_count = 0
+        #: sha256 of each external grasps file read so far -> its absolute path and record.
+        self.external: dict[str, tuple[str, ExternalGrasps]] = {}
 
     def suite(self, data: dict[str, Any], source: str, text: str, default_name: str) -> Suite:
         _no_unknown_keys("top level", data, TOP_KEYS)
@@ -153,7 +160,7 @@ class _Parser:
         contacts = values_of(f"{where}.contacts", table.get("contacts", DEFAULT_CONTACTS), CONTACT_COUNT)
         seeds = seed_values(f"{where}.contact_seeds", table.get("contact_seeds", DEFAULT_SEED))
         ms = values_of(f"{where}.m", table.get("m", DEFAULT_FINGERS), FINGERS)
-        mu = MU.check(f"{where}.mu", table.get("mu", DEFAULT_MU))
+        mus = values_of(f"{where}.mu", table.get("mu", DEFAULT_MU), MU)
         edges = CONE_EDGES.check(f"{where}.cone_edges", table.get("cone_edges", DEFAULT_CONE_EDGES))
         simulate = Option("bool", True).check(f"{where}.simulate", table.get("simulate", True))
         diagonal = DIAGONAL.check(f"{where}.diagonal", table.get("diagonal", DEFAULT_DIAGONAL))
@@ -166,15 +173,19 @@ class _Parser:
             if "tip_radius" in table
             else [self.default_tip]
         )
-        variants = self.methods(f"{where}.methods", table["methods"])
+        every = self.methods(f"{where}.methods", table["methods"])
+        # External grasps bring their own contacts, m and mu: one cell per file, outside the product.
+        variants = [v for v in every if v[0] != EXTERNAL_METHOD]
+        external = [self.external_cell(where, group, objects, simulate, v) for v in every if v[0] == EXTERNAL_METHOD]
         if max(ms) > min(contacts):
             raise OgcpError(f"{where}.m: m = {max(ms)} exceeds the contact count {min(contacts)}")
-        count = math.prod(map(len, (objects, contacts, seeds, ms, tips, variants)))
+        count = math.prod(map(len, (objects, contacts, seeds, ms, mus, tips, variants))) + len(external)
         self.cell_count += count
         if self.cell_count > MAX_CELLS:  # counted before the cells are made
             raise OgcpError(
                 f"{where}: {count} cells ({len(objects)} objects x {len(contacts)} contact counts x {len(seeds)} "
-                f"seeds x {len(ms)} m x {len(tips)} tip radii x {len(variants)} method variants), "
+                f"seeds x {len(ms)} m x {len(mus)} mu x {len(tips)} tip radii x {len(variants)} method variants"
+                f" + {len(external)} external grasps files), "
                 f"{self.cell_count} with the groups before; at most {MAX_CELLS} per suite: split it into several suites"
             )
         try:
@@ -185,10 +196,10 @@ class _Parser:
                     check_contact_memory(max(contacts), edges, max(ms), params["chunk"])
         except OgcpError as exc:
             raise OgcpError(f"{where}.contacts: {exc}") from exc
-        self.check_labels(variants)
-        cells = []
-        for obj, n, seed, m, tip, (method, params, label, vwhere) in itertools.product(
-            objects, contacts, seeds, ms, tips, variants
+        self.check_labels(every)
+        cells = list(external)
+        for obj, n, seed, m, mu, tip, (method, params, label, vwhere) in itertools.product(
+            objects, contacts, seeds, ms, mus, tips, variants
         ):
             if params.get("hand") is not None and m != HAND_FINGERS:
                 raise OgcpError(
@@ -212,6 +223,61 @@ class _Parser:
                 )
             )
         return cells
+
+    def external_cell(
+        self,
+        where: str,
+        group: str,
+        objects: list[ObjectSpec],
+        simulate: bool,
+        variant: tuple[str, dict[str, Any], str, str],
+    ) -> Cell:
+        """The one cell of an external grasps file: its object, contacts, best grasp's m and friction.
+
+        The file's object must be one of the group's, so its cells sit next to the planners' on
+        that object in tables and figures; the group's contact counts, seeds, m, mu and tip radii
+        do not apply (the file has its own contacts and friction).
+
+        Raises:
+            OgcpError: For a file on an object the group does not list, naming both.
+        """
+        _, params, label, vwhere = variant
+        path, grasps = self.external[params["grasps"]]
+        spec = grasps.object_spec
+        if spec is None or grasps.mesh is None:  # a record always names its object; arrays never reach a suite
+            raise OgcpError(f"{vwhere}.grasps: {path} names no object")
+        if is_object_name(grasps.mesh):
+            key = spec
+        elif Path(spec).is_file():
+            # A mesh file is the same object wherever it lies: compared by content, as ObjectSpec.key does.
+            key = f"mesh:{file_sha256(Path(spec))}"
+        else:
+            raise OgcpError(f"{vwhere}.grasps: the grasps' mesh file is not found: {spec}")
+        matches = [o for o in objects if o.key == key]
+        if not matches:
+            raise OgcpError(
+                f"{vwhere}.grasps: the grasps are on {grasps.mesh!r}, which {where}.objects does not list "
+                f"({', '.join(o.spec for o in objects)}); add it there or move the method to a group of that object"
+            )
+        named = matches[0].path is None
+        best = best_grasp(grasps)
+        return Cell(
+            matches[0],
+            sum(len(g.positions) for g in grasps.grasps),
+            None,
+            len(grasps.grasps[best].positions),
+            grasps.mu,
+            grasps.cone_edges,
+            grasps.diagonal if grasps.diagonal is not None or not named else DEFAULT_DIAGONAL,
+            EXTERNAL_METHOD,
+            tuple(sorted(params.items())),
+            label,
+            (group,),
+            simulate,
+            # 0: no reach-aware sampling, so the id and params carry no tip radius.
+            0.0,
+            path,
+        )
 
     def objects(self, where: str, value: Any) -> list[ObjectSpec]:
         if isinstance(value, str):
@@ -270,8 +336,12 @@ class _Parser:
 
     def variants(self, where: str, table: dict[str, Any]) -> list[tuple[str, dict[str, Any], str, str]]:
         method = table.get("method")
+        if method == EXTERNAL_METHOD:
+            return [self.external_variant(where, table)]
         if not isinstance(method, str) or method not in METHOD_PARAMS:
-            raise choice_error(f"{where}.method", method, METHOD_PARAMS)
+            # The planners first, as everywhere; external grasps need a file too, so they are named apart.
+            planners = choice_error(f"{where}.method", method, METHOD_PARAMS)
+            raise OgcpError(f'{planners}; or {EXTERNAL_METHOD} with grasps = "FILE.json" (ogcp.grasps/1)')
         spec = METHOD_PARAMS[method]
         _no_unknown_keys(f"{where} (method {method})", table, ("label", "method", *spec))
         label = _string(f"{where}.label", table["label"]) if "label" in table else None
@@ -285,11 +355,42 @@ class _Parser:
             variants.append((method, params, _format_label(where, label, method, params), where))
         return variants
 
+    def external_variant(self, where: str, table: dict[str, Any]) -> tuple[str, dict[str, Any], str, str]:
+        """``method = "external"``: the grasps file, read and checked now; its sha256 is the variant.
+
+        Raises:
+            OgcpError: For other keys, a missing or invalid file.
+        """
+        _no_unknown_keys(f"{where} (method {EXTERNAL_METHOD})", table, EXTERNAL_KEYS)
+        if "grasps" not in table:
+            raise OgcpError(f"{where}.grasps: missing; the path of an ogcp.grasps/1 file, relative to the suite")
+        path = (self.base / _string(f"{where}.grasps", table["grasps"])).resolve()
+        if not path.is_file():
+            raise OgcpError(f"{where}.grasps: grasps file not found: {path}")
+        try:
+            grasps = load_grasps(path)
+        except OgcpError as exc:
+            raise OgcpError(f"{where}.grasps: {exc}") from exc
+        sha = file_sha256(path)
+        self.external[sha] = (str(path), grasps)
+        params = {"grasps": sha}
+        if "label" in table:
+            label = _format_label(where, _string(f"{where}.label", table["label"]), EXTERNAL_METHOD, params)
+        else:
+            label = grasps.method or path.stem
+        return EXTERNAL_METHOD, params, label, where
+
     def simulation(self, value: Any) -> dict[str, Any]:
         if not isinstance(value, dict):
             raise OgcpError("simulation: expected a [simulation] table")
         if not isinstance(value.get("enabled", False), bool):
             raise OgcpError(f"simulation.enabled: expected true or false, got {value['enabled']!r}")
+        if isinstance(value.get("mu"), list):
+            # The simulation takes each cell's own mu (the plan's contact set) unless this overrides it.
+            raise OgcpError(
+                "simulation.mu: expected one number (or leave it unset: each cell simulates with its own mu); "
+                "sweep friction with the suite's mu = [...]"
+            )
         # Checked even while disabled: the table is part of the suite's hash, and a typo should not
         # wait for the day the simulation is switched on.
         _check_simulation_settings(value)

@@ -36,7 +36,7 @@ class CellParams:
     Attributes:
         object: The object as the suite names it (name or mesh path).
         contacts: Number of contacts n.
-        contact_seed: Seed of the contact sampling.
+        contact_seed: Seed of the contact sampling (None for external grasps: nothing is sampled).
         m: Number of fingers.
         mu: Friction coefficient.
         cone_edges: Friction-cone edges k.
@@ -51,7 +51,7 @@ class CellParams:
 
     object: str
     contacts: int
-    contact_seed: int
+    contact_seed: int | None
     m: int
     mu: float
     cone_edges: int

@@ -5,11 +5,21 @@ local processes or a Dask cluster) and the main process appends each finished re
 to ``results.jsonl``, so the folder is the same whatever ran the cells, apart from the
 order of the lines and the timings. ``resume`` skips cells whose id is already recorded
 and refuses a folder written by a different suite (another hash).
+
+Every process that runs cells first compiles (or loads) the numba kernels, once, before its
+first cell (:func:`_run_warm_cell`), so no cell's times include numba's compilation; the
+seconds each process spent on it go to the session's ``kernel_warmup_seconds`` in
+``manifest.json``. Progress goes to stderr: a bar on a terminal, else one line per finished
+cell at most every ``interval`` seconds (``lines="periodic"``), or one line per cell
+(``lines="each"``).
 """
 
 from __future__ import annotations
 
+import os
 import sys
+import threading
+import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -19,13 +29,50 @@ from tqdm import tqdm
 
 from benchmarks.suite.cells import run_cell
 from benchmarks.suite.config import Suite
-from benchmarks.suite.manifest import ManifestSuite, first_commit, new_manifest, session_record, with_session
+from benchmarks.suite.manifest import (
+    ManifestSuite,
+    first_commit,
+    new_manifest,
+    session_record,
+    with_kernel_warmup,
+    with_session,
+)
 from benchmarks.suite.record import CellRecord
 from benchmarks.suite.select import Selection, is_selected, parse_selection
 from benchmarks.suite.store import LOCK, ResultStore
 from planner.config.options import JOBS, TIME_LIMIT
 from planner.infra.errors import OgcpError
 from planner.infra.parallel import run_tasks, validate_backend
+
+#: Progress line modes: none, one line per finished cell at most every ``interval`` s, every cell.
+PROGRESS_LINES = ("none", "periodic", "each")
+
+#: Whether this process has warmed the kernels; a lock because Dask runs cells in threads.
+_WARM_LOCK = threading.Lock()
+_WARMED = False
+
+
+def _warm_up_once() -> float | None:
+    """Warm the kernels if this process has not yet: the seconds it took, None if already warm."""
+    global _WARMED
+    with _WARM_LOCK:
+        if _WARMED:
+            return None
+        from planner.grasp.kernel import warm_up  # lazy: the runner module stays importable without numba loaded
+
+        seconds = warm_up()
+        _WARMED = True
+        return seconds
+
+
+def _run_warm_cell(*task: Any) -> tuple[dict[str, Any], int, float | None]:
+    """:func:`run_cell` after the kernel warm-up of this process (first call only).
+
+    Returns:
+        The cell's record, this process's id and its warm-up seconds (None: done before).
+    """
+    warmup = _warm_up_once()
+    return run_cell(*task), os.getpid(), warmup
 
 
 @dataclass(frozen=True)
@@ -66,7 +113,12 @@ class SuiteRunner:
             ``retry_errors`` and a larger limit). None: unlimited.
         only: Run only the cells matching these ``KEY=VALUE[,VALUE...]`` items
             (:mod:`benchmarks.suite.select`); the others stay for a later ``resume``.
-        progress: Show a progress bar on stderr.
+        progress: Show a progress bar on stderr (for a terminal).
+        lines: Progress lines on stderr, one of :data:`PROGRESS_LINES`: ``none``;
+            ``periodic``: done/total, errors, elapsed and ETA after a finished cell, at most
+            every ``interval`` seconds, and after the last; ``each``: one line per cell
+            (its description, Q1 and wall seconds). Errors are reported in every mode.
+        interval: Least seconds between two ``periodic`` lines.
         log: Where one-line notices go (default: stderr).
     """
 
@@ -83,6 +135,8 @@ class SuiteRunner:
         only: Sequence[str] = (),
         time_limit: float | None = None,
         progress: bool = False,
+        lines: str = "none",
+        interval: float = 10.0,
         log: Callable[[str], None] | None = None,
     ) -> None:
         self.suite = suite
@@ -96,6 +150,8 @@ class SuiteRunner:
         self.only = tuple(only)
         self.time_limit = time_limit
         self.progress = progress
+        self.lines = lines
+        self.interval = interval
         self.log = log or (lambda text: print(text, file=sys.stderr))
 
     def run(self) -> RunSummary:
@@ -108,6 +164,8 @@ class SuiteRunner:
         validate_backend(self.backend, self.address, self.jobs)
         if self.backend != "dask":  # a Dask cluster decides its own workers
             JOBS.check("jobs", self.jobs)
+        if self.lines not in PROGRESS_LINES:
+            raise OgcpError(f"lines must be one of {', '.join(PROGRESS_LINES)}, got {self.lines!r}")
         if self.retry_errors and not self.resume:
             raise OgcpError("--retry-errors applies with --resume only")
         if self.max_cells is not None and (not isinstance(self.max_cells, int) or self.max_cells < 1):
@@ -193,33 +251,86 @@ class SuiteRunner:
         bar = tqdm(
             total=len(self.suite.cells), initial=skipped, unit="cell", desc=self.suite.name, disable=not self.progress
         )
+        # On a terminal the lines go above the bar (tqdm.write), else through the log.
+        say = (lambda text: tqdm.write(text, file=sys.stderr)) if self.progress else self.log
+        meter = _Meter(self.suite.name, len(self.suite.cells), skipped, len(todo), self.lines, self.interval, say)
+        warmups: dict[int, float] = {}
         try:
             tasks = [(cell, settings if cell.simulate else None, self.time_limit) for cell in todo]
-            finished = run_tasks(run_cell, tasks, self.jobs, self.backend, self.address) if tasks else iter(())
-            for line in finished:
+            finished = run_tasks(_run_warm_cell, tasks, self.jobs, self.backend, self.address) if tasks else iter(())
+            for line, pid, warmup in finished:
+                # A process already warm from an earlier run in it (loky reuses its workers) compiled nothing.
+                warmups[pid] = warmup if warmup is not None else warmups.get(pid, 0.0)
                 store.append(line)
                 records[line["id"]] = line
                 bar.update()
                 record = CellRecord.from_dict(line)
                 if record.error is not None:
-                    tqdm.write(
+                    say(
                         f"ogcp: cell {record.id} ({record.describe()}) failed: "
-                        f"{record.error.type}: {record.error.message}",
-                        file=sys.stderr,
+                        f"{record.error.type}: {record.error.message}"
                     )
                 elif record.status == "stopped" and record.plan_view is not None:
                     view = record.plan_view
-                    tqdm.write(
+                    say(
                         f"ogcp: cell {record.id} ({record.describe()}) stopped at its time limit: "
-                        f"best Q1 {_number(view.q1)}, optimum <= {_number(view.bound)}",
-                        file=sys.stderr,
+                        f"best Q1 {_number(view.q1)}, optimum <= {_number(view.bound)}"
                     )
+                meter.finished(record)
         finally:
             bar.close()
+            if warmups:  # also after an interruption: the cells recorded so far ran warm
+                store.write_manifest(with_kernel_warmup(manifest, list(warmups.values())))
         errors = sum(1 for r in records.values() if _failed(r))
         return RunSummary(
             len(self.suite.cells), skipped, len(todo), errors, len(self.suite.cells) - len(records), records
         )
+
+
+class _Meter:
+    """Progress lines for runs off a terminal (CI, nohup): see :class:`SuiteRunner` ``lines``."""
+
+    def __init__(
+        self, name: str, total: int, skipped: int, todo: int, mode: str, interval: float, say: Callable[[str], None]
+    ) -> None:
+        self.name, self.total, self.skipped, self.todo = name, total, skipped, todo
+        self.mode, self.interval, self.say = mode, interval, say
+        self.ran = 0
+        self.errors = 0
+        self.start = time.monotonic()
+        self.last: float | None = None
+
+    def finished(self, record: CellRecord) -> None:
+        """Count one finished cell and print its line if one is due."""
+        self.ran += 1
+        self.errors += record.status in ("error", "stopped")
+        now = time.monotonic()
+        done = f"{self.skipped + self.ran}/{self.total}"
+        if self.mode == "each":
+            view = record.plan_view
+            q1 = _number(view.q1 if view is not None else None)
+            wall = "-" if record.wall_seconds is None else f"{record.wall_seconds:.2f}"
+            self.say(f"ogcp: [{done}] {record.describe()} {record.status}: Q1 {q1}, {wall} s")
+        elif self.mode == "periodic" and (
+            self.ran == self.todo or self.last is None or now - self.last >= self.interval
+        ):
+            self.last = now
+            elapsed = now - self.start
+            eta = elapsed / self.ran * (self.todo - self.ran)
+            self.say(
+                f"ogcp: {self.name}: {done} cells, {self.errors} errors, "
+                f"{_duration(elapsed)} elapsed, ETA {_duration(eta)}"
+            )
+
+
+def _duration(seconds: float) -> str:
+    """``1h02m03s``, ``2m05s`` or ``7s``: a duration for a progress line."""
+    whole = round(seconds)
+    hours, rest = divmod(whole, 3600)
+    minutes, secs = divmod(rest, 60)
+    if hours:
+        return f"{hours}h{minutes:02d}m{secs:02d}s"
+    return f"{minutes}m{secs:02d}s" if minutes else f"{secs}s"
 
 
 def summary_table(suite: Suite, records: dict[str, dict[str, Any]]) -> str:

@@ -20,6 +20,8 @@ SELECTORS: dict[str, Callable[[Cell], tuple[str, ...]]] = {
     "label": lambda cell: (cell.label,),
     "m": lambda cell: (str(cell.m),),
     "contacts": lambda cell: (str(cell.contacts),),
+    # As a suite writes it: mu = 0.5 is selected by --only mu=0.5.
+    "mu": lambda cell: (f"{cell.mu:g}",),
 }
 
 Selection = dict[str, frozenset[str]]

@@ -58,8 +58,8 @@ class ESResult:
         grasp: Sorted indices of the best grasp (lexicographically smallest among ties).
         positions: Its contact points, shape (m, 3) [m].
         normals: Its inward normals, shape (m, 3).
-        q1: Its Q1 [N].
-        q_ows: Q1 of all contacts [N]; the histogram spans [0, q_ows].
+        q1: Its Q1 [-].
+        q_ows: Q1 of all contacts [-]; the histogram spans [0, q_ows].
         grasps: Number of grasps C(|C|, m).
         bin_edges: Histogram bin edges over (0, q_ows], shape (bins + 1,).
         counts: Force-closure grasps per bin (``es`` only).

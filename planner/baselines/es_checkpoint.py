@@ -92,7 +92,7 @@ class ChunkSpace:
         m: Contacts per grasp.
         chunk: Grasps per chunk.
         edges: Histogram bin edges [N], one more than the bins.
-        q_ows: Q1 of all contacts [N].
+        q_ows: Q1 of all contacts [-].
         pruned: ``es-pruned`` (no histogram) rather than ``es``.
         constraints: Constraints every counted grasp satisfies.
     """

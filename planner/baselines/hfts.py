@@ -83,7 +83,7 @@ class HFTSResult:
 
     @property
     def values(self) -> NDArray[np.float64]:
-        """Q1 of every run [N]."""
+        """Q1 of every run [-]."""
         return np.array([r.q1 for r in self.runs])
 
     def summary(self) -> dict[str, float]:

@@ -56,8 +56,8 @@ class Q1Certificate:
     """Exact Q1 with the facet that certifies it.
 
     Attributes:
-        q1: Ferrari-Canny Q1 [N]; 0 when not in force closure or degenerate.
-        offset: For force closure, the offset of the certified nearest facet (= Q1) [N].
+        q1: Ferrari-Canny Q1 [-]; 0 when not in force closure or degenerate.
+        offset: For force closure, the offset of the certified nearest facet (= Q1) [-].
             Otherwise the offset of a supporting hyperplane proving it (<= 1e-9;
             negative when the origin is strictly outside), not necessarily the most
             negative facet offset (use :func:`signed_q1` for that). NaN if degenerate.
@@ -297,7 +297,7 @@ def exact_q1_batch(
         contact_wrenches: Wrenches of every contact, shape (n, k, 6) [N].
         grasps: Contact indices, shape (B, m).
         table: :func:`planner.grasp.kernel.support_table` of ``contact_wrenches``.
-        cut: Values below ``cut - CUT_MARGIN`` may be upper bounds (branch and bound) [N].
+        cut: Values below ``cut - CUT_MARGIN`` may be upper bounds (branch and bound) [-].
 
     Returns:
         ``(q1, status)`` per grasp, shape (B,) each: the canonical Q1 (bit-identical to
@@ -339,7 +339,7 @@ def signed_q1(wrenches: NDArray[np.float64]) -> float:
         wrenches: Wrenches, shape (N, 6).
 
     Returns:
-        Q1 > 0, or the smallest facet offset (<= 1e-9) [N]; -inf for degenerate sets.
+        Q1 > 0, or the smallest facet offset (<= 1e-9) [-]; -inf for degenerate sets.
 
     Raises:
         OgcpError: For wrenches of another shape than (N, 6) or with NaN or infinite entries.
@@ -359,7 +359,7 @@ def q1(wrenches: NDArray[np.float64]) -> float:
         wrenches: Wrenches, shape (N, 6).
 
     Returns:
-        Q1 [N]; 0 when the origin is not strictly inside the hull or the set is degenerate
+        Q1 [-]; 0 when the origin is not strictly inside the hull or the set is degenerate
         (fewer than 7 wrenches, none, or all in a lower-dimensional affine subspace).
 
     Raises:

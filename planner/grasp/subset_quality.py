@@ -55,7 +55,7 @@ class GraspQuality:
         return np.packbits(flags)
 
     def of_masks(self, masks: Sequence[PackedMask], vectors: Sequence[Vector] | None = None) -> float:
-        """Q1 of the union of the contacts in the given packed masks [N].
+        """Q1 of the union of the contacts in the given packed masks [-].
 
         Args:
             masks: Packed membership masks of the super-contacts.
@@ -84,5 +84,5 @@ class GraspQuality:
         return cert.q1
 
     def of_indices(self, indices: NDArray[np.intp]) -> float:
-        """Q1 of a set of contacts [N]."""
+        """Q1 of a set of contacts [-]."""
         return self.of_masks([self.mask_of(indices)])

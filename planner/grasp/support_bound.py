@@ -78,7 +78,7 @@ class SupportBound:
 
     @staticmethod
     def bound(vectors: Sequence[Vector]) -> float:
-        """Upper bound of Q1 of the union of sets with the given support vectors [N].
+        """Upper bound of Q1 of the union of sets with the given support vectors [-].
 
         Vectors may differ in length (computed at different times); the common prefix of
         directions is used, which is still a valid bound.

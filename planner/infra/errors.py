@@ -22,8 +22,8 @@ class SearchTimeout(OgcpError):
     Attributes:
         seconds: The time limit that was reached [s]; None when stopped by a request.
         visited: States expanded until then.
-        best_q1: Best exact Q1 of a grasp seen so far (None if no grasp was evaluated) [N].
-        upper_bound: Certified upper bound on the optimal Q1 at that moment [N].
+        best_q1: Best exact Q1 of a grasp seen so far (None if no grasp was evaluated) [-].
+        upper_bound: Certified upper bound on the optimal Q1 at that moment [-].
     """
 
     def __init__(

@@ -24,7 +24,7 @@ from planner.config.methods import (
     WAStarConfig,
 )
 from planner.config.options import MethodConfig, Option, options_of
-from planner.infra.errors import choice_error
+from planner.infra.errors import OgcpError, choice_error
 
 if TYPE_CHECKING:
     from planner.grasp.contact_set import ContactSet
@@ -112,6 +112,9 @@ METHODS: dict[str, MethodSpec] = {
         MethodSpec("hfts", "HFTS", HFTSConfig, _Deferred("run_hfts"), False, False, _HFTS_RUN_OPTIONS),
     )
 }
+#: Grasps given in an ``ogcp.grasps/1`` file rather than planned: a suite's method (see
+#: ``benchmarks.suite``), never a planner here, so :func:`method_spec` names where it belongs.
+EXTERNAL = "external"
 #: The best-first searches (A*, Dijkstra, WA*).
 SEARCH_METHODS = tuple(name for name, spec in METHODS.items() if issubclass(spec.config, SearchConfig))
 #: Methods whose answer is the optimum (unless approximate symmetry removal is on).
@@ -125,6 +128,11 @@ def method_spec(name: str) -> MethodSpec:
     Raises:
         OgcpError: For an unknown name, listing every method.
     """
+    if name == EXTERNAL:
+        raise OgcpError(
+            f"method {EXTERNAL!r} plans nothing: evaluate an ogcp.grasps/1 file with `ogcp evaluate FILE.json`, or "
+            f'list it in a suite (method = "{EXTERNAL}", grasps = "FILE.json"); planners: {", ".join(METHODS)}'
+        )
     if name not in METHODS:
         raise choice_error("method", name, METHODS)
     return METHODS[name]

@@ -44,9 +44,9 @@ def check_result(method: str, q1: float, q_ows: float, bound: float) -> None:
 
     Args:
         method: Method name, for the message.
-        q1: Q1 of the returned grasp [N].
-        q_ows: Q1 of the whole contact set [N].
-        bound: Certified upper bound on the optimum [N].
+        q1: Q1 of the returned grasp [-].
+        q_ows: Q1 of the whole contact set [-].
+        bound: Certified upper bound on the optimum [-].
 
     Raises:
         OgcpError: One line naming the values that break the order.
@@ -85,9 +85,9 @@ def plan_record(
     Args:
         method: Method name.
         grasp: Sorted contact indices.
-        q1: Q1 of the grasp [N].
-        q_ows: Q1 of the whole contact set [N].
-        bound: Certified upper bound on the optimum [N].
+        q1: Q1 of the grasp [-].
+        q_ows: Q1 of the whole contact set [-].
+        bound: Certified upper bound on the optimum [-].
         positions: Contact points of the grasp, shape (m, 3) [m].
         normals: Inward normals of the grasp, shape (m, 3).
         stats: Method-specific statistics.
@@ -149,7 +149,7 @@ def add_hand(record: dict[str, Any], hand: SDHReachability | None, contacts: Con
 
 
 def add_optimum(record: dict[str, Any], method: str, grasp: Sequence[int], q1: float) -> dict[str, Any]:
-    """``record`` with the ``"optimum"`` block: grasp and Q1 [N] an exact ``method`` found (HFTS shows its gap)."""
+    """``record`` with the ``"optimum"`` block: grasp and Q1 [-] an exact ``method`` found (HFTS shows its gap)."""
     record["optimum"] = {"method": method, "grasp": list(grasp), "q1": q1}
     return record
 
@@ -160,7 +160,7 @@ def histogram_record(
     """The ``"histogram"`` block of an exhaustive search: Q1 of every admissible grasp, binned.
 
     Args:
-        bin_edges: Bin edges over (0, Q_OWS] [N], one more than ``counts``.
+        bin_edges: Bin edges over (0, Q_OWS] [-], one more than ``counts``.
         counts: Grasps per bin.
         zero: Grasps with Q1 = 0 (not in force closure).
         force_closure_fraction: Fraction of the admissible grasps in force closure.
@@ -331,17 +331,17 @@ class PlanView:
 
     @property
     def q1(self) -> float | None:
-        """Q1 of the best grasp [N]."""
+        """Q1 of the best grasp [-]."""
         return _number(self.record.get("q1"))
 
     @property
     def q_ows(self) -> float | None:
-        """Q1 of the whole contact set [N]."""
+        """Q1 of the whole contact set [-]."""
         return _number(self.record.get("q_ows"))
 
     @property
     def bound(self) -> float | None:
-        """Certified upper bound on the optimum [N]."""
+        """Certified upper bound on the optimum [-]."""
         return _number(self.record.get("bound"))
 
     @property
@@ -393,7 +393,7 @@ class PlanView:
 
     @property
     def run_q1s(self) -> tuple[float | None, ...]:
-        """Q1 of every recorded run (HFTS's ``runs``) [N]; empty for other methods."""
+        """Q1 of every recorded run (HFTS's ``runs``) [-]; empty for other methods."""
         return tuple(_number(run.get("q1")) for run in _runs(self.record))
 
     @property

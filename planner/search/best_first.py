@@ -68,7 +68,7 @@ class Incumbent:
     """The best grasp evaluated so far.
 
     Attributes:
-        q: Its exact Q1 [N].
+        q: Its exact Q1 [-].
         state: Its terminal state (sorted node tuple).
         parent: The unexpanded state whose branch and bound found it; None once the
             grasp is a created state.
@@ -109,7 +109,7 @@ class Search(SearchSpace):
         self.eps = config["eps"]
         self.time_limit = time_limit
         self.stop = stop
-        #: Called about every :data:`PROGRESS_SECONDS` with (best Q1 or None, certified bound) [N].
+        #: Called about every :data:`PROGRESS_SECONDS` with (best Q1 or None, certified bound) [-].
         self.on_progress: Callable[[float | None, float], object] = lambda best, bound: None
         self._pending: dict[State, tuple[Ranked, int, float]] = {}
         # Heuristic children are successors only on the expansion tree and without the

@@ -115,7 +115,7 @@ class SearchTree:
         level: Tree level (depth) per state; 0 for the root.
         visited: Whether the state was expanded.
         f: Unweighted f per state: exact for states whose heuristic was finished (every
-            expanded state), otherwise the lower bound the search had reached [N].
+            expanded state), otherwise the lower bound the search had reached [-].
         path: Ids of the returned solution path, root first, goal last.
     """
 
@@ -145,13 +145,13 @@ class SearchResult:
         grasp: Sorted contact indices, length m.
         positions: Contact points of the grasp, shape (m, 3) [m].
         normals: Inward unit normals of the grasp, shape (m, 3).
-        q1: Exact Q1 of the grasp [N].
-        q_ows: Q1 of the whole contact set (object wrench space) [N].
-        bound: Certified upper bound on the optimal Q1 when the search stopped [N]:
+        q1: Exact Q1 of the grasp [-].
+        q_ows: Q1 of the whole contact set (object wrench space) [-].
+        bound: Certified upper bound on the optimal Q1 when the search stopped [-]:
             equals ``q1`` for A* and Dijkstra.
         eps: WA* inflation (0 for A* and Dijkstra).
         eps_bound: Upper bound on the optimum implied by the (1 + eps) guarantee on path
-            cost, ``q_ows - (q_ows - q1) / (1 + eps)`` [N].
+            cost, ``q_ows - (q_ows - q1) / (1 + eps)`` [-].
         stats: Search statistics.
         config: Resolved search parameters (seed included).
         contact_source: Provenance of the contact set.
@@ -180,7 +180,7 @@ class SearchResult:
 
     @property
     def gap(self) -> float:
-        """Certified optimality gap: ``bound - q1`` [N]; 0 for a proven optimum."""
+        """Certified optimality gap: ``bound - q1`` [-]; 0 for a proven optimum."""
         return max(0.0, self.bound - self.q1)
 
     def to_dict(self, contact_set: dict[str, Any] | None = None) -> dict[str, Any]:

@@ -15,15 +15,17 @@ __all__ = ["METHODS", "PREPROCESS_MODES", "DecompositionSettings"]
 METHODS = ("coacd", "convex_hull")
 PREPROCESS_MODES = ("if_open", "auto", "on", "off")
 
-#: Integer settings and their ranges (None: unbounded above); CoACD rejects a preprocess
-#: resolution outside 5-1000 and takes an unsigned 32-bit seed.
+#: Integer settings and their ranges; CoACD rejects a preprocess resolution outside 5-1000 and
+#: takes an unsigned 32-bit seed. The search's upper bounds are 50-100x CoACD's defaults
+#: (2000 samples, 20 nodes, 150 iterations, depth 3): past them one decomposition runs for
+#: hours, and the timeout would end it with nothing to show.
 _INT_RANGES = {
     "preprocess_resolution": (5, 1000),
-    "resolution": (1, None),
-    "mcts_nodes": (1, None),
-    "mcts_iterations": (1, None),
-    "mcts_max_depth": (1, None),
-    "max_ch_vertex": (4, None),
+    "resolution": (1, 200_000),
+    "mcts_nodes": (1, 1000),
+    "mcts_iterations": (1, 10_000),
+    "mcts_max_depth": (1, 20),
+    "max_ch_vertex": (4, 100_000),
     "seed": (0, 2**32 - 1),
 }
 

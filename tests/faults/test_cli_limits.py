@@ -330,3 +330,14 @@ def test_an_unwritable_mesh_cache_is_refused_before_the_download(tmp_path, monke
     blocker.write_text("")
     err = _one_error(["assets", "fetch", "bunny", "--cache", str(blocker)])
     assert f"cannot write the cache folder {blocker / 'meshes'}: {blocker} is a file, not a folder" in err
+
+
+@pytest.mark.parametrize(
+    "name, value", [("resolution", 10**7), ("mcts_nodes", 10**6), ("mcts_iterations", 10**9), ("mcts_max_depth", 99)]
+)
+def test_coacd_search_settings_have_upper_limits(name, value):
+    """A CoACD search that would run for hours is refused up front, naming the range."""
+    from sim_eval.decomposition.settings import DecompositionSettings
+
+    with pytest.raises(OgcpError, match=f"{name}.*from 1 to"):
+        DecompositionSettings(**{name: value})

@@ -97,7 +97,7 @@ def test_a_file_size_limit_keeps_every_recorded_cell_and_resume_finishes(suite_f
     assert manifest < limit
 
     out = tmp_path / "run"
-    full = _ogcp("suite", str(suite_file), "--out", str(out), limit=limit)
+    full = _ogcp("suite", str(suite_file), "--out", str(out), "-q", limit=limit)  # -q: no progress lines
     assert full.returncode == 2, (full.returncode, full.stderr)
     lines = full.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith(f"ogcp: error: cannot append to {out / 'results.jsonl'}: "), lines

@@ -94,8 +94,8 @@ EDITS: dict[str, tuple[Edit, str]] = {
     "rho": (_set("contact_set.torque_scale", 0.12), "torque scale rho [m] recorded 0.12, rebuilt 0.1;"),
     "com": (_set("contact_set.com", [0.001, 0.0, 0.0]), "centre of mass [m] recorded [0.001, 0, 0], rebuilt [0, 0, 0]"),
     "size": (_set("contact_set.size", 31), "contact set size recorded 31, rebuilt 30"),
-    "q1": (_set("q1", 0.2), "q1 [N] of the best grasp recorded 0.2, rebuilt {q1:.12g};"),
-    "q_ows": (_set("q_ows", 0.6), "q_ows [N] of the contact set recorded 0.6, rebuilt {q_ows:.12g};"),
+    "q1": (_set("q1", 0.2), "q1 of the best grasp recorded 0.2, rebuilt {q1:.12g};"),
+    "q_ows": (_set("q_ows", 0.6), "q_ows of the contact set recorded 0.6, rebuilt {q_ows:.12g};"),
     "diagonal": (_both("diagonal", 0.3), "diagonal [m] recorded 0.3, but its torque scale rho 0.1 m (rebuilt 0.15 m)"),
     "seed": (_both("seed", 1), "(the plan's contacts are not on the object as re-sampled: were n, seed or tip_radius"),
     "n": (_both("n", 40), "contact set size recorded 30, rebuilt 40 (sampled with n = 40)"),
@@ -118,7 +118,7 @@ def test_friction_model_changed_away_from_the_defaults_names_both_fields(box_pla
     record["contact_set"].update(mu=0.7, cone_edges=6)
     message = _refused(record)
     recorded = f"[{box_plan['q1']:.12g}, {box_plan['q_ows']:.12g}]"
-    assert message.startswith(f"{REFUSAL}(q1, q_ows) [N] recorded {recorded}, rebuilt ["), message
+    assert message.startswith(f"{REFUSAL}(q1, q_ows) recorded {recorded}, rebuilt ["), message
     assert "recomputed with the recorded mu 0.7 and cone_edges 6: was mu or cone_edges changed?" in message
 
 
@@ -163,3 +163,12 @@ def test_cli_evaluate_refuses_an_edited_plan_in_one_line(box_plan, tmp_path):
     assert run.stderr.startswith("ogcp: error: " + REFUSAL + "mu recorded 0.8, but its q1 and q_ows fit mu 0.5")
     assert run.stderr.count("\n") == 1 and "Traceback" not in run.stderr
     assert Path(path).read_text() == json.dumps(record)
+
+
+@pytest.mark.parametrize("max_grasps", [0, -1, 1.5, True])
+def test_evaluate_plan_refuses_a_grasp_count_below_one(max_grasps):
+    """The API refuses what the CLI's --max-grasps refuses: 0 grasps would be a run that does nothing."""
+    from sim_eval.evaluate import evaluate_plan
+
+    with pytest.raises(OgcpError, match="max_grasps must be an integer >= 1"):
+        evaluate_plan({}, max_grasps=max_grasps)

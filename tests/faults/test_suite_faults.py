@@ -81,7 +81,7 @@ def test_repeats_of_one_variant_may_share_a_label():
         ("contacts = 100000000", "top level.contacts: 100000000 contacts with 8 cone edges need about 2e+03 GiB"),
         ("contacts = '16'", "top level.contacts: expected an integer >= 2, got '16'"),
         ("mu = 1e308", "top level.mu: expected a number <= 10, got 1e+308 (valid: > 0 and <= 10)"),
-        ("mu = [0.5, 1.0]", "top level.mu: expected a number > 0, got [0.5, 1.0]"),
+        ("mu = [0.5, 0.5]", "top level.mu: repeated values in [0.5, 0.5]"),
         ("cone_edges = 100000", "top level.cone_edges: expected an integer <= 64, got 100000 (valid: 3 to 64)"),
         ("diagonal = 1e9", "top level.diagonal: expected a number <= 100, got 1000000000.0 (valid: 0.001 to 100)"),
         ("diagonal = 1e-300", "top level.diagonal: expected a number >= 0.001, got 1e-300"),

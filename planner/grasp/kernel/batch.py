@@ -197,14 +197,14 @@ def evaluate_batch(
         grasps: Contact indices of each grasp, shape (B, m).
         certify: See :func:`kernel_q1`.
         table: Optional precomputed :func:`support_table` (reuse it across calls).
-        threshold: Branch-and-bound cut-off [N]. 0 (default): every settled value is the
+        threshold: Branch-and-bound cut-off [-]. 0 (default): every settled value is the
             exact Q1. If > 0, every grasp with Q1 >= threshold still gets its exact Q1,
             but a grasp proven to have Q1 < threshold may get an *upper bound* of its Q1
             below ``threshold - CUT_MARGIN`` instead, found without finishing its hull.
         parallel: Spread the grasps over all numba threads (same results).
 
     Returns:
-        ``(q1, status)``, shape (B,) each: per grasp the value [N] and how it was settled:
+        ``(q1, status)``, shape (B,) each: per grasp the value [-] and how it was settled:
         ``OK`` exact canonical Q1 from the expanding polytope, ``ZERO`` Q1 = 0 proven by
         the support table, ``BOUND`` an upper bound below the threshold, ``FALLBACK``
         not settled (NaN; the caller computes it by another method).
@@ -247,7 +247,7 @@ def q1_batch(
     """:func:`evaluate_batch` with the status reduced to settled or not.
 
     Returns:
-        ``(q1, ok)``: Q1 per grasp, shape (B,) [N] (an upper bound below
+        ``(q1, ok)``: Q1 per grasp, shape (B,) [-] (an upper bound below
         ``threshold - CUT_MARGIN`` where the threshold settled it), and whether the kernel
         settled it; the caller computes the grasps with ``ok`` False by another method.
     """

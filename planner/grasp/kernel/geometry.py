@@ -29,7 +29,7 @@ OK = 0
 FALLBACK = 1
 BOUND = 2
 ZERO = 3
-#: Threshold mode returns a bound only this far below the threshold [N]: canonical Q1 can
+#: Threshold mode returns a bound only this far below the threshold [-]: canonical Q1 can
 #: sit a rounding error above the true value, and a tie with the threshold must be exact.
 CUT_MARGIN = 1e-9
 

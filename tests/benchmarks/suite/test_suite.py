@@ -506,7 +506,7 @@ def test_slices_selected_with_only_add_up_to_the_full_run(tiny_file, serial_run,
     ]
     for only, message in [
         (["object=bunny"], "no cell of this suite has it; the suite has object = box, sphere"),
-        (["colour=red"], "valid choices: contacts, group, label, m, method, object"),
+        (["colour=red"], "valid choices: contacts, group, label, m, method, mu, object"),
         (["object"], "--only takes KEY=VALUE"),
     ]:
         with pytest.raises(OgcpError, match=message):

@@ -1,0 +1,212 @@
+"""Fig. 3: the optimal grasp on each object, drawn on the shaded mesh.
+
+One panel per problem (object, m, ...) for its A* cell, or failing that its best cell of a
+certified method (:attr:`planner.methods.registry.MethodSpec.optimal`): the mesh rendered by the
+z-buffer rasteriser (:mod:`benchmarks.plots.raster`), the contact set as small yellow points and
+the grasp's contacts with force arrows along the inward normals (or friction cones). Marks the
+mesh hides are left out, piece by piece, from the rasteriser's depth buffer. The mesh is a raster
+image inside a matplotlib axes, so titles, fonts and the saved formats match the other figures.
+"""
+
+from __future__ import annotations
+
+import itertools
+import time
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
+import numpy as np
+from numpy.typing import NDArray
+
+from planner.infra.errors import OgcpError
+from planner.methods.registry import METHODS
+from sim_eval.plan_input import PlanInput, plan_input
+
+from .data import CellData, RunData, SkipFigure
+from .raster import Raster, fit_view, look, render_mesh
+from .style import DOUBLE_COLUMN, SINGLE_COLUMN, method_colour, new_figure, styled
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
+
+#: Okabe-Ito yellow, as the paper draws the contact set.
+CONTACT_COLOUR = "#F0E442"
+#: Camera of every panel [deg]: azimuth around +z, elevation above the xy plane.
+AZIMUTH, ELEVATION = 35.0, 25.0
+#: Rendered pixels per inch of panel: above the 300 dpi of print, so the PDF stays sharp.
+PIXELS_PER_INCH = 400
+#: Arrow length as a fraction of the object's bounding-box diagonal.
+ARROW_LENGTH = 0.3
+#: Depth slack of marks on the surface, as a fraction of the diagonal.
+SURFACE_TOLERANCE = 0.005
+#: Seconds spent rendering each panel of the last figure (for the report and the README).
+RENDER_SECONDS: list[float] = []
+
+
+class NoGraspCells(SkipFigure):
+    """The run has no cell this figure draws: left out without a note unless asked for by name."""
+
+
+def grasp_cells(data: RunData) -> list[CellData]:
+    """The cell drawn per problem: its plain A* cell, else its best cell of a certified method.
+
+    Args:
+        data: The run.
+
+    Returns:
+        One cell per problem that has one, problems in order of first appearance.
+    """
+    chosen = []
+    for cells in data.by_problem().values():
+        astar = [c for c in cells if c.method == "astar" and c.plain and c.plan_view.grasp is not None]
+        certified = [
+            c
+            for c in cells
+            if c.method in METHODS
+            and METHODS[c.method].optimal
+            and not c.variant.get("symmetry")
+            # The hand / spread constraints change the problem: their optimum is not the object's.
+            and not c.constraint
+            and c.q1 is not None
+            and c.plan_view.grasp is not None
+        ]
+        pick = astar[:1] or sorted(certified, key=lambda c: -(c.q1 or 0.0))[:1]
+        chosen += pick
+    return chosen
+
+
+@styled
+def fig3_grasps(data: RunData, notes: list[str] | None = None, cones: bool = False) -> Figure:
+    """Fig. 3: the optimal grasp of each problem on its shaded object.
+
+    Args:
+        data: The run.
+        notes: Gets one line per cell whose object or contact set cannot be rebuilt.
+        cones: Draw friction cones at the grasp's contacts instead of force arrows.
+
+    Returns:
+        The figure, one panel per drawn problem, at most three per row.
+
+    Raises:
+        NoGraspCells: No problem has an A* or certified cell.
+        SkipFigure: No cell's plan could be rebuilt.
+    """
+    cells = grasp_cells(data)
+    if not cells:
+        raise NoGraspCells("needs an A* cell or a cell of another certified method")
+    names = data.problem_names()
+    inputs: list[tuple[CellData, PlanInput]] = []
+    for cell in cells:
+        try:
+            inputs.append((cell, plan_input(cell.plan)))
+        except OgcpError as exc:
+            if notes is not None:
+                notes.append(f"fig3_grasps: {names[cell.problem]} {cell.label} left out: {exc}")
+    if not inputs:
+        raise SkipFigure("no A* or certified cell's object and contact set could be rebuilt")
+    columns = min(len(inputs), 3)
+    width = SINGLE_COLUMN if columns == 1 else DOUBLE_COLUMN
+    figure, axes = new_figure(len(inputs), width=width, panel_height=width / columns, max_columns=3)
+    RENDER_SECONDS.clear()
+    for ax, (cell, rebuilt) in zip(axes, inputs, strict=True):
+        pixels = round(PIXELS_PER_INCH * width / columns)
+        started = time.perf_counter()
+        draw_grasp(ax, rebuilt, rebuilt.grasps[0], method_colour(cell.method), pixels, cones)
+        RENDER_SECONDS.append(time.perf_counter() - started)
+        quality = f", $Q_1$={cell.q1:.3f}" if cell.q1 is not None else ""
+        problem = names[cell.problem]
+        m = f" m={len(rebuilt.grasps[0])}" if " m=" not in problem else ""
+        ax.set_title(f"{problem}{m}: {cell.label}{quality}")
+    return figure
+
+
+def draw_grasp(
+    ax: Axes,
+    rebuilt: PlanInput,
+    grasp: Sequence[int],
+    colour: str,
+    pixels: int = 800,
+    cones: bool = False,
+) -> Raster:
+    """Draw the object, its contact set and one grasp into ``ax``.
+
+    Args:
+        ax: The panel (its axis frame is switched off).
+        rebuilt: Mesh and contact set of the plan (:func:`sim_eval.plan_input.plan_input`).
+        grasp: Contact indices of the grasp, length m.
+        colour: Colour of the grasp's contacts and arrows.
+        pixels: Side of the square rendered image [px].
+        cones: Friction cones (half-angle atan(mu)) instead of force arrows.
+
+    Returns:
+        The rendered mesh with its depth buffer.
+    """
+    from matplotlib.collections import LineCollection
+    from matplotlib.patches import FancyArrowPatch
+
+    mesh, contacts = rebuilt.mesh, rebuilt.contacts
+    diagonal = float(np.linalg.norm(mesh.bounds[1] - mesh.bounds[0]))
+    length = ARROW_LENGTH * diagonal
+    index = np.asarray(grasp, dtype=int)
+    heads = contacts.positions[index]
+    tails = heads - length * contacts.normals[index]  # outside the object, pushing inwards
+    view = fit_view(np.vstack([mesh.vertices, tails]), look(AZIMUTH, ELEVATION), pixels, pixels)
+    raster = render_mesh(mesh.vertices, mesh.faces, view)
+    ax.imshow(raster.rgba, extent=(0, pixels, pixels, 0), interpolation="antialiased", zorder=1)
+    tolerance = SURFACE_TOLERANCE * diagonal
+    shown = _facing(raster, contacts.normals) & raster.visible(contacts.positions, tolerance)
+    others = np.setdiff1d(np.flatnonzero(shown), index)
+    where = view.project(contacts.positions)
+    ax.scatter(where[others, 0], where[others, 1], s=3, c=CONTACT_COLOUR, edgecolors="#555555", linewidths=0.2)
+    ax.scatter(where[index[shown[index]], 0], where[index[shown[index]], 1], s=9, c=colour, zorder=4, linewidths=0)
+    lines = []
+    for head, normal in zip(heads, contacts.normals[index], strict=True):
+        if cones:
+            lines += _cone_pieces(raster, head, normal, contacts.mu, 0.6 * length, tolerance)
+            continue
+        runs = raster.visible_runs(head - length * normal, head, tolerance)
+        for first, last in runs:
+            if np.allclose(last, view.project(head)[0, :2]):
+                arrow = FancyArrowPatch(
+                    (float(first[0]), float(first[1])),
+                    (float(last[0]), float(last[1])),
+                    arrowstyle="-|>",
+                    mutation_scale=6,
+                    shrinkA=0,
+                    shrinkB=0,
+                )
+                arrow.set(color=colour, linewidth=1.0, zorder=3)
+                ax.add_patch(arrow)
+            else:
+                lines.append((first, last))
+    ax.add_collection(LineCollection(lines, colors=colour, linewidths=0.8 if cones else 1.0, zorder=3))
+    ax.set_xlim(0, pixels)
+    ax.set_ylim(pixels, 0)
+    ax.set_aspect("equal")
+    ax.axis("off")
+    return raster
+
+
+def _facing(raster: Raster, normals: NDArray[np.float64]) -> NDArray[np.bool_]:
+    """Contacts whose surface faces the camera (inward normal along the view's forward axis)."""
+    # The depth test alone lets through points on the back of thin parts (a wing, an ear).
+    return np.asarray(normals @ raster.view.rotation[2] > 0.0)
+
+
+def _cone_pieces(
+    raster: Raster, apex: NDArray[np.float64], normal: NDArray[np.float64], mu: float, height: float, tolerance: float
+) -> list[tuple[NDArray[np.float64], NDArray[np.float64]]]:
+    """Visible pixel pieces of a friction cone's generators and rim, opening outwards from ``apex``."""
+    helper = np.array([1.0, 0.0, 0.0]) if abs(normal[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    u = np.cross(normal, helper)
+    u /= np.linalg.norm(u)
+    v = np.cross(normal, u)
+    angles = np.linspace(0, 2 * np.pi, 25)
+    rim = apex - height * normal + height * mu * (np.cos(angles)[:, None] * u + np.sin(angles)[:, None] * v)
+    pieces = []
+    for point in rim[:-1:3]:  # eight generators
+        pieces += raster.visible_runs(apex, point, tolerance, samples=24)
+    for a, b in itertools.pairwise(rim):
+        pieces += raster.visible_runs(a, b, tolerance, samples=4)
+    return pieces
