@@ -227,6 +227,7 @@ def evaluate_plan(
     decomposition: DecompositionSettings | dict[str, Any] | None = None,
     progress: bool = False,
     max_grasps: int | None = None,
+    plan_file: str | Path | None = None,
 ) -> SimResult:
     """Simulate the grasps of an ``ogcp.plan/1`` record (best grasp, ES top grasps, HFTS runs).
 
@@ -237,6 +238,8 @@ def evaluate_plan(
         progress: Show progress bars on stderr.
         max_grasps: Simulate at most this many of the plan's distinct grasps (best first), >= 1;
             None: all.
+        plan_file: Where the record was read from: a mesh file is looked for next to it first
+            (a plan moved together with its mesh still evaluates).
 
     Returns:
         The simulation result.
@@ -249,7 +252,7 @@ def evaluate_plan(
         settings = SimSettings.from_dict(settings)
     if decomposition is not None and not isinstance(decomposition, DecompositionSettings):
         decomposition = DecompositionSettings(**dict(decomposition))
-    plan = plan_input(record)
+    plan = plan_input(record, plan_file)
     grasps, labels = plan.grasps[:max_grasps], plan.labels[:max_grasps]
     evaluator = GraspEvaluator(settings, decomposition, progress=progress)
     return evaluator.evaluate(plan.mesh, plan.contacts, grasps, labels)

@@ -1,14 +1,20 @@
 """Turn an ``ogcp.plan/1`` record back into what the simulation needs: mesh, contact set, grasps.
 
-A plan records how its contact set was made (object, sampling seed and, for reach-aware
-sampling, the fingertip radius and tolerance), not the set itself, so the set is sampled
-again. Everything the plan records about the problem is then checked against the rebuilt
-one: the object's identity (kind, name, file sha256, diagonal), the set's size, torque scale
-rho and centre of mass, the best grasp's contact positions and normals, and its Q1 and the
-set's Q_OWS (which are where mu and the cone edges k show). A plan that disagrees anywhere
-(an edited field, another mesh, another ogcp version) is refused with the field, its recorded
-and its rebuilt value, never simulated as if it were the original. Reading the record itself
-(file, schema, grasps, sampling) is :mod:`planner.records.plan`'s job.
+A plan records its contact set in full (positions, inward normals, COM, rho, mu, k) and
+how it was made (object, sampling seed, tip radius). The recorded set is the reference: it
+is used as recorded, never re-sampled, so a plan evaluates the same contacts on any machine
+(trimesh's sampling changes between versions). It is checked against the object instead:
+the object's identity (kind, name, mesh file sha256, diagonal), the set's size, rho and COM
+against the mesh's, every contact on the mesh surface with its face's normal, the best
+grasp's contacts against the set, and the Q1 and Q_OWS recomputed from it (where mu and the
+cone edges k show). On the very build the plan was made with (same ogcp commit and sampling
+libraries), re-sampling must also reproduce the set, so an edited n, seed or tip radius shows.
+
+Older plans, which record only how their set was sampled, are re-sampled as before and
+checked the same way against the re-sampled set. A plan that disagrees anywhere is refused
+with the field, its recorded and its rebuilt value (and the recorded vs running library
+versions where they differ), never simulated as if it were the original. Reading the record
+itself (file, schema, grasps, sampling) is :mod:`planner.records.plan`'s job.
 """
 
 from __future__ import annotations
@@ -22,14 +28,35 @@ import numpy as np
 import trimesh
 from numpy.typing import NDArray
 
-from planner.config.options import Option
-from planner.grasp.contact_set import DEFAULT_CONE_EDGES, DEFAULT_MU, ContactSet, sample_contacts
-from planner.grasp.defaults import CONE_EDGES, CONTACT_SEED, CONTACTS, DIAGONAL, MU, TIP_RADIUS
+from planner.grasp.contact_set import (
+    DEFAULT_CONE_EDGES,
+    DEFAULT_MU,
+    EVEN_SAMPLING,
+    ContactSet,
+    mass_properties,
+    sample_contacts,
+)
 from planner.grasp.quality import q1
 from planner.infra.errors import OgcpError
 from planner.infra.tolerance import TOL
 from planner.objects import DEFAULT_DIAGONAL, file_sha256, resolve_object
-from planner.records.plan import SAMPLING_KEYS, ContactSampling, contact_sampling, plan_grasps, recorded_positions
+from planner.records.plan import (
+    SAMPLING_KEYS,
+    ContactSampling,
+    contact_sampling,
+    plan_grasps,
+    recorded_contacts,
+    recorded_positions,
+)
+from sim_eval.plan_contacts import (
+    FACE_NORMAL_TOLERANCE,
+    SURFACE_TOLERANCE,
+    mesh_candidates,
+    same_sampling_build,
+    surface_misfit,
+    versions_note,
+)
+from sim_eval.plan_fields import check_plan_fields
 
 POSITION_TOLERANCE = 1e-9  # [m] recorded vs re-sampled contact positions, COM and rho
 NORMAL_TOLERANCE = 1e-9  # recorded vs re-sampled unit normals (per component)
@@ -94,113 +121,13 @@ def _check_copies(record: dict[str, Any]) -> None:
             )
 
 
-#: The plan's fields that the simulation reads, by key path, with their valid values (a
-#: missing or null field is allowed where older plans or other methods lack it).
-_NUMBERS: dict[str, Option] = {
-    "q1": Option("float", None, minimum=0),
-    "q_ows": Option("float", None, minimum=0),
-    "contact_set.size": CONTACTS,
-    "contact_set.torque_scale": Option("float", None, minimum=0, exclusive=True),
-    "contact_set.mu": MU,
-    "contact_set.cone_edges": CONE_EDGES,
-}
-#: Keys of a contact source (either copy) and their valid values.
-_SOURCE: dict[str, Option | type] = {
-    "n": CONTACTS,
-    "seed": CONTACT_SEED,
-    "tip_radius": TIP_RADIUS,
-    "reach_tolerance": Option("float", None, minimum=0),
-    "diagonal": DIAGONAL,
-    "sampling": str,
-    "kind": str,
-    "name": str,
-    "path": str,
-    "sha256": str,
-}
+def _mesh(source: dict[str, Any], candidates: Sequence[Path]) -> trimesh.Trimesh:
+    """Rebuild the plan's object and check every recorded key of its description.
 
-
-def _field(record: dict[str, Any], path: str) -> Any:
-    node: Any = record
-    for key in path.split("."):
-        node = node.get(key) if isinstance(node, dict) else None
-    return node
-
-
-def _present(record: dict[str, Any], path: str) -> bool:
-    *parents, last = path.split(".")
-    node = _field(record, ".".join(parents)) if parents else record
-    return isinstance(node, dict) and last in node
-
-
-def _block(record: dict[str, Any], path: str, kind: type) -> None:
-    value = _field(record, path)
-    if value is not None and not isinstance(value, kind):
-        what = "an object" if kind is dict else "a list"
-        raise OgcpError(f"plan field {path}: expected {what}, got {type(value).__name__} {_show_short(value)}")
-
-
-def _show_short(value: Any) -> str:
-    text = repr(value)
-    return text if len(text) <= 60 else text[:57] + "..."
-
-
-def _point(value: Any) -> bool:
-    """Whether ``value`` is [x, y, z] of finite numbers."""
-    numbers = isinstance(value, list) and len(value) == 3
-    return numbers and all(isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v) for v in value)
-
-
-def _rows(record: dict[str, Any], path: str) -> None:
-    """A list of [x, y, z] rows of finite numbers (positions or normals), if present."""
-    value = _field(record, path)
-    if value is None:
-        return
-    if not (isinstance(value, list) and all(_point(row) for row in value)):
-        raise OgcpError(
-            f"plan field {path}: expected a list of [x, y, z] rows of finite numbers, got {_show_short(value)}"
-        )
-
-
-def check_plan_fields(record: dict[str, Any]) -> None:
-    """Check the type and range of every field of an ``ogcp.plan/1`` record that the simulation reads.
-
-    Fields it does not read (``method``, ``bound``, ``status``, ``stats``, ``config``,
-    ``provenance``, ...) are left to their readers, which are lenient by design.
-
-    Raises:
-        OgcpError: ``plan field <key path>: expected ..., got ...`` for the first bad field.
+    Args:
+        source: The object's description as recorded.
+        candidates: Where a mesh file may be, tried in order (:func:`sim_eval.plan_contacts.mesh_candidates`).
     """
-    for path in ("contact_set", "contact_set.source", "source", "contacts"):
-        _block(record, path, dict)
-    for path in ("grasp", "top", "runs"):
-        _block(record, path, list)
-    for i, run in enumerate(_field(record, "runs") or []):
-        if not isinstance(run, dict):
-            raise OgcpError(f"plan field runs[{i}]: expected an object with a grasp, got {_show_short(run)}")
-    for path, declared in _NUMBERS.items():
-        value = _field(record, path)
-        # NaN is written as null, so a quality may be null; mu, k and the size never are.
-        if value is not None or (path.startswith("contact_set.") and _present(record, path)):
-            declared.check(f"plan field {path}", value)
-    com = _field(record, "contact_set.com")
-    if com is not None and not _point(com):
-        raise OgcpError(f"plan field contact_set.com: expected [x, y, z] of finite numbers, got {_show_short(com)}")
-    for path in ("contacts.positions", "contacts.normals"):
-        _rows(record, path)
-    for where in ("contact_set.source", "source"):
-        source = _field(record, where) or {}
-        for key, expected in _SOURCE.items():
-            value = source.get(key)
-            if value is None and (key not in source or key not in ("n", "seed", "sampling")):
-                continue  # absent, or null where null means none (no tip, a mesh at its own size)
-            if isinstance(expected, Option):
-                expected.check(f"plan field {where}.{key}", value)
-            elif not isinstance(value, expected):
-                raise OgcpError(f"plan field {where}.{key}: expected a string, got {_show_short(value)}")
-
-
-def _mesh(source: dict[str, Any]) -> trimesh.Trimesh:
-    """Rebuild the plan's object and check every recorded key of its description."""
     kind = source.get("kind")
     if kind in ("builtin", "fetched"):
         diagonal = source.get("diagonal", DEFAULT_DIAGONAL)
@@ -208,9 +135,14 @@ def _mesh(source: dict[str, Any]) -> trimesh.Trimesh:
             raise OgcpError(f"plan field source.diagonal: a {kind} object is scaled to a diagonal, got null")
         mesh, rebuilt = resolve_object(str(source.get("name")), float(diagonal))
     elif kind == "mesh":
-        path = Path(str(source.get("path")))
-        if not path.exists():
-            raise OgcpError(f"the plan's mesh {path} does not exist (run from the folder the plan was made in)")
+        found = [path for path in candidates if path.is_file()]
+        if not found:
+            tried = ", ".join(str(path) for path in candidates) or "no path recorded"
+            raise OgcpError(
+                f"the plan's mesh {source.get('path')} does not exist (tried {tried}); "
+                "keep it where it was, or beside the plan as it was when planned"
+            )
+        path = found[0]
         # Checked before loading: a changed file may not load at all, and this says why.
         if source.get("sha256") and (digest := file_sha256(path)) != source["sha256"]:
             raise _mismatch("object sha256", source["sha256"], digest, f"the plan's mesh {path} changed since planning")
@@ -223,8 +155,9 @@ def _mesh(source: dict[str, Any]) -> trimesh.Trimesh:
             "valid kinds: builtin, fetched, mesh (plan from a built-in name, a fetched name or a mesh path)"
         )
     for key, value in rebuilt.items():
-        # Keys an older plan lacks are not held against it; keys it has must agree.
-        if key in source and source[key] != value:
+        # Keys an older plan lacks are not held against it; keys it has must agree. The path
+        # may differ: the file is found wherever the plan and it moved (its sha256 is checked).
+        if key in source and key != "path" and source[key] != value:
             raise _mismatch(f"object {key}", source[key], value)
     return mesh
 
@@ -336,21 +269,99 @@ def _check_quality(record: dict[str, Any], contacts: ContactSet, best: Sequence[
     raise _mismatch(field, recorded[0 if wrong[0] else 1], rebuilt[0 if wrong[0] else 1])
 
 
-def plan_input(record: dict[str, Any]) -> PlanInput:
-    """Rebuild the mesh and contact set of a plan, check them against it, and collect its grasps.
+def _refuse(what: str) -> OgcpError:
+    return OgcpError(_REFUSAL.format(what))
 
-    Raises:
-        OgcpError: A field of the wrong type or out of range (:func:`check_plan_fields`),
-            an unknown object, a contact set that cannot be reproduced, or any recorded
-            field of the problem (object, size, rho, COM, contact positions and normals,
-            Q1, Q_OWS) that differs from the rebuilt one: the message names the field and
-            gives its recorded and rebuilt values.
-    """
-    check_plan_fields(record)
+
+def _check_recorded_set(record: dict[str, Any], mesh: trimesh.Trimesh, contacts: ContactSet) -> None:
+    """The recorded set against the object: size and n, rho and COM, every contact on the surface."""
+    block = record.get("contact_set") or {}
+    n = contacts.source.get("n")
+    if n is not None and n != len(contacts):
+        raise _mismatch("contact set size", len(contacts), n, f"sampled with n = {n}")
+    if block.get("size") is not None and block["size"] != len(contacts):
+        raise _mismatch("contact set size", block["size"], len(contacts), "the recorded contacts")
+    com, rho = mass_properties(mesh)
+    if abs(contacts.torque_scale - rho) > POSITION_TOLERANCE:
+        ratio = contacts.torque_scale / rho
+        diagonal = _number(contacts.source.get("diagonal"))
+        # Objects are scaled about their bounding-box centre (the origin): the same object at
+        # another diagonal has its COM and contacts times the ratio of the rhos. If the recorded
+        # ones are, the recorded diagonal is not the one planned at.
+        if (
+            diagonal is not None
+            and _close(contacts.com, com * ratio, POSITION_TOLERANCE)
+            and surface_misfit(mesh, contacts.positions / ratio, contacts.normals) is None
+        ):
+            evidence = f"its torque scale rho {_show(contacts.torque_scale)} m (rebuilt {_show(rho)} m) and contacts"
+            raise _misfit("diagonal [m]", diagonal, diagonal * ratio, evidence)
+        off = surface_misfit(mesh, contacts.positions, contacts.normals) is not None
+        why = "the contacts are off the object too: another object, or the object at another diagonal" if off else ""
+        raise _mismatch("torque scale rho [m]", contacts.torque_scale, rho, why)
+    if not _close(contacts.com, np.asarray(com), POSITION_TOLERANCE):
+        raise _mismatch("centre of mass [m]", contacts.com, com)
+    misfit = surface_misfit(mesh, contacts.positions, contacts.normals)
+    if misfit is not None:
+        index, distance, normal_error = misfit
+        if distance > SURFACE_TOLERANCE:
+            raise _refuse(
+                f"recorded contact {index} at {_show(contacts.positions[index])} m is {distance:.3g} m off the mesh "
+                f"surface (tolerance {SURFACE_TOLERANCE:g} m)"
+            )
+        raise _refuse(
+            f"recorded inward normal of contact {index} {_show(contacts.normals[index])} differs from its face's "
+            f"by {normal_error:.3g} (tolerance {FACE_NORMAL_TOLERANCE:g})"
+        )
+
+
+def _check_best_block(record: dict[str, Any], contacts: ContactSet, best: Sequence[int]) -> None:
+    """The best grasp's ``contacts`` block (positions, normals) against the recorded set's rows."""
+    index = np.asarray(best, dtype=np.intp)
+    positions = recorded_positions(record)
+    if positions.shape != (len(index), 3):
+        raise OgcpError(
+            f"the plan records {positions.shape} positions for its {len(index)}-contact best grasp; "
+            "refusing to simulate it as the original"
+        )
+    if not _close(positions, contacts.positions[index], POSITION_TOLERANCE):
+        row = _first_row(positions, contacts.positions[index])
+        raise _mismatch(
+            f"position [m] of contact {int(index[row])}",
+            positions[row],
+            contacts.positions[index][row],
+            "the best grasp's contacts are not the recorded contact set's",
+        )
+    normals = np.asarray((record.get("contacts") or {}).get("normals", []), dtype=float)
+    if normals.size and not _close(normals, contacts.normals[index], NORMAL_TOLERANCE):
+        if normals.shape != positions.shape:
+            raise _mismatch("normals' shape", list(normals.shape), list(positions.shape))
+        row = _first_row(normals, contacts.normals[index])
+        raise _mismatch(f"inward normal of contact {int(index[row])}", normals[row], contacts.normals[index][row])
+
+
+def _check_resampling(record: dict[str, Any], mesh: trimesh.Trimesh, contacts: ContactSet) -> None:
+    """On the build the plan was made with, re-sampling must give the recorded set (n, seed, tip radius)."""
+    if contacts.source.get("sampling") != EVEN_SAMPLING or not same_sampling_build(record):
+        return
     sampling = contact_sampling(record)
-    _check_copies(record)
-    mesh = _mesh(sampling.object)
-    contacts = sample_contacts(
+    again = _resample(mesh, sampling)
+    for key in SAMPLING_KEYS:
+        if key in contacts.source and contacts.source[key] != again.source.get(key):
+            raise _mismatch(key, contacts.source[key], again.source.get(key))
+    if len(again) != len(contacts):
+        raise _mismatch("contact set size", len(contacts), len(again), f"sampled with n = {sampling.n}")
+    hint = "the plan's contacts are not on the object as re-sampled: were n, seed or tip_radius changed?"
+    for name, recorded, rebuilt in (
+        ("position [m]", contacts.positions, again.positions),
+        ("inward normal", contacts.normals, again.normals),
+    ):
+        if not _close(recorded, rebuilt, POSITION_TOLERANCE):
+            row = _first_row(recorded, rebuilt)
+            raise _mismatch(f"{name} of contact {row}", recorded[row], rebuilt[row], hint)
+
+
+def _resample(mesh: trimesh.Trimesh, sampling: ContactSampling) -> ContactSet:
+    return sample_contacts(
         mesh,
         sampling.n,
         sampling.seed,
@@ -360,6 +371,26 @@ def plan_input(record: dict[str, Any]) -> PlanInput:
         tip_radius=sampling.tip_radius,
         reach_tolerance=sampling.reach_tolerance,
     )
+
+
+def _from_recorded(record: dict[str, Any], contacts: ContactSet, plan_file: Path | None) -> PlanInput:
+    """Check a plan that carries its contacts: the recorded set is the reference."""
+    mesh_block = (record.get("contact_set") or {}).get("mesh") or {}
+    source = contacts.source
+    mesh = _mesh(source, mesh_candidates(source, mesh_block, plan_file))
+    _check_recorded_set(record, mesh, contacts)
+    grasps, labels = plan_grasps(record, len(contacts))
+    _check_best_block(record, contacts, grasps[0])
+    _check_resampling(record, mesh, contacts)
+    _check_quality(record, contacts, grasps[0])
+    return PlanInput(mesh, contacts, grasps, labels, record)
+
+
+def _from_sampling(record: dict[str, Any], plan_file: Path | None) -> PlanInput:
+    """Re-sample the set of an older plan that records only how it was sampled, and check it."""
+    sampling = contact_sampling(record)
+    mesh = _mesh(sampling.object, mesh_candidates(sampling.object, {}, plan_file))
+    contacts = _resample(mesh, sampling)
     # The source contact_sampling read: the contact set's own, else the plan's top-level copy.
     recorded_source = dict((record.get("contact_set") or {}).get("source") or record.get("source") or {})
     for key in SAMPLING_KEYS:
@@ -370,3 +401,42 @@ def plan_input(record: dict[str, Any]) -> PlanInput:
     _check_geometry(record, sampling, contacts, grasps[0])
     _check_quality(record, contacts, grasps[0])
     return PlanInput(mesh, contacts, grasps, labels, record)
+
+
+def plan_input(record: dict[str, Any], plan_file: str | Path | None = None) -> PlanInput:
+    """Rebuild the mesh and contact set of a plan, check them against it, and collect its grasps.
+
+    Checks, in order: field types and ranges (:func:`check_plan_fields`), the two copies of
+    the contact source, then with recorded contacts: the mesh (found by :func:`mesh_candidates`,
+    its sha256, name and diagonal), the set's size and n, rho and COM against the mesh's
+    (naming an edited diagonal), every contact on the mesh surface with its face's normal,
+    the best grasp's contacts against the set, re-sampling on the very same build, and Q1 and
+    Q_OWS recomputed from the set. Older plans without contacts are re-sampled and checked
+    against the re-sampled set instead.
+
+    Args:
+        record: The plan record.
+        plan_file: The file the plan was read from, to find its mesh file relative to it;
+            None: only the recorded absolute and as-given paths are tried.
+
+    Raises:
+        OgcpError: A field of the wrong type or out of range, an unknown object, a mesh file
+            not found or changed, a contact set that cannot be reproduced, or any recorded
+            field of the problem (object, size, rho, COM, contact positions and normals,
+            Q1, Q_OWS) that differs from the rebuilt one: the one-line message names the field
+            and gives its recorded and rebuilt values, and the recorded and running library
+            versions where they differ.
+    """
+    check_plan_fields(record)
+    folder = None if plan_file is None else Path(plan_file)
+    try:
+        _check_copies(record)
+        contacts = recorded_contacts(record)
+        if contacts is None:
+            return _from_sampling(record, folder)
+        return _from_recorded(record, contacts, folder)
+    except OgcpError as exc:
+        note = versions_note(record)
+        if not note:
+            raise
+        raise OgcpError(f"{exc}; {note}") from exc

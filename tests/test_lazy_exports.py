@@ -14,6 +14,7 @@ import pickle
 import pytest
 
 LAZY_PACKAGES = (
+    "benchmarks",
     "planner",
     "planner.grasp",
     "planner.methods",

@@ -123,3 +123,15 @@ def test_dm_control_is_not_a_dependency():
     names = {canonicalize_name(r.name) for r in _requirements(*PYPROJECT["project"]["optional-dependencies"])}
     assert "dm-control" not in names and "labmaze" not in names
     assert "dm-control" not in _pins()
+
+
+def test_the_version_comes_from_git_and_is_what_ogcp_reports():
+    """setuptools-scm sets the version at install time: results from two commits never look alike."""
+    import importlib.metadata
+
+    import planner
+
+    pyproject = tomllib.loads((ROOT / "pyproject.toml").read_text())
+    assert pyproject["project"]["dynamic"] == ["version"] and "version" not in pyproject["project"]
+    assert "setuptools-scm>=8" in pyproject["build-system"]["requires"]
+    assert planner.__version__ == importlib.metadata.version("ogcp")

@@ -16,12 +16,12 @@ import warnings
 from collections.abc import Sequence
 from typing import NoReturn
 
-from benchmarks.cli import assets, export, plan, plot, simulate, suite
+from benchmarks.cli import assets, export, plan, plot, report, simulate, suite
 from planner import __version__
 from planner.infra.errors import OgcpError
 
 #: The command modules, in the order ``ogcp --help`` lists their commands.
-COMMAND_MODULES = (plan, simulate, assets, suite, plot, export)
+COMMAND_MODULES = (plan, simulate, assets, suite, plot, report, export)
 
 
 class _Parser(argparse.ArgumentParser):

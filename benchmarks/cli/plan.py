@@ -255,6 +255,9 @@ def run_plan(args: argparse.Namespace) -> int:
     else:
         run = spec.run(config, contacts, args.fingers, options)
     if args.output is not None:
-        write_json_atomic(args.output, run.record)
+        from planner.records.plan import add_plan_path
+
+        # Where the plan goes is known only now: its mesh file is found from there when both move.
+        write_json_atomic(args.output, add_plan_path(run.record, args.output))
     print(json.dumps(run.record) if args.json else describe(run, contacts))
     return EXIT_STATUS.get(run.record.get("status", ""), 0)

@@ -327,7 +327,12 @@ def run_evaluate(args: argparse.Namespace) -> int:
     check_output(args.render)
     record = load_plan(args.plan)
     result = evaluate_plan(
-        record, _settings(args), _decomposition(args), progress=sys.stderr.isatty(), max_grasps=args.max_grasps
+        record,
+        _settings(args),
+        _decomposition(args),
+        progress=sys.stderr.isatty(),
+        max_grasps=args.max_grasps,
+        plan_file=args.plan,
     )
     data = result.to_dict()
     if args.render is not None:

@@ -30,8 +30,10 @@ if TYPE_CHECKING:
         fig8_wastar_tradeoff,
     )
     from benchmarks.plots.grasp_figures import fig3_grasps
+    from benchmarks.plots.hand_figures import fig10_sdh_grasps
     from benchmarks.plots.names import NAMES, TABLE
     from benchmarks.plots.report import FIGURES, PlotReport, plot_run
+    from benchmarks.plots.sim_figures_3d import sim_grasps
     from benchmarks.plots.simulation import sim_fidelity, sim_q1_vs_resistance, sim_survival, survival
     from benchmarks.plots.style import DOUBLE_COLUMN, SINGLE_COLUMN, method_colour, save_figure
     from benchmarks.plots.tables import TimeTable, time_table
@@ -50,6 +52,7 @@ _EXPORTS = {
     "SkipFigure": "benchmarks.plots.data",
     "TimeTable": "benchmarks.plots.tables",
     "fig3_grasps": "benchmarks.plots.grasp_figures",
+    "fig10_sdh_grasps": "benchmarks.plots.hand_figures",
     "fig4_q1_histograms": "benchmarks.plots.figures",
     "fig5_search_tree": "benchmarks.plots.tree",
     "fig6_states_per_level": "benchmarks.plots.figures",
@@ -61,6 +64,7 @@ _EXPORTS = {
     "plot_run": "benchmarks.plots.report",
     "save_figure": "benchmarks.plots.style",
     "sim_fidelity": "benchmarks.plots.simulation",
+    "sim_grasps": "benchmarks.plots.sim_figures_3d",
     "sim_q1_vs_resistance": "benchmarks.plots.simulation",
     "sim_survival": "benchmarks.plots.simulation",
     "survival": "benchmarks.plots.simulation",
@@ -84,12 +88,14 @@ __all__ = [
     "fig6_states_per_level",
     "fig7_iterations_f",
     "fig8_wastar_tradeoff",
+    "fig10_sdh_grasps",
     "layout_tree",
     "load_run",
     "method_colour",
     "plot_run",
     "save_figure",
     "sim_fidelity",
+    "sim_grasps",
     "sim_q1_vs_resistance",
     "sim_survival",
     "survival",

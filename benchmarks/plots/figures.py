@@ -15,6 +15,7 @@ import numpy as np
 from planner.methods.registry import OPTIMAL_METHODS, SEARCH_METHODS
 
 from .data import CellData, RunData, SkipFigure, frozen, number
+from .facets import facet_figure, facet_names
 from .style import (
     LEGEND_ROW,
     METHOD_TITLES,
@@ -56,10 +57,12 @@ def _cap(panels: list[Panel], notes: list[str] | None, what: str) -> list[Panel]
 def fig4_q1_histograms(run: RunData, notes: list[str] | None = None) -> Figure:
     """ES Q1 histogram per problem with A*'s optimum, WA*'s Q1 and bound per eps, and HFTS's spread.
 
+    A run with several mu values gets a column of panels per mu (see :mod:`.facets`).
+
     Needs: an ``es`` cell (it records the histogram) per problem; A*, WA* and HFTS cells of
     the same problem and constraint add their markers.
     """
-    names = run.problem_names()
+    names = facet_names(run)
     panels = []
     for problem, cells in run.by_problem().items():
         for es in (c for c in cells if c.method == "es" and c.plan_view.histogram is not None):
@@ -69,7 +72,7 @@ def fig4_q1_histograms(run: RunData, notes: list[str] | None = None) -> Figure:
     if not panels:
         raise SkipFigure("needs an ES cell (method es) with its Q1 histogram")
     panels = _cap(panels, notes, "fig4")
-    figure, axes = new_figure(len(panels), panel_height=1.9)
+    figure, axes = facet_figure(run, [(es.problem, es.constraint) for es, _, _ in panels], panel_height=1.9)
     for ax, (es, others, title) in zip(axes, panels):
         _histogram_panel(ax, es, others, title)
     shared_legend(figure, axes)

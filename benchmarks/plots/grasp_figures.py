@@ -13,7 +13,7 @@ from __future__ import annotations
 import itertools
 import time
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -30,10 +30,17 @@ if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
+T = TypeVar("T")
+
 #: Okabe-Ito yellow, as the paper draws the contact set.
 CONTACT_COLOUR = "#F0E442"
-#: Camera of every panel [deg]: azimuth around +z, elevation above the xy plane.
-AZIMUTH, ELEVATION = 35.0, 25.0
+#: Candidate cameras [deg] (azimuth around the mesh's up axis, elevation above its plane), in order
+#: of preference: the first that shows the most grasp contacts is taken, so ties keep the usual view.
+VIEWS = tuple((azimuth, elevation) for elevation in (25.0, -25.0) for azimuth in (35.0, 125.0, 215.0, 305.0))
+#: Side of the small test render that scores each candidate view [px].
+SCORE_PIXELS = 96
+#: Least surface share of a flat base, more than on the opposite side, that makes its axis "up".
+BASE_SHARE = 0.02
 #: Rendered pixels per inch of panel: above the 300 dpi of print, so the PDF stays sharp.
 PIXELS_PER_INCH = 400
 #: Arrow length as a fraction of the object's bounding-box diagonal.
@@ -96,21 +103,12 @@ def fig3_grasps(data: RunData, notes: list[str] | None = None, cones: bool = Fal
     if not cells:
         raise NoGraspCells("needs an A* cell or a cell of another certified method")
     names = data.problem_names()
-    inputs: list[tuple[CellData, PlanInput]] = []
-    for cell in cells:
-        try:
-            inputs.append((cell, plan_input(cell.plan)))
-        except OgcpError as exc:
-            if notes is not None:
-                notes.append(f"fig3_grasps: {names[cell.problem]} {cell.label} left out: {exc}")
+    inputs = rebuilt_panels(data, [(cell, None) for cell in cells], "fig3_grasps", notes)
     if not inputs:
         raise SkipFigure("no A* or certified cell's object and contact set could be rebuilt")
-    columns = min(len(inputs), 3)
-    width = SINGLE_COLUMN if columns == 1 else DOUBLE_COLUMN
-    figure, axes = new_figure(len(inputs), width=width, panel_height=width / columns, max_columns=3)
+    figure, axes, pixels = panel_grid(len(inputs))
     RENDER_SECONDS.clear()
-    for ax, (cell, rebuilt) in zip(axes, inputs, strict=True):
-        pixels = round(PIXELS_PER_INCH * width / columns)
+    for ax, (cell, _, rebuilt) in zip(axes, inputs, strict=True):
         started = time.perf_counter()
         draw_grasp(ax, rebuilt, rebuilt.grasps[0], method_colour(cell.method), pixels, cones)
         RENDER_SECONDS.append(time.perf_counter() - started)
@@ -119,6 +117,36 @@ def fig3_grasps(data: RunData, notes: list[str] | None = None, cones: bool = Fal
         m = f" m={len(rebuilt.grasps[0])}" if " m=" not in problem else ""
         ax.set_title(f"{problem}{m}: {cell.label}{quality}")
     return figure
+
+
+def rebuilt_panels(
+    data: RunData, picks: Sequence[tuple[CellData, T]], figure: str, notes: list[str] | None
+) -> list[tuple[CellData, T, PlanInput]]:
+    """Each picked cell with its rebuilt object and contact set; a cell that cannot be rebuilt is noted.
+
+    Args:
+        data: The run.
+        picks: (cell, what the figure draws of it) pairs.
+        figure: The figure's name, for the notes.
+        notes: Gets one line per cell left out (None: no notes).
+    """
+    names = data.problem_names()
+    rebuilt: list[tuple[CellData, T, PlanInput]] = []
+    for cell, item in picks:
+        try:
+            rebuilt.append((cell, item, plan_input(cell.plan)))
+        except OgcpError as exc:
+            if notes is not None:
+                notes.append(f"{figure}: {names[cell.problem]} {cell.label} left out: {exc}")
+    return rebuilt
+
+
+def panel_grid(count: int) -> tuple[Figure, Sequence[Axes], int]:
+    """A figure of ``count`` square panels, at most three per row; returns it, its axes and the panel side [px]."""
+    columns = min(count, 3)
+    width = SINGLE_COLUMN if columns == 1 else DOUBLE_COLUMN
+    figure, axes = new_figure(count, width=width, panel_height=width / columns, max_columns=3)
+    return figure, axes, round(PIXELS_PER_INCH * width / columns)
 
 
 def draw_grasp(
@@ -151,7 +179,8 @@ def draw_grasp(
     index = np.asarray(grasp, dtype=int)
     heads = contacts.positions[index]
     tails = heads - length * contacts.normals[index]  # outside the object, pushing inwards
-    view = fit_view(np.vstack([mesh.vertices, tails]), look(AZIMUTH, ELEVATION), pixels, pixels)
+    rotation = best_view(mesh.vertices, mesh.faces, heads, contacts.normals[index])
+    view = fit_view(np.vstack([mesh.vertices, tails]), rotation, pixels, pixels)
     raster = render_mesh(mesh.vertices, mesh.faces, view)
     ax.imshow(raster.rgba, extent=(0, pixels, pixels, 0), interpolation="antialiased", zorder=1)
     tolerance = SURFACE_TOLERANCE * diagonal
@@ -186,6 +215,79 @@ def draw_grasp(
     ax.set_aspect("equal")
     ax.axis("off")
     return raster
+
+
+def upright(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> NDArray[np.float64]:
+    """The world axis a mesh stands on: the side with a flat base that its opposite side lacks.
+
+    Scanned meshes are often y-up (the bunny); drawn z-up they lie on their side. A base is the
+    area of faces facing down within 2 % of the diagonal of the lowest point; a box or a ball has
+    the same on both sides of every axis and keeps z.
+
+    Args:
+        vertices: Mesh vertices, shape (v, 3) [m].
+        faces: Triangles, shape (f, 3).
+
+    Returns:
+        Unit up direction, shape (3,): a signed coordinate axis, +z unless a base says otherwise.
+    """
+    corners = np.asarray(vertices, dtype=float)[np.asarray(faces, dtype=np.int64)]
+    cross = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    area = np.linalg.norm(cross, axis=1)
+    normal = cross / np.maximum(area, 1e-30)[:, None]
+    centre = corners.mean(axis=1)
+    diagonal = float(np.linalg.norm(np.ptp(vertices, axis=0)))
+    share = np.zeros((3, 2))
+    for axis, (k, sign) in itertools.product(range(3), enumerate((1.0, -1.0))):
+        lowest = float((sign * np.asarray(vertices, dtype=float)[:, axis]).min())
+        base = (sign * normal[:, axis] < -0.95) & (sign * centre[:, axis] - lowest < 0.02 * diagonal)
+        share[axis, k] = area[base].sum() / max(area.sum(), 1e-30)
+    lead = share[:, 0] - share[:, 1]  # + side's base over the - side's, per axis
+    axis = int(np.argmax(np.abs(lead)))
+    up = np.array([0.0, 0.0, 1.0])
+    if abs(lead[axis]) >= BASE_SHARE:
+        up = np.zeros(3)
+        up[axis] = np.sign(lead[axis])
+    return up
+
+
+def best_view(
+    vertices: NDArray[np.float64],
+    faces: NDArray[np.int64],
+    points: NDArray[np.float64],
+    normals: NDArray[np.float64],
+    occluder: tuple[NDArray[np.float64], NDArray[np.int64]] | None = None,
+) -> NDArray[np.float64]:
+    """The candidate camera (:data:`VIEWS` around :func:`upright`) that shows the most grasp contacts.
+
+    Args:
+        vertices: Mesh vertices, shape (v, 3) [m].
+        faces: Triangles, shape (f, 3).
+        points: The grasp's contacts, shape (m, 3) [m].
+        normals: Their inward normals, shape (m, 3).
+        occluder: Another mesh in the picture (a hand): vertices (w, 3) [m] and faces (g, 3). It
+            may hide contacts, and among views that show as many, the one where it hides the
+            least of the object wins.
+
+    Returns:
+        Camera rotation for :func:`~benchmarks.plots.raster.fit_view`, shape (3, 3).
+    """
+    up = upright(vertices, faces)
+    diagonal = float(np.linalg.norm(np.ptp(vertices, axis=0)))
+    everything = vertices if occluder is None else np.vstack([vertices, occluder[0]])
+    best, chosen = (-1, -1), look(*VIEWS[0], up=up)
+    for azimuth, elevation in VIEWS:
+        rotation = look(azimuth, elevation, up=up)
+        view = fit_view(everything, rotation, SCORE_PIXELS, SCORE_PIXELS)
+        raster = render_mesh(vertices, faces, view, outline=False)
+        shown = _facing(raster, normals)
+        scene = raster if occluder is None else raster.over(render_mesh(*occluder, view, outline=False))
+        shown &= scene.visible(points, SURFACE_TOLERANCE * diagonal)
+        # Object pixels the occluder leaves in sight; without one, ties keep the preferred view.
+        seen = 0 if occluder is None else int(np.sum(np.isfinite(raster.depth) & (raster.depth <= scene.depth)))
+        if (int(shown.sum()), seen) > best:
+            best, chosen = (int(shown.sum()), seen), rotation
+    return chosen
 
 
 def _facing(raster: Raster, normals: NDArray[np.float64]) -> NDArray[np.bool_]:

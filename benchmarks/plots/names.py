@@ -15,6 +15,8 @@ FIGURE_NAMES = (
     "sim_q1_vs_resistance",
     "sim_fidelity",
     "sim_survival",
+    "fig10_sdh_grasps",
+    "sim_grasps",
 )
 #: File stem of the time table (Fig. 9).
 TABLE = "fig9_times"

@@ -34,15 +34,20 @@ DIFFUSE = 0.65
 OUTLINE = (0.25, 0.25, 0.28)
 
 
-def look(azimuth: float, elevation: float) -> NDArray[np.float64]:
-    """Camera axes for a view from ``azimuth`` around +z and ``elevation`` above the xy plane.
+def look(azimuth: float, elevation: float, up: ArrayLike = (0.0, 0.0, 1.0)) -> NDArray[np.float64]:
+    """Camera axes for a view from ``azimuth`` around ``up`` and ``elevation`` above its plane.
 
     Args:
-        azimuth: Angle of the camera around the z axis [deg], 0 = looking from +x.
-        elevation: Angle of the camera above the xy plane [deg], in (-90, 90]; 90 looks down -z.
+        azimuth: Angle of the camera around the up axis [deg]; for the default z-up, 0 = looking
+            from +x. For another up axis the azimuth is measured in the cyclic frame
+            (up = y: from +z; up = x: from +y).
+        elevation: Angle of the camera above the plane normal to ``up`` [deg], in (-90, 90];
+            90 looks down ``-up``.
+        up: The world direction shown as "up" in the picture, shape (3,) (normalised here).
 
     Returns:
-        Rotation, shape (3, 3): rows right, up, forward (unit, right-handed).
+        Rotation, shape (3, 3): rows right, up, forward (unit, orthogonal; as a frame
+        left-handed, since forward points into the scene).
     """
     a, e = np.radians(azimuth), np.radians(elevation)
     towards_camera = np.array([np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), np.sin(e)])
@@ -51,8 +56,23 @@ def look(azimuth: float, elevation: float) -> NDArray[np.float64]:
     world_up = np.array([0.0, 0.0, 1.0]) if abs(np.sin(e)) < 0.999 else np.array([-np.cos(a), -np.sin(a), 0.0])
     right = np.cross(forward, world_up)
     right /= np.linalg.norm(right)
-    up = np.cross(right, forward)
-    return np.stack([right, up, forward])
+    z_up = np.stack([right, np.cross(right, forward), forward])
+    return z_up @ up_frame(up).T
+
+
+def up_frame(up: ArrayLike) -> NDArray[np.float64]:
+    """A right-handed frame whose third axis is ``up``, shape (3, 3): columns x', y', up.
+
+    For a coordinate axis it is the cyclic permutation (up = +y gives x' = z, y' = x), so views of
+    y-up meshes keep the same azimuth meaning whatever the sign conventions of the mesh.
+    """
+    u = np.asarray(up, dtype=float).reshape(3)
+    u = u / np.linalg.norm(u)
+    helper = np.zeros(3)
+    helper[(int(np.argmax(np.abs(u))) + 1) % 3] = 1.0
+    x = helper - (helper @ u) * u
+    x /= np.linalg.norm(x)
+    return np.column_stack([x, np.cross(u, x), u])
 
 
 @dataclass(frozen=True)
@@ -123,6 +143,16 @@ class Raster:
     rgba: NDArray[np.float64]
     depth: NDArray[np.float64]
     view: View
+
+    def over(self, other: Raster) -> Raster:
+        """This picture and ``other`` (same view) merged per pixel by depth: the nearer surface wins.
+
+        Rendering the object and the hand as separate meshes keeps one colour per mesh and still
+        hides each behind the other correctly, as one scene would.
+        """
+        nearer = self.depth <= other.depth
+        rgba = np.where(nearer[..., None], self.rgba, other.rgba)
+        return Raster(rgba, np.minimum(self.depth, other.depth), self.view)
 
     def visible(self, points: ArrayLike, tolerance: float = 0.0) -> NDArray[np.bool_]:
         """Whether each point is in front of (or on) the surface drawn at its pixel.
@@ -279,3 +309,85 @@ def _fill(
     nearer = z < depth[pixel]
     depth[pixel[nearer]] = z[nearer]
     owner[pixel[nearer]] = triangle[nearer]
+
+
+def sphere_mesh(centre: ArrayLike, radius: float, rings: int = 8) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """A UV sphere, for fingertips and joints.
+
+    Args:
+        centre: Centre, shape (3,) [m].
+        radius: Radius [m].
+        rings: Latitude bands (twice as many longitude segments).
+
+    Returns:
+        Vertices, shape (v, 3) [m], and triangles, shape (f, 3).
+    """
+    latitude = np.linspace(0.0, np.pi, rings + 1)
+    longitude = np.linspace(0.0, 2 * np.pi, 2 * rings, endpoint=False)
+    lat, lon = np.meshgrid(latitude, longitude, indexing="ij")
+    unit = np.stack([np.sin(lat) * np.cos(lon), np.sin(lat) * np.sin(lon), np.cos(lat)], axis=-1)
+    vertices = np.asarray(centre, dtype=float) + radius * unit.reshape(-1, 3)
+    return vertices, _grid_faces(rings + 1, 2 * rings)
+
+
+def tube_mesh(
+    start: ArrayLike, end: ArrayLike, radius: float, sides: int = 12
+) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """A closed cylinder from ``start`` to ``end`` (a link of a finger, the palm).
+
+    Args:
+        start: Centre of one end, shape (3,) [m].
+        end: Centre of the other end, shape (3,) [m].
+        radius: Radius [m].
+        sides: Segments around the axis.
+
+    Returns:
+        Vertices, shape (v, 3) [m], and triangles, shape (f, 3).
+    """
+    a, b = np.asarray(start, dtype=float), np.asarray(end, dtype=float)
+    axis = (b - a) / max(float(np.linalg.norm(b - a)), 1e-12)
+    frame = up_frame(axis)
+    angle = np.linspace(0.0, 2 * np.pi, sides, endpoint=False)
+    ring = radius * (np.cos(angle)[:, None] * frame[:, 0] + np.sin(angle)[:, None] * frame[:, 1])
+    # Rows: start cap centre, start ring, end ring, end cap centre; caps are fans, so the
+    # ends are shaded and hide what is inside the tube.
+    vertices = np.vstack([a, a + ring, b + ring, b])
+    k = np.arange(sides)
+    following = (k + 1) % sides
+    side = np.vstack(
+        [
+            np.column_stack([1 + k, 1 + following, 1 + sides + k]),
+            np.column_stack([1 + following, 1 + sides + following, 1 + sides + k]),
+        ]
+    )
+    last = 2 * sides + 1
+    caps = np.vstack(
+        [
+            np.column_stack([np.zeros(sides, int), 1 + following, 1 + k]),
+            np.column_stack([np.full(sides, last), 1 + sides + k, 1 + sides + following]),
+        ]
+    )
+    return vertices, np.vstack([side, caps]).astype(np.int64)
+
+
+def merge_meshes(
+    parts: list[tuple[NDArray[np.float64], NDArray[np.int64]]],
+) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """One mesh of several (vertices, faces) parts, shapes (v, 3) and (f, 3) as in the parts."""
+    offsets = np.cumsum([0] + [len(v) for v, _ in parts[:-1]])
+    vertices = np.vstack([v for v, _ in parts])
+    faces = np.vstack([f + o for (_, f), o in zip(parts, offsets, strict=True)])
+    return vertices, faces
+
+
+def _grid_faces(rows: int, columns: int) -> NDArray[np.int64]:
+    """Triangles of a (rows x columns) vertex grid, wrapping around the columns."""
+    r, c = np.meshgrid(np.arange(rows - 1), np.arange(columns), indexing="ij")
+    here = r * columns + c
+    right = r * columns + (c + 1) % columns
+    return np.vstack(
+        [
+            np.column_stack([here.ravel(), right.ravel(), (here + columns).ravel()]),
+            np.column_stack([right.ravel(), (right + columns).ravel(), (here + columns).ravel()]),
+        ]
+    ).astype(np.int64)

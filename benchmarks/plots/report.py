@@ -12,7 +12,9 @@ from planner.infra.errors import OgcpError
 from .data import RunData, SkipFigure, load_run
 from .figures import fig4_q1_histograms, fig6_states_per_level, fig7_iterations_f, fig8_wastar_tradeoff
 from .grasp_figures import NoGraspCells, fig3_grasps
+from .hand_figures import fig10_sdh_grasps
 from .names import FIGURE_NAMES, NAMES, TABLE
+from .sim_figures_3d import sim_grasps
 from .simulation import sim_fidelity, sim_q1_vs_resistance, sim_survival
 from .style import DEFAULT_DPI, FORMATS, SAVE_FORMATS, save_figure
 from .tables import time_table
@@ -38,6 +40,8 @@ FIGURES: dict[str, FigureBuilder] = dict(
             sim_q1_vs_resistance,
             sim_fidelity,
             sim_survival,
+            fig10_sdh_grasps,
+            sim_grasps,
         ),
         strict=True,
     )
@@ -107,7 +111,8 @@ def plot_run(
         try:
             figure = FIGURES[name](data, notes)
         except SkipFigure as skip:
-            # The grasp pictures are an extra of runs with A* cells: a note only when asked for.
+            # The object pictures (Fig. 3, Fig. 10, sim_grasps) are extras of runs with A*, SDH or
+            # simulated cells (NoGraspCells and its subclasses): a note only when asked for.
             if not (isinstance(skip, NoGraspCells) and only is None):
                 notes.append(f"{name}: skipped, {skip}")
             continue

@@ -9,12 +9,13 @@ hollow.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from .data import CellData, RunData, SkipFigure, number
+from .facets import MU, facet_figure, facet_names, faceted, mu_label, mu_order, row_names
 from .figures import MAX_PANELS
 from .style import method_colour, new_figure, series_colour, shared_legend, styled
 
@@ -109,14 +110,14 @@ def _rank_correlations(x: list[float], y: list[float]) -> str:
 
 @styled
 def sim_q1_vs_resistance(run: RunData, notes: list[str] | None = None) -> Figure:
-    """Scatter of Q1 against the minimum measured resistance, one panel per problem.
+    """Scatter of Q1 against the minimum measured resistance, one panel per problem (a column per mu).
 
     The title gives Spearman and Kendall over the panel's valid grasps; hollow triangles
     are grasps whose weakest direction never slipped (a lower bound).
     """
     groups = _simulated(run)
-    names = run.problem_names()
-    figure, axes = new_figure(len(groups), panel_height=2.0)
+    names = facet_names(run)
+    figure, axes = facet_figure(run, [(problem, None) for problem in groups], panel_height=2.0)
     lower_bounds = False
     for ax, (problem, cells) in zip(axes, groups.items()):
         # A grasp returned by several methods (A* and ES) is one sample of the correlation.
@@ -173,10 +174,13 @@ def _censored_entry(ax: Axes) -> None:
 
 @styled
 def sim_fidelity(run: RunData, notes: list[str] | None = None) -> Figure:
-    """Measured against predicted resistance per direction, with y = x; log axes when the values span decades."""
+    """Measured against predicted resistance per direction, with y = x; log axes when the values span decades.
+
+    One panel per problem; a run with several mu values gets a column of panels per mu.
+    """
     groups = _simulated(run)
-    names = run.problem_names()
-    figure, axes = new_figure(len(groups), panel_height=2.1)
+    names = facet_names(run)
+    figure, axes = facet_figure(run, [(problem, None) for problem in groups], panel_height=2.1)
     lower_bounds = False
     for ax, (problem, cells) in zip(axes, groups.items()):
         values, fidelity = [], []
@@ -236,42 +240,63 @@ def survival(values: list[float]) -> tuple[np.ndarray, np.ndarray]:
     return loads, fraction
 
 
+@dataclass
+class _Curves:
+    """One facet's survival data: measured minima per method and per object, holding loads."""
+
+    per_method: dict[str, tuple[CellData, list[float]]] = field(default_factory=dict)
+    per_object: dict[str, list[float]] = field(default_factory=dict)
+    holding: set[float] = field(default_factory=set)
+
+
 @styled
 def sim_survival(run: RunData, notes: list[str] | None = None) -> Figure:
     """Fraction of valid grasps still holding against load: (a) per method, (b) per object.
 
-    For each load L the fraction of valid grasps with ``measured_min >= L``.
+    For each load L the fraction of valid grasps with ``measured_min >= L``. A run with
+    several mu values gets a column per mu: per method on top, per object below.
     """
     groups = _simulated(run)
-    names = run.problem_names()
-    per_method: dict[str, tuple[CellData, list[float]]] = {}
-    per_object: dict[str, list[float]] = {}
-    holding = set()
-    for problem, cells in groups.items():
+    split = faceted(run)
+    names = row_names(run) if split else run.problem_names()
+    facets: dict[Any, _Curves] = {}
+    for problem, cells in sorted(groups.items(), key=lambda item: mu_order(item[0][MU]) if split else (False, 0.0)):
+        curves = facets.setdefault(problem[MU] if split else None, _Curves())
         for cell, grasps in cells:
             low = [g.measured_min for g in grasps if g.measured_min is not None]
-            per_method.setdefault(cell.label, (cell, []))[1].extend(low)
-            per_object.setdefault(names[problem], []).extend(low)
+            curves.per_method.setdefault(cell.label, (cell, []))[1].extend(low)
+            curves.per_object.setdefault(names[problem], []).extend(low)
             load = number(cell.simulation.set_metrics.get("holding_load")) if cell.simulation is not None else None
             if load is not None:
-                holding.add(load)
-    if not any(per_object.values()):
+                curves.holding.add(load)
+    if not any(low for curves in facets.values() for low in curves.per_object.values()):
         raise SkipFigure("needs simulated grasps with a measured minimum resistance")
-    figure, axes = new_figure(2, panel_height=2.3)
-    for label, (cell, low) in per_method.items():
+    # One colour per object in every column: the order the objects first appear in, over all facets.
+    objects = list(dict.fromkeys(name for curves in facets.values() for name in curves.per_object))
+    n = len(facets)
+    # One facet keeps the two panels side by side; several stack them, a column per mu.
+    figure, axes = new_figure(2 * n, panel_height=2.3, max_columns=max(n, 2))
+    for j, (mu, curves) in enumerate(facets.items()):
+        prefix = f"{mu_label(mu)}: " if split else ""
+        _survival_panels((axes[j], axes[n + j]), curves, objects, prefix)
+    return figure
+
+
+def _survival_panels(axes: tuple[Axes, Axes], curves: _Curves, objects: list[str], prefix: str) -> None:
+    for label, (cell, low) in curves.per_method.items():
         if low:
             axes[0].step(*survival(low), where="pre", color=_colour(cell), label=f"{label} (n={len(low)})")
-    for i, (name, low) in enumerate(per_object.items()):
+    for name, low in curves.per_object.items():
         if low:
-            axes[1].step(*survival(low), where="pre", color=series_colour(i), label=f"{name} (n={len(low)})")
+            colour = series_colour(objects.index(name))
+            axes[1].step(*survival(low), where="pre", color=colour, label=f"{name} (n={len(low)})")
     for ax, what in zip(axes, ("per method", "per object")):
-        for load in sorted(holding):
+        for load in sorted(curves.holding):
             ax.axvline(load, color="#555555", linestyle=":", linewidth=0.7, label=f"holding load {load:g} N")
-        ax.set_title(f"grasps holding, {what}")
+        ax.set_title(f"{prefix}grasps holding, {what}")
         ax.set_xlabel("load [N]")
         ax.set_ylabel("fraction of valid grasps")
         ax.set_ylim(0, 1.03)
         ax.set_xlim(left=0)
         ax.grid(True)
         ax.legend(loc="upper right")
-    return figure

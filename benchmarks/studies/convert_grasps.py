@@ -24,6 +24,7 @@ import argparse
 import csv
 import io
 import sys
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -140,20 +141,44 @@ def convert(
     return load_grasps(out)
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
-    parser.add_argument("source", type=Path, help="CSV table or .npy array of fingertip contacts")
+def converter_parser(
+    description: str, source_help: str, units_help: str, method_default: str | None
+) -> argparse.ArgumentParser:
+    """The arguments every converter takes: the source, the output, the object, friction and units."""
+    parser = argparse.ArgumentParser(description=description)
+    parser.add_argument("source", type=Path, help=source_help)
     parser.add_argument("-o", "--output", type=Path, required=True, help="the ogcp.grasps/1 file to write")
     parser.add_argument("--mesh", required=True, help="built-in or fetched object name, or mesh path")
     parser.add_argument("--mu", type=float, required=True, help="friction coefficient of the contacts")
     parser.add_argument("--diagonal", type=float, default=None, help="scale the object to this diagonal [m]")
     parser.add_argument("--cone-edges", type=int, default=DEFAULT_CONE_EDGES, help="friction-cone edges k")
-    parser.add_argument("--method", default=None, help="the planner that made the grasps")
-    parser.add_argument("--units", choices=tuple(UNITS), default="m", help="units of the positions (default m)")
+    default = f" (default {method_default})" if method_default else ""
+    parser.add_argument("--method", default=method_default, help=f"the planner that made the grasps{default}")
+    parser.add_argument("--units", choices=tuple(UNITS), default="m", help=f"{units_help} (default m)")
+    return parser
+
+
+def run_converter(name: str, output: Path, convert_file: Callable[[], ExternalGrasps]) -> int:
+    """Run a conversion: one summary line and exit status 0, or one error line and 2."""
+    try:
+        grasps = convert_file()
+    except OgcpError as exc:
+        print(f"{name}: error: {exc}", file=sys.stderr)
+        return 2
+    print(f"{output}: {len(grasps.grasps)} grasp(s) on {grasps.mesh}, mu {grasps.mu:g}")
+    return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = converter_parser(
+        (__doc__ or "").splitlines()[0], "CSV table or .npy array of fingertip contacts", "units of the positions", None
+    )
     parser.add_argument("--outward", action="store_true", help="the normals point out of the object: negate them")
     args = parser.parse_args(argv)
-    try:
-        grasps = convert(
+    return run_converter(
+        "convert_grasps",
+        args.output,
+        lambda: convert(
             args.source,
             args.output,
             args.mesh,
@@ -163,12 +188,8 @@ def main(argv: list[str] | None = None) -> int:
             method=args.method,
             units=args.units,
             outward=args.outward,
-        )
-    except OgcpError as exc:
-        print(f"convert_grasps: error: {exc}", file=sys.stderr)
-        return 2
-    print(f"{args.output}: {len(grasps.grasps)} grasp(s) on {grasps.mesh}, mu {grasps.mu:g}")
-    return 0
+        ),
+    )
 
 
 if __name__ == "__main__":

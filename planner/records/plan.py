@@ -1,14 +1,15 @@
 """The ``ogcp.plan/1`` record: what every planning method writes and the simulation reads.
 
 This module owns the schema: it builds the record (:func:`plan_record` and its blocks)
-and reads it back (:func:`load_plan`, :func:`contact_sampling`, :func:`plan_grasps`,
-:class:`PlanView`). Later stages (simulation, suites, comparisons, figures) read it only
+and reads it back (:func:`load_plan`, :func:`recorded_contacts`, :func:`contact_sampling`,
+:func:`plan_grasps`, :class:`PlanView`). Later stages (simulation, suites, comparisons, figures) read it only
 through these, so every key is named here. Fields are only ever added.
 """
 
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -118,15 +119,45 @@ def plan_record(
 
 
 def contact_set_record(contacts: ContactSet) -> dict[str, Any]:
-    """What a plan records about its contact set (enough to rebuild or evaluate it)."""
-    return {
+    """What a plan records about its contact set: the set itself, and how and on what it was made.
+
+    The contacts are recorded in full (``positions`` (n, 3) [m] and inward unit ``normals``
+    (n, 3), at full float precision: about 100 kB for n = 1000), so a plan evaluates the same
+    set on any machine; re-sampling from ``source`` can differ across trimesh versions. For a
+    mesh file, ``mesh`` records its sha256 and its path twice: as given (relative to the folder
+    planned in) and absolute; :func:`add_plan_path` adds it relative to the plan file.
+    """
+    record: dict[str, Any] = {
         "size": len(contacts),
         "com": contacts.com.tolist(),
         "torque_scale": contacts.torque_scale,
         "mu": contacts.mu,
         "cone_edges": contacts.cone_edges,
         "source": contacts.source,
+        "positions": contacts.positions.tolist(),
+        "normals": contacts.normals.tolist(),
     }
+    source = contacts.source
+    if source.get("kind") == "mesh" and isinstance(source.get("path"), str):
+        record["mesh"] = {
+            "sha256": source.get("sha256"),
+            "path": source["path"],
+            "absolute_path": str(Path(source["path"]).resolve()),
+        }
+    return record
+
+
+def add_plan_path(record: dict[str, Any], plan_file: str | Path) -> dict[str, Any]:
+    """``record`` with its mesh file's path relative to ``plan_file``, where the plan is about to be written.
+
+    A plan moved to another folder together with its mesh (keeping their relative layout) then
+    still finds it. Unchanged for plans on built-in or fetched objects, or on contact files.
+    """
+    mesh = (record.get("contact_set") or {}).get("mesh")
+    if isinstance(mesh, dict) and isinstance(mesh.get("absolute_path"), str):
+        folder = Path(plan_file).resolve().parent
+        mesh["path_from_plan"] = Path(os.path.relpath(mesh["absolute_path"], folder)).as_posix()
+    return record
 
 
 def hand_record(hand: SDHReachability, grasp: Sequence[int], contacts: ContactSet) -> dict[str, Any]:
@@ -267,6 +298,32 @@ def plan_grasps(record: dict[str, Any], n: int) -> tuple[tuple[tuple[int, ...], 
             raise OgcpError(f"plan grasp {label!r} {grasp} indexes outside the {n}-contact set")
         found.setdefault(tuple(grasp), label)
     return tuple(found), tuple(found.values())
+
+
+def recorded_contacts(record: dict[str, Any]) -> ContactSet | None:
+    """The contact set the plan records in full, None for plans made before contacts were recorded.
+
+    Raises:
+        OgcpError: For recorded contacts that do not make a valid set (shapes, NaN, zero normals).
+    """
+    block = record.get("contact_set") or {}
+    if not isinstance(block, dict) or "positions" not in block:
+        return None
+    source = block.get("source") or record.get("source") or {}
+    try:
+        return ContactSet(
+            np.asarray(block.get("positions"), dtype=float),
+            np.asarray(block.get("normals"), dtype=float),
+            np.asarray(block.get("com"), dtype=float),
+            block.get("torque_scale"),  # type: ignore[arg-type]  # checked by ContactSet
+            block.get("mu", DEFAULT_MU),
+            block.get("cone_edges", DEFAULT_CONE_EDGES),
+            dict(source),
+        )
+    except (TypeError, ValueError) as exc:
+        raise OgcpError(f"plan field contact_set: the recorded contacts are not a contact set ({exc})") from None
+    except OgcpError as exc:
+        raise OgcpError(f"plan field contact_set: the recorded contacts are not a contact set: {exc}") from None
 
 
 def recorded_positions(record: dict[str, Any]) -> NDArray[np.float64]:

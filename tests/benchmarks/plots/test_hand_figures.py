@@ -1,0 +1,130 @@
+"""Fig. 10 (SDH on its grasp), sim_grasps (tips and weakest push) and the per-mesh camera."""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import matplotlib
+import numpy as np
+import pytest
+
+from benchmarks import plots
+from benchmarks.plots.data import load_run
+from benchmarks.plots.grasp_figures import NoGraspCells, upright
+from benchmarks.plots.hand_figures import LINK_RADIUS, NoHandCells, fig10_sdh_grasps, palm_pose
+from benchmarks.plots.raster import look
+from benchmarks.plots.sim_figures_3d import NoSimulatedCells, sim_grasps
+from benchmarks.suite.parse import parse_suite
+from benchmarks.suite.runner import SuiteRunner
+from planner.hands.reachability import finger_chain, pad_normals
+
+matplotlib.use("Agg")
+SDH_SUITE = """
+schema_version = 1
+name = "tiny-sdh"
+objects = ["box"]
+contacts = 40
+m = [3]
+simulate = false
+
+[[methods]]
+method = "astar"
+hand = "sdh"
+label = "A* SDH"
+"""
+SIM_SUITE = """
+schema_version = 1
+name = "tiny-sim"
+objects = ["box"]
+contacts = 20
+m = [3]
+
+[[methods]]
+method = "astar"
+label = "A*"
+
+[simulation]
+enabled = true
+"""
+
+
+def test_the_palm_fit_recovers_a_known_hand_pose():
+    angles = np.array([0.4, 0.3, 0.5, 0.2, 0.6, 0.7, 0.1])
+    tips, pads = finger_chain(angles)[0, :, 2], pad_normals(angles)[0]
+    turn = np.linalg.qr(np.array([[1.0, 0.2, 0.1], [0.3, 1.0, 0.4], [0.2, 0.1, 1.0]]))[0]
+    turn *= np.sign(np.linalg.det(turn))
+    shift = np.array([0.1, -0.2, 0.3])
+    normals = pads @ turn.T
+    points = tips @ turn.T + shift + LINK_RADIUS * normals  # the contact is one radius beyond the axis
+    rotation, translation, misfit = palm_pose(angles, points, normals)
+    assert misfit < 1e-9
+    np.testing.assert_allclose(rotation, turn, atol=1e-9)
+    np.testing.assert_allclose(translation, shift, atol=1e-9)
+
+
+def test_look_turns_the_picture_up_to_the_given_axis():
+    assert np.allclose(look(35.0, 25.0), look(35.0, 25.0, up=(0, 0, 2)))
+    handedness = np.linalg.det(look(35.0, 25.0))  # (right, up, into the scene) is left-handed
+    for up in np.vstack([np.eye(3), -np.eye(3)]):
+        rotation = look(35.0, 25.0, up=up)
+        assert np.allclose(rotation @ rotation.T, np.eye(3)) and np.isclose(np.linalg.det(rotation), handedness)
+        assert rotation[1] @ up > 0.85 and abs(rotation[0] @ up) < 1e-12  # up shows as up, never sideways
+
+
+def test_a_mesh_with_a_flat_base_stands_on_it():
+    # A tall square pyramid standing on y = 0: its base faces -y and its top is a point.
+    vertices = np.array([[0, 0, 0], [1, 0, 0], [1, 0, 1], [0, 0, 1], [0.5, 3, 0.5]], dtype=float)
+    faces = np.array([[0, 1, 2], [0, 2, 3], [0, 4, 1], [1, 4, 2], [2, 4, 3], [3, 4, 0]])
+    assert upright(vertices, faces).tolist() == [0.0, 1.0, 0.0]
+    cube = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], dtype=float)
+    hull = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1]])
+    hull = np.vstack([hull, [[2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]]])
+    assert upright(cube, hull).tolist() == [0.0, 0.0, 1.0]  # the same base on every side: z stays
+
+
+@pytest.fixture(scope="module")
+def sdh_run(tmp_path_factory) -> Path:
+    folder = tmp_path_factory.mktemp("sdh") / "run"
+    SuiteRunner(parse_suite(SDH_SUITE), folder, log=lambda _: None).run()
+    return folder
+
+
+@pytest.fixture(scope="module")
+def sim_run(tmp_path_factory) -> Path:
+    folder = tmp_path_factory.mktemp("sim") / "run"
+    SuiteRunner(parse_suite(SIM_SUITE), folder, log=lambda _: None).run()
+    return folder
+
+
+def test_fig10_draws_one_hand_panel_per_object_and_writes_its_files(sdh_run, tmp_path):
+    figure = fig10_sdh_grasps(load_run(sdh_run))
+    assert [ax.get_title().split(":")[0] for ax in figure.axes] == ["box"]
+    assert "tip misfit" in figure.axes[0].get_title()
+    report = plots.plot_run(sdh_run, tmp_path / "out", only=["fig10_sdh_grasps"], formats=["png"], dpi=60)
+    assert [p.name for p in report.written] == ["fig10_sdh_grasps.png"]
+
+
+def test_runs_without_hand_or_simulation_skip_quietly_by_default_and_with_a_note_on_request(sdh_run, tmp_path):
+    assert issubclass(NoHandCells, NoGraspCells) and issubclass(NoSimulatedCells, NoGraspCells)
+    with pytest.raises(NoSimulatedCells):
+        sim_grasps(load_run(sdh_run))
+    report = plots.plot_run(sdh_run, tmp_path / "out", only=["sim_grasps"], formats=["png"], dpi=60)
+    assert report.written == () and any(n.startswith("sim_grasps: skipped") for n in report.notes)
+
+
+def test_sim_grasps_draws_the_realized_tips_or_says_it_used_the_planned_ones(sim_run):
+    data = load_run(sim_run)
+    with pytest.raises(NoHandCells):
+        fig10_sdh_grasps(data)
+    title = sim_grasps(data).axes[0].get_title()
+    assert title.startswith("box: A* best") and "weakest" in title and "planned" not in title
+    # An ogcp.sim/1 record has no realized contacts: the tips go on the planned ones, said in the title.
+    cells = []
+    for cell in data.cells:
+        if cell.simulation is not None:
+            grasps = tuple(dataclasses.replace(g, realized={}) for g in cell.simulation.grasps)
+            cell = dataclasses.replace(cell, simulation=dataclasses.replace(cell.simulation, grasps=grasps))
+        cells.append(cell)
+    old = plots.RunData(data.directory, tuple(cells), (), None)
+    assert "tips at planned contacts" in sim_grasps(old).axes[0].get_title()
