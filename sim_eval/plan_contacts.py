@@ -104,7 +104,10 @@ def surface_misfit(
         bad = (distance > SURFACE_TOLERANCE) | (normal_error > FACE_NORMAL_TOLERANCE)
         if np.any(bad):
             row = int(np.argmax(bad))
-            return start + row, float(distance[row]), float(normal_error[row])
+            gap = float(distance[row])
+            if not np.isfinite(gap):  # no face near it: measure against all of them, for the message
+                gap = float(np.min(_face_gaps(triangles, np.broadcast_to(points[row], (len(triangles), 3)))))
+            return start + row, gap, float(normal_error[row])
     return None
 
 

@@ -121,7 +121,10 @@ def test_recorded_contacts_off_the_mesh_are_refused_by_index(donut_plan):
     record["contact_set"]["positions"][unused][2] += 1e-4
     with pytest.raises(OgcpError, match=f"recorded contact {unused} at .* m off the mesh surface") as info:
         plan_input(record)
-    # The message says the plan was made with another trimesh than this one.
+    # The message says how far off (about the 0.1 mm it was moved: it lies on a face's plane
+    # extension at most that far) and that the plan was made with another trimesh than this one.
+    distance = float(str(info.value).split(" m is ")[1].split(" m off")[0])
+    assert 0 < distance <= 1.0001e-4
     assert "recorded with trimesh 0.0.1, running " in str(info.value) and "\n" not in str(info.value)
 
 
