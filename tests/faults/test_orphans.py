@@ -163,6 +163,14 @@ def test_a_killed_suite_leaves_no_worker(tmp_path: Path, parents: Parents, sig: 
     assert parents.survivors_after_kill(proc, sig) == {}
 
 
+def _threads(pid: int) -> int:
+    """Threads of a live process (0 once it is gone)."""
+    try:
+        return len(os.listdir(f"/proc/{pid}/task"))
+    except OSError:
+        return 0
+
+
 NAPS = """
 import sys, time
 from pathlib import Path
@@ -193,8 +201,12 @@ def test_killed_run_tasks_leaves_no_worker(tmp_path: Path, parents: Parents, gua
     proc = parents.spawn([sys.executable, "-c", NAPS, guard, *map(str, markers)])
 
     def running() -> bool:
-        workers = sum("LokyProcess" in _cmdline(pid) for pid in _descendants(proc.pid))
-        return workers >= 2 and all(marker.exists() for marker in markers)
+        # Each worker past its start-up: its guard thread runs beside its main thread. (A parent
+        # killed while a worker is still starting is not covered: loky's start-up reads from the
+        # parent before any code of ogcp runs in the worker.)
+        workers = [pid for pid in _descendants(proc.pid) if "LokyProcess" in _cmdline(pid)]
+        guarded = all(_threads(pid) >= 2 for pid in workers)
+        return len(workers) >= 2 and guarded and all(marker.exists() for marker in markers)
 
     parents.wait_for(proc, running, "running tasks")
     assert parents.survivors_after_kill(proc, signal.SIGKILL) == {}
