@@ -58,6 +58,8 @@ CELL_COLUMNS = (
 GRASP_COLUMNS = (
     ("mu", "", "friction coefficient of the cones"),
     ("cone_edges", "", "edges per linearised friction cone, k"),
+    ("contact_model", "", "hard (point contacts) or soft (with torsional friction)"),
+    ("torsional_friction", "m", "torsional friction coefficient of soft fingers (0 for hard)"),
     ("groups", "", "suite groups listing the cell, ';'-separated"),
     ("status", "", "cell status: ok, error or stopped (search past its time limit)"),
     ("error", "", "error type of a failed cell"),
@@ -142,6 +144,8 @@ def grasp_rows(record: CellRecord) -> Iterator[dict[str, Any]]:
         **_cell(record),
         "mu": _float(record.params.get("mu")),
         "cone_edges": record.params.get("cone_edges"),
+        "contact_model": record.params.get("contact_model", "hard"),
+        "torsional_friction": _float(record.params.get("torsional_friction", 0.0)),
         "groups": ";".join(record.groups),
         "status": record.status,
         "error": None if record.error is None else record.error.type,

@@ -32,10 +32,11 @@ from planner.infra.provenance import provenance
 from sim_eval.body import object_inertia
 from sim_eval.collision_fit import DecompositionLadder
 from sim_eval.decomposition.decompose import Decomposition, DecompositionSettings, decompose
+from sim_eval.dexgraspbench import set_summary
 from sim_eval.metrics import set_metrics
 from sim_eval.result import GraspSimResult, SimResult
 from sim_eval.settings import SimSettings, scaled_lengths
-from sim_eval.trial import ObjectBody, failed_result, simulate_grasp
+from sim_eval.trial import ObjectBody, contact_torsion, failed_result, simulate_grasp
 
 
 class GraspEvaluator:
@@ -133,11 +134,28 @@ class GraspEvaluator:
                 "object_diagonal": diagonal,
                 "scaled_lengths": scaled_lengths(settings),
                 "decomposition": decomposition.to_dict(),
+                # What the simulation and the prediction used: Q1 keeps the contact set's own model.
+                "contact_model": contact_model_record(contacts, settings),
             },
             decomposition=_decomposition_meta(parts, ladder),
             wall_seconds=time.perf_counter() - start,
             provenance=provenance(),
         )
+
+
+def contact_model_record(contacts: ContactSet, settings: SimSettings) -> dict[str, Any]:
+    """The contact models of a simulation: Q1's (the contact set's) and the simulated one.
+
+    Returns:
+        ``{"q1": "hard"|"soft", "q1_torsional_friction": [m], "simulated": ..., "simulated_torsional_friction": [m]}``.
+    """
+    simulated = contact_torsion(contacts, settings)
+    return {
+        "q1": contacts.contact_model,
+        "q1_torsional_friction": contacts.torsional_friction,
+        "simulated": "soft" if simulated > 0 else "hard",
+        "simulated_torsional_friction": simulated,
+    }
 
 
 def object_diagonal(mesh: trimesh.Trimesh) -> float:
@@ -211,6 +229,9 @@ def _set_level(results: Sequence[GraspSimResult], settings: SimSettings, diagona
             )
         )
     metrics["median_fidelity"] = float(np.median(fidelities)) if fidelities else None
+    if settings.protocol == "dexgraspbench":
+        # That protocol measures no resistance (n_valid counts none): its own success rate and AUCs.
+        metrics["dexgraspbench"] = set_summary(results)
     depths = [float(r.gates["initial_penetration"]) for r in simulated if "initial_penetration" in r.gates]
     metrics["max_initial_penetration"] = max(depths) if depths else None
     metrics["max_initial_penetration_ratio"] = max(depths) / diagonal if depths else None

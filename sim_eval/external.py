@@ -202,6 +202,8 @@ class ExternalInput:
         return {
             "mu": self.contacts.mu,
             "cone_edges": self.contacts.cone_edges,
+            "contact_model": self.contacts.contact_model,
+            "torsional_friction": self.contacts.torsional_friction,
             "on_surface": on_surface,
             "tip_radius": self.radius,
             "surface_tolerance": self.fit.tolerance,
@@ -238,7 +240,16 @@ def external_input(
     com, rho = mass_properties(mesh)
     file = None if grasps.path is None else str(grasps.path)
     origin = {"sampling": EXTERNAL_SAMPLING, "schema": GRASPS_SCHEMA, "file": file}
-    contacts = ContactSet(fit.positions, normals, com, rho, grasps.mu, grasps.cone_edges, {**(source or {}), **origin})
+    contacts = ContactSet(
+        fit.positions,
+        normals,
+        com,
+        rho,
+        grasps.mu,
+        grasps.cone_edges,
+        {**(source or {}), **origin},
+        grasps.torsional_friction,
+    )
     sizes = np.cumsum([0] + [len(g.positions) for g in grasps.grasps])
     indices = tuple(tuple(range(int(a), int(b))) for a, b in itertools.pairwise(sizes.tolist()))
     q1 = tuple(q1_certificate(contacts.subset_wrenches(np.asarray(g, dtype=np.intp))).q1 for g in indices)

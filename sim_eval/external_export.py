@@ -115,6 +115,7 @@ def export_grasps(
         diagonal=fields.get("diagonal"),
         sha256=fields.get("sha256"),
         method=PlanView(record).method,
+        torsional_friction=contacts.torsional_friction,
     )
     save_grasps(external, path)
     return load_grasps(path)

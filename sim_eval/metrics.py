@@ -3,7 +3,8 @@
 Per grasp: :func:`fidelity` compares the measured breaking magnitude with the analytic
 prediction of the same model per direction. Over a set of grasps: rank correlations of Q1
 (and of the predicted minimum resistance) with the measured minimum resistance, and the
-ROC-AUC of Q1 as a predictor of holding a fixed load.
+ROC-AUC of Q1 as a predictor of holding a fixed load: exact (:func:`roc_auc`, Mann-Whitney)
+or binned as DexGraspBench computes it (:func:`binned_roc`).
 """
 
 from __future__ import annotations
@@ -21,6 +22,8 @@ from planner.infra.errors import OgcpError
 
 #: Fewer finite pairs than this make a rank correlation meaningless (NaN).
 MIN_PAIRS = 3
+#: Most groups of sorted grasps (ROC points - 1) in DexGraspBench's ROC curve.
+ROC_BINS = 100
 
 
 @dataclass(frozen=True)
@@ -190,6 +193,68 @@ def roc_auc(scores: object, labels: object) -> float:
     ranks = stats.rankdata(s)
     u = float(ranks[positive].sum()) - n_pos * (n_pos + 1) / 2.0
     return u / (n_pos * n_neg)
+
+
+@dataclass(frozen=True)
+class BinnedRoc:
+    """DexGraspBench's ROC curve: points at the boundaries of groups of grasps sorted by energy.
+
+    Attributes:
+        tpr: True-positive rates, shape (bins + 1,).
+        fpr: False-positive rates, shape (bins + 1,).
+        thresholds: The energy at each boundary, shape (bins + 1,).
+        auc: Area under (fpr, tpr) by the trapezoid rule; NaN when a class is empty.
+    """
+
+    tpr: NDArray[np.float64]
+    fpr: NDArray[np.float64]
+    thresholds: NDArray[np.float64]
+    auc: float
+
+
+def binned_roc(energy: object, success: object, max_bins: int = ROC_BINS) -> BinnedRoc:
+    """DexGraspBench's ROC of an energy (lower predicts success) against simulated success.
+
+    As ``compute_ROC_data`` and ``sklearn.metrics.auc`` in their ``src/task/statistic.py``
+    (JYChen18/DexGraspBench@1e7a5a6, read, not copied).
+
+    Grasps are sorted by energy with numpy's default sort (as theirs: the order of ties
+    depends on it), split into ``min(max_bins, n)`` consecutive groups whose sizes differ by
+    at most one (the larger first), and the rates are taken at the group boundaries. With
+    at most ``max_bins`` grasps and no ties it equals the Mann-Whitney AUC; tied energies and
+    larger sets can differ from it.
+
+    Args:
+        energy: Energy per grasp, shape (n,); for Q1 pass -Q1 (their Q1 metric is 2 - Q1).
+        success: Simulated success per grasp, shape (n,).
+        max_bins: Most groups, >= 1.
+
+    Returns:
+        The curve and its area (NaN when either class is empty).
+
+    Raises:
+        OgcpError: No grasps, non-finite energies, labels that are not 0/1 or of another
+            length, or fewer than one group.
+    """
+    e = _vector(energy, "energy")
+    if not len(e) or not np.all(np.isfinite(e)):
+        raise OgcpError(f"binned ROC needs at least one grasp and finite energies, got {e.tolist()[:5]}")
+    if isinstance(max_bins, bool) or not isinstance(max_bins, int) or max_bins < 1:
+        raise OgcpError(f"binned ROC needs max_bins >= 1 groups, got {max_bins!r}")
+    hits = _labels(success, len(e))
+    order = np.argsort(e)
+    hits, e = hits[order], e[order]
+    bins = min(max_bins, len(e))
+    size, left = divmod(len(e), bins)
+    edges = np.concatenate([[0], np.cumsum([size + 1] * left + [size] * (bins - left))])
+    tp = np.concatenate([[0], np.cumsum(hits)])[edges].astype(float)
+    fp = edges - tp
+    with np.errstate(invalid="ignore", divide="ignore"):
+        tpr, fpr = tp / hits.sum(), fp / (~hits).sum()
+    area = float(np.sum(np.diff(fpr) * (tpr[1:] + tpr[:-1]) / 2.0))
+    last = edges.copy()
+    last[-1] -= 1
+    return BinnedRoc(tpr, fpr, e[last], area)
 
 
 def _json_float(value: float) -> float | None:

@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from planner.config.options import Option
-from planner.grasp.defaults import CONE_EDGES, CONTACT_SEED, CONTACTS, DIAGONAL, MU, TIP_RADIUS
+from planner.grasp.defaults import CONE_EDGES, CONTACT_SEED, CONTACTS, DIAGONAL, MU, TIP_RADIUS, TORSIONAL_FRICTION
 from planner.infra.errors import OgcpError
 
 #: The plan's fields that the simulation reads, by key path, with their valid values (a
@@ -23,6 +23,7 @@ _NUMBERS: dict[str, Option] = {
     "contact_set.torque_scale": Option("float", None, minimum=0, exclusive=True),
     "contact_set.mu": MU,
     "contact_set.cone_edges": CONE_EDGES,
+    "contact_set.torsional_friction": TORSIONAL_FRICTION,
 }
 #: Keys of a contact source (either copy) and their valid values.
 _SOURCE: dict[str, Option | type] = {

@@ -231,10 +231,21 @@ def _check_geometry(
         raise _mismatch(f"inward normal of contact {int(index[row])}", normals[row], contacts.normals[index][row])
 
 
-def _qualities(contacts: ContactSet, best: Sequence[int], mu: float, k: int) -> tuple[float, float]:
-    """Q1 of the best grasp and of the whole set [-] under friction ``mu`` with ``k`` cone edges."""
-    if (mu, k) != (contacts.mu, contacts.cone_edges):
-        contacts = ContactSet(contacts.positions, contacts.normals, contacts.com, contacts.torque_scale, mu, k)
+def _qualities(
+    contacts: ContactSet, best: Sequence[int], mu: float, k: int, torsion: float | None = None
+) -> tuple[float, float]:
+    """Q1 of the best grasp and of the whole set [-] under friction ``mu``, ``k`` cone edges and ``torsion`` [m]."""
+    torsion = contacts.torsional_friction if torsion is None else torsion
+    if (mu, k, torsion) != (contacts.mu, contacts.cone_edges, contacts.torsional_friction):
+        contacts = ContactSet(
+            contacts.positions,
+            contacts.normals,
+            contacts.com,
+            contacts.torque_scale,
+            mu,
+            k,
+            torsional_friction=torsion,
+        )
     return q1(contacts.subset_wrenches(np.asarray(best, dtype=np.intp))), q1(contacts.wrenches.reshape(-1, 6))
 
 
@@ -248,22 +259,23 @@ def _check_quality(record: dict[str, Any], contacts: ContactSet, best: Sequence[
     wrong = [r is not None and abs(r - b) > Q1_TOLERANCE for r, b in zip(recorded, rebuilt)]
     if not any(wrong):
         return
+    # A friction-model field set away from its default names itself when the default reproduces
+    # the recorded values (torsion may move Q1 alone: Q_OWS can be limited where it does not help).
+    for field, value, default, mu, k, torsion in (
+        ("mu", contacts.mu, DEFAULT_MU, DEFAULT_MU, contacts.cone_edges, None),
+        ("cone_edges", contacts.cone_edges, DEFAULT_CONE_EDGES, contacts.mu, DEFAULT_CONE_EDGES, None),
+        ("torsional_friction", contacts.torsional_friction, 0.0, contacts.mu, contacts.cone_edges, 0.0),
+    ):
+        trial = _qualities(contacts, best, mu, k, torsion) if value != default else None
+        if trial is not None and all(r is None or abs(r - t) <= Q1_TOLERANCE for r, t in zip(recorded, trial)):
+            raise _misfit(field, value, default, "its q1 and q_ows")
     if all(wrong):
-        # Both moved: the friction model. A field set away from its default names itself when
-        # the default reproduces both recorded values.
-        for field, value, default, mu, k in (
-            ("mu", contacts.mu, DEFAULT_MU, DEFAULT_MU, contacts.cone_edges),
-            ("cone_edges", contacts.cone_edges, DEFAULT_CONE_EDGES, contacts.mu, DEFAULT_CONE_EDGES),
-        ):
-            trial = _qualities(contacts, best, mu, k) if value != default else None
-            if trial is not None and all(r is None or abs(r - t) <= Q1_TOLERANCE for r, t in zip(recorded, trial)):
-                raise _misfit(field, value, default, "its q1 and q_ows")
         raise _mismatch(
             "(q1, q_ows)",
             list(recorded),
             list(rebuilt),
-            f"recomputed with the recorded mu {contacts.mu:g} and cone_edges {contacts.cone_edges}: "
-            "was mu or cone_edges changed?",
+            f"recomputed with the recorded mu {contacts.mu:g}, cone_edges {contacts.cone_edges} and "
+            f"torsional_friction {contacts.torsional_friction:g}: was one of them changed?",
         )
     field = "q1 of the best grasp" if wrong[0] else "q_ows of the contact set"
     raise _mismatch(field, recorded[0 if wrong[0] else 1], rebuilt[0 if wrong[0] else 1])
@@ -370,6 +382,7 @@ def _resample(mesh: trimesh.Trimesh, sampling: ContactSampling) -> ContactSet:
         sampling.object,
         tip_radius=sampling.tip_radius,
         reach_tolerance=sampling.reach_tolerance,
+        torsional_friction=sampling.torsional_friction,
     )
 
 

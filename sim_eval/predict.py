@@ -125,6 +125,9 @@ class ResistanceLP:
         mu: Coulomb friction coefficient (>= 0).
         cone_edges: Number of friction-cone edges k (>= 3).
         max_normal_force: Per-finger normal-force cap F_max [N].
+        torsion: Torsional friction coefficient of soft fingers [m] (0 = hard fingers); their
+            elliptic set is linearised densely (:func:`planner.grasp.wrench.soft_directions`,
+            inradius 0.993 at k = 32).
 
     Raises:
         OgcpError: Any invalid argument.
@@ -139,6 +142,7 @@ class ResistanceLP:
         mu: float,
         cone_edges: int,
         max_normal_force: float,
+        torsion: float = 0.0,
     ) -> None:
         p = _finite_array(positions, "contact positions", "(m, 3)", 2, 3)
         if len(p) == 0:
@@ -155,8 +159,10 @@ class ResistanceLP:
         mu_f = _positive(mu, "friction coefficient mu", "", allow_zero=True)
         k = _cone_edge_count(cone_edges)
         self.max_normal_force = _positive(max_normal_force, "max normal force F_max", " N")
-        self.fingers, self.edges = len(p), k
-        self.wrenches = _readonly(contact_wrenches(p, n, c, rho, mu_f, k))  # (m, k, 6)
+        torsion_f = _positive(torsion, "torsional friction coefficient", " m", allow_zero=True)
+        self.wrenches = _readonly(contact_wrenches(p, n, c, rho, mu_f, k, torsion_f, dense=True))  # (m, K, 6)
+        self.fingers, self.edges = len(p), self.wrenches.shape[1]
+        k = self.edges
         columns = self.fingers * k
         self._a_eq = np.zeros((DIM, columns + 1))
         self._a_eq[:, :columns] = self.wrenches.reshape(columns, DIM).T
@@ -226,6 +232,7 @@ def predicted_resistance(
     cone_edges: int,
     max_normal_force: float,
     directions: NDArray[np.float64],
+    torsion: float = 0.0,
 ) -> Prediction:
     """Largest disturbance magnitude a grasp resists along each direction.
 
@@ -242,6 +249,7 @@ def predicted_resistance(
         cone_edges: Number of friction-cone edges k (>= 3).
         max_normal_force: Per-finger normal-force cap F_max [N].
         directions: Unit disturbance directions, shape (D, 6).
+        torsion: Torsional friction coefficient of soft fingers [m]; 0 = hard fingers.
 
     Returns:
         The :class:`Prediction`: ``resistance`` (D,) [N] and ``normal_forces`` (D, m) [N].
@@ -249,7 +257,7 @@ def predicted_resistance(
     Raises:
         OgcpError: Any invalid argument.
     """
-    lp = ResistanceLP(positions, normals, com, torque_scale, mu, cone_edges, max_normal_force)
+    lp = ResistanceLP(positions, normals, com, torque_scale, mu, cone_edges, max_normal_force, torsion)
     return lp.predict(directions)
 
 

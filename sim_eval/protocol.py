@@ -46,6 +46,24 @@ class Settled:
     gates: dict[str, float | int | bool | list[float]]
     normal_forces: NDArray[np.float64]
 
+    def tip_centres(self, scene: GraspScene) -> NDArray[np.float64] | None:
+        """Centres of the fingertip spheres after settling, in the object's own frame, shape (m, 3) [m].
+
+        The object body starts at the world origin unrotated, so its frame is the mesh's: these
+        are where the settled tips sit on the mesh as drawn. None when the settled state is not
+        finite (a diverged settle).
+        """
+        if not (np.all(np.isfinite(self.state)) and np.all(np.isfinite(self.pose))):
+            return None
+        data = mujoco.MjData(scene.model)
+        mujoco.mj_setState(scene.model, data, self.state, FULL_STATE)
+        mujoco.mj_kinematics(scene.model, data)
+        world = data.geom_xpos[scene.tip_geoms]
+        rotation = np.empty(9)
+        mujoco.mju_quat2Mat(rotation, self.pose[3:7])
+        # Rows (x - p) R: each row is R^T (x - p), the world point in the object's frame.
+        return np.asarray((world - self.pose[:3]) @ rotation.reshape(3, 3), dtype=float)
+
 
 @dataclass(frozen=True, eq=False)
 class TrialResult:
@@ -268,6 +286,37 @@ def serial_trials(
     return TrialResult(failure, failed, diverged, nstep)
 
 
+def hold_poses(
+    scene: GraspScene,
+    settled: Settled,
+    loads: NDArray[np.float64],
+    duration: float,
+    settings: SimSettings,
+) -> NDArray[np.float64]:
+    """The object's pose after every step of constant-load trials from the settled state.
+
+    Args:
+        scene: The compiled grasp model.
+        settled: The settled start state.
+        loads: Physical wrenches on the object (force [N], torque [N·m]), shape (L, 6).
+        duration: Duration of each trial [s].
+        settings: Simulation settings (threads).
+
+    Returns:
+        Position [m] and quaternion after steps 1..n of each trial, shape (L, n, 7); NaN once
+        a trial diverged.
+    """
+    model = scene.model
+    nstep = max(1, int(np.ceil(duration / model.opt.timestep)))
+    threads = settings.threads or os.cpu_count() or 1
+    datas = [mujoco.MjData(model) for _ in range(threads)]
+    controls = _controls(scene, np.ones((len(loads), nstep)), np.asarray(loads, dtype=float))
+    initial = np.tile(settled.state, (len(loads), 1))
+    state, _ = rollout.rollout(model, datas, initial, controls, control_spec=CONTROL_SPEC)
+    poses: NDArray[np.float64] = state[:, :, QPOS_OFFSET + scene.object_qpos : QPOS_OFFSET + scene.object_qpos + 7]
+    return poses
+
+
 def hold_trials(
     scene: GraspScene,
     settled: Settled,
@@ -277,11 +326,11 @@ def hold_trials(
     rotation_limit: float,
     settings: SimSettings,
 ) -> NDArray[np.bool_]:
-    """Constant-load trials (weight test, DexGraspBench compatibility): does the grasp hold?
+    """Constant-load trials (the weight test): does the grasp hold at every step?
 
     Args:
         scene: The compiled grasp model.
-        settled: The settled start state.
+        settled: The settled start state, also the reference pose.
         loads: Physical wrenches on the object (force [N], torque [N·m]), shape (L, 6).
         duration: Duration of each trial [s].
         move_limit: Largest displacement that still passes [m].
@@ -291,14 +340,7 @@ def hold_trials(
     Returns:
         Pass flag per load, shape (L,).
     """
-    model = scene.model
-    nstep = max(1, int(np.ceil(duration / model.opt.timestep)))
-    threads = settings.threads or os.cpu_count() or 1
-    datas = [mujoco.MjData(model) for _ in range(threads)]
-    controls = _controls(scene, np.ones((len(loads), nstep)), np.asarray(loads, dtype=float))
-    initial = np.tile(settled.state, (len(loads), 1))
-    state, _ = rollout.rollout(model, datas, initial, controls, control_spec=CONTROL_SPEC)
-    poses = state[:, :, QPOS_OFFSET + scene.object_qpos : QPOS_OFFSET + scene.object_qpos + 7]
+    poses = hold_poses(scene, settled, loads, duration, settings)
     shift, angle = _displacement(poses, settled.pose)
     finite = np.all(np.isfinite(poses), axis=(1, 2))
     return finite & (np.nanmax(shift, axis=1) < move_limit) & (np.nanmax(angle, axis=1) < rotation_limit)

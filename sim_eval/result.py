@@ -64,7 +64,9 @@ class GraspSimResult:
         gates: Validity gates of the preload (``valid`` summarises them).
         normal_forces: Tip normal forces after settling, shape (m,) [N].
         surface_distance: Distance of each planned contact from the decomposed surface, shape (m,) [m].
-        hold_tests: Pass/fail of constant-load tests (weight test, DexGraspBench mode).
+        hold_tests: Pass/fail of constant-load tests: ``weight``, and ``dexgraspbench`` (per axis
+            ``passed``, ``delta_pos`` [m], ``delta_angle`` [deg], ``success``, ``failures``; see
+            :func:`sim_eval.dexgraspbench.hold_test`).
         error: Why the grasp could not be simulated, if it could not.
         unreachable: Fingers (positions in ``grasp``) whose contact the simulated fingertip
             cannot touch without cutting the object; such a grasp is not simulated.

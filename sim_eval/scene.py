@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import mujoco
 import numpy as np
@@ -42,6 +43,8 @@ class GraspScene:
         preload_ctrl: Control vector that preloads the grasp, shape (nu,).
         tip_radius: Fingertip radius [m].
         mu: Friction coefficient of every tip-object contact.
+        torsion: Torsional friction coefficient of every tip-object contact [m]; 0 = hard
+            fingers (condim 3), else soft fingers (condim 4).
     """
 
     model: mujoco.MjModel
@@ -52,11 +55,23 @@ class GraspScene:
     preload_ctrl: NDArray[np.float64]
     tip_radius: float
     mu: float
+    torsion: float = 0.0
 
     @property
     def fingers(self) -> int:
         """Number of fingertips m."""
         return len(self.tip_geoms)
+
+
+def _friction(mu: float, torsion: float) -> dict[str, Any]:
+    """Geom attributes of a contact: sliding friction only (condim 3), or with torsion (condim 4).
+
+    MuJoCo takes a pair's friction from the larger of its geoms' values and its condim from
+    the larger condim, so tips and parts carry the same values.
+    """
+    if torsion > 0:
+        return {"condim": 4, "friction": [mu, torsion, 0.0]}
+    return {"condim": 3, "friction": [mu, 0.0, 0.0]}
 
 
 def _options(spec: mujoco.MjSpec, settings: SimSettings, gravity: bool) -> None:
@@ -81,6 +96,7 @@ def _add_object(
     mass: float,
     settings: SimSettings,
     mu: float,
+    torsion: float,
 ) -> None:
     body = spec.worldbody.add_body(name="object")
     body.add_freejoint(name="object_free")
@@ -102,8 +118,7 @@ def _add_object(
             meshname=f"part{k}",
             contype=1,
             conaffinity=0,
-            condim=3,
-            friction=[mu, 0.0, 0.0],
+            **_friction(mu, torsion),
             density=0.0,
             solref=list(settings.contact_solref),
             solimp=[*settings.contact_solimp, 0.5, 2.0],
@@ -119,6 +134,7 @@ def _add_tip(
     radius: float,
     settings: SimSettings,
     mu: float,
+    torsion: float,
 ) -> None:
     body = spec.worldbody.add_body(name=f"tip{i}", pos=centre.tolist())
     for name, axis in zip(("n", "a", "b"), axes, strict=True):
@@ -135,8 +151,7 @@ def _add_tip(
         mass=settings.tip_mass,
         contype=0,
         conaffinity=1,
-        condim=3,
-        friction=[mu, 0.0, 0.0],
+        **_friction(mu, torsion),
         solref=list(settings.contact_solref),
         solimp=[*settings.contact_solimp, 0.5, 2.0],
         rgba=[0.2, 0.45, 0.8, 1.0],
@@ -165,6 +180,7 @@ def build_scene(
     mu: float,
     tip_radius: float,
     gravity: bool | None = None,
+    torsion: float = 0.0,
 ) -> GraspScene:
     """Compile the grasp model.
 
@@ -178,6 +194,8 @@ def build_scene(
         mu: Friction coefficient of the tip-object contacts.
         tip_radius: Fingertip sphere radius [m].
         gravity: Override of ``settings.gravity`` (the weight test turns it on).
+        torsion: Torsional friction coefficient of the tip-object contacts [m]; 0 for hard
+            fingers (point contacts), > 0 for soft fingers (condim 4).
 
     Returns:
         The compiled scene.
@@ -187,11 +205,11 @@ def build_scene(
     spec = mujoco.MjSpec()
     spec.modelname = "ogcp_grasp"
     _options(spec, settings, settings.gravity if gravity is None else gravity)
-    _add_object(spec, parts, com, inertia, settings.body_mass, settings, mu)
+    _add_object(spec, parts, com, inertia, settings.body_mass, settings, mu, torsion)
     a, b = tangent_basis(normals)
     for i in range(len(positions)):
         centre = positions[i] - tip_radius * normals[i]
-        _add_tip(spec, i, centre, np.stack([normals[i], a[i], b[i]]), tip_radius, settings, mu)
+        _add_tip(spec, i, centre, np.stack([normals[i], a[i], b[i]]), tip_radius, settings, mu, torsion)
     model = spec.compile()
     object_body = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "object")
     joint = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, "object_free")
@@ -216,4 +234,5 @@ def build_scene(
         ctrl,
         float(tip_radius),
         float(mu),
+        float(torsion),
     )

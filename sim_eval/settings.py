@@ -7,7 +7,13 @@ from dataclasses import asdict, dataclass, fields, replace
 from typing import Any
 
 from planner.config.options import MAX_SEED, Option
-from planner.grasp.defaults import DEFAULT_TIP_RADIUS_RATIO, MAX_DIAGONAL, MAX_MU, MIN_DIAGONAL
+from planner.grasp.defaults import (
+    DEFAULT_TIP_RADIUS_RATIO,
+    MAX_DIAGONAL,
+    MAX_MU,
+    MAX_TORSIONAL_FRICTION,
+    MIN_DIAGONAL,
+)
 from planner.infra.errors import OgcpError, choice_error
 from planner.objects.builtin import DEFAULT_DIAGONAL
 
@@ -50,6 +56,7 @@ RANGES: dict[str, Option] = {
     "object_mass": _range(0, 1e3),
     "inertia_scale": _range(0, 1e3),
     "mu": _range(0, MAX_MU),
+    "torsional_friction": _range(0, MAX_TORSIONAL_FRICTION, exclusive=False),
     "timestep": _range(1e-5, 0.1, exclusive=False),
     "impratio": _range(0, 1e4),
     "noslip_iterations": _range(0, 1000, "int"),
@@ -72,7 +79,7 @@ RANGES: dict[str, Option] = {
 #: direction of one grasp takes hours.
 MAX_STEPS = 10**7
 #: Settings that may be left unset (None): the object's default tip, the plan's mu, all cores.
-UNSET = ("tip_radius", "mu", "threads")
+UNSET = ("tip_radius", "mu", "torsional_friction", "threads")
 
 PROTOCOLS = ("resistance", "dexgraspbench")
 INTEGRATORS = ("implicitfast", "implicit", "euler", "rk4")
@@ -120,6 +127,9 @@ class SimSettings:
         inertia_scale: Factor on the object's simulated mass and inertia, and divisor of
             gravity (set by :meth:`scaled`; 1 at the reference diagonal).
         mu: Friction coefficient; None = the plan's contact-set mu.
+        torsional_friction: Torsional friction coefficient [m] of the simulated contacts, an
+            absolute length like MuJoCo's (not scaled with the object); 0 = hard fingers
+            (condim 3), > 0 = soft (condim 4); None = the contact set's model.
         timestep: Physics step [s].
         integrator: MuJoCo integrator.
         cone: Friction cone type.
@@ -167,6 +177,7 @@ class SimSettings:
     object_mass: float = 0.1
     inertia_scale: float = 1.0
     mu: float | None = None
+    torsional_friction: float | None = None
     timestep: float = 0.002
     integrator: str = "implicitfast"
     cone: str = "elliptic"

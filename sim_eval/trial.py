@@ -20,6 +20,7 @@ from planner.grasp.contact_set import ContactSet
 from planner.grasp.quality import Q1Certificate, q1_certificate
 from sim_eval.collision import TipPlacement, place_tips
 from sim_eval.collision_fit import ContactFit
+from sim_eval.dexgraspbench import PROTOCOL, hold_test, physics_settings, use_object_defaults
 from sim_eval.directions import direction_set
 from sim_eval.gates import GateFailure, gate_failures, not_in_force_closure
 from sim_eval.metrics import fidelity
@@ -29,7 +30,8 @@ from sim_eval.result import GraspSimResult
 from sim_eval.scene import GRAVITY, GraspScene, build_scene
 from sim_eval.settings import SimSettings
 
-DEXGRASPBENCH = {"load_per_kg": 10.0, "duration": 2.0, "move_limit": 0.05, "rotation_limit": 15.0, "mu": 0.6}
+#: DexGraspBench's test at commit 1e7a5a6 (load, limits, friction, step; see sim_eval.dexgraspbench).
+DEXGRASPBENCH = PROTOCOL.constants()
 WEIGHT_TEST_DURATION = 2.0  # [s]
 FIDELITY_FLOOR = 1e-3  # predictions below this fraction of F_max have no fidelity
 
@@ -60,10 +62,21 @@ def _axis_loads(magnitude: float) -> tuple[NDArray[np.float64], list[str]]:
     return loads, labels
 
 
-def realized_summary(placement: TipPlacement, q1_planned: float, q1_realized: float) -> dict[str, Any]:
-    """The ``realized`` entry of a simulated grasp: per finger point, normal and offset from the plan."""
+def realized_summary(
+    placement: TipPlacement,
+    q1_planned: float,
+    q1_realized: float,
+    settled: Settled | None = None,
+    scene: GraspScene | None = None,
+) -> dict[str, Any]:
+    """The ``realized`` entry of a simulated grasp: per finger point, normal and offset from the plan.
+
+    With the settled state and its scene it also holds ``settled_centres``: each fingertip sphere's
+    centre after preload and settling, in the object's frame (shape (m, 3) [m]), the tips as the
+    disturbance trials start from them (absent when settling diverged).
+    """
     change = (q1_realized - q1_planned) / q1_planned if q1_planned > 0 else None
-    return {
+    summary: dict[str, Any] = {
         "points": placement.points.tolist(),
         "normals": placement.normals.tolist(),
         "offsets": placement.offsets.tolist(),
@@ -72,6 +85,10 @@ def realized_summary(placement: TipPlacement, q1_planned: float, q1_realized: fl
         "q1": q1_realized,
         "q1_change": change,
     }
+    centres = settled.tip_centres(scene) if settled is not None and scene is not None else None
+    if centres is not None:
+        summary["settled_centres"] = centres.tolist()
+    return summary
 
 
 def _lost_tips(placement: TipPlacement, max_inward: float) -> str:
@@ -80,6 +97,19 @@ def _lost_tips(placement: TipPlacement, max_inward: float) -> str:
         f"finger(s) {fingers}: no collision part within {max_inward * 1e3:.3g} mm beyond the planned contact "
         f"along its normal (the decomposition lost that region of the mesh); try a smaller --threshold"
     )
+
+
+def contact_torsion(contacts: ContactSet, settings: SimSettings) -> float:
+    """Torsional friction coefficient of the simulated contacts [m]: 0 = hard fingers (condim 3).
+
+    The settings' override, else the protocol's (DexGraspBench's condim 4), else the contact
+    set's own model.
+    """
+    if settings.torsional_friction is not None:
+        return float(settings.torsional_friction)
+    if settings.protocol == "dexgraspbench":
+        return float(DEXGRASPBENCH["torsional_friction"])
+    return contacts.torsional_friction
 
 
 def simulate_grasp(
@@ -106,16 +136,18 @@ def simulate_grasp(
     idx = np.asarray(grasp, dtype=np.intp)
     positions, normals = contacts.positions[idx], contacts.normals[idx]
     compat = settings.protocol == "dexgraspbench"
+    if compat:
+        # Their 4 ms step, solver and hand contact parameters (absolute lengths, like theirs).
+        settings = physics_settings(settings)
     mu = settings.mu if settings.mu is not None else (DEXGRASPBENCH["mu"] if compat else contacts.mu)
+    torsion = contact_torsion(contacts, settings)
     planned = q1_certificate(contacts.subset_wrenches(idx))
     collision = {**fit.to_dict(), "note": fit.note(body.diagonal)}
     placement = place_tips(fit.surface, positions, normals, body.tip_radius, max_inward=body.tip_radius)
     if not placement.placed.all():
         failed = failed_result(contacts, grasp, label, _lost_tips(placement, body.tip_radius), "")
         return dataclasses.replace(failed, collision=collision)
-    realized = ContactSet(
-        placement.points, placement.normals, contacts.com, contacts.torque_scale, contacts.mu, contacts.cone_edges
-    )
+    realized = dataclasses.replace(contacts, positions=placement.points, normals=placement.normals, source={})
     achieved = q1_certificate(realized.wrenches.reshape(-1, 6))
     weakest = _weakest(achieved, planned)
     dirs = direction_set(settings.directions, settings.direction_seed, weakest)
@@ -130,24 +162,30 @@ def simulate_grasp(
             settings.prediction_cone_edges,
             settings.max_normal_force,
             dirs.vectors,
+            torsion,
         ).resistance
 
     predicted = predict(placement.points, placement.normals)
     args = (fit.decomposition.parts, body.com, body.inertia, placement.points, placement.normals, settings, mu)
-    scene = build_scene(*args, body.tip_radius)
+    scene = build_scene(*args, body.tip_radius, torsion=torsion)
+    if compat:
+        use_object_defaults(scene)
     settled = settle(scene, settings)
     nan = np.full(len(predicted), math.nan)
     measured, censored, fid = nan.copy(), np.zeros(len(predicted), dtype=bool), nan.copy()
     holds: dict[str, Any] = {}
+    if compat:
+        # Every grasp gets DexGraspBench's verdict, a diverged or gated one too (a failure).
+        holds["dexgraspbench"] = _dexgraspbench(scene, settled, settings)
     if not settled.gates["diverged"]:
-        if compat:
-            holds["dexgraspbench"] = _dexgraspbench(scene, settled, settings)
-        else:
+        if not compat:
             measured, censored = _ramp(scene, settled, dirs.vectors, predicted, contacts.torque_scale, settings)
             fid = fidelity(measured, predicted, FIDELITY_FLOOR * settings.max_normal_force)
             fid[censored] = math.nan
         if settings.weight_test:
-            weightless = build_scene(*args, body.tip_radius, gravity=False)
+            weightless = build_scene(*args, body.tip_radius, gravity=False, torsion=torsion)
+            if compat:
+                use_object_defaults(weightless)
             holds["weight"] = _weight(weightless, settings)
     return GraspSimResult(
         grasp,
@@ -165,7 +203,7 @@ def simulate_grasp(
         holds,
         invalid_reasons=tuple(f.to_dict() for f in _reasons(settled, settings, achieved)),
         predicted_planned=predict(positions, normals),
-        realized=realized_summary(placement, planned.q1, achieved.q1),
+        realized=realized_summary(placement, planned.q1, achieved.q1, settled, scene),
         collision=collision,
     )
 
@@ -210,23 +248,8 @@ def _ramp(
 
 
 def _dexgraspbench(scene: GraspScene, settled: Settled, settings: SimSettings) -> dict[str, Any]:
-    loads, labels = _axis_loads(DEXGRASPBENCH["load_per_kg"] * settings.object_mass)
-    passed = hold_trials(
-        scene,
-        settled,
-        loads,
-        DEXGRASPBENCH["duration"],
-        DEXGRASPBENCH["move_limit"],
-        DEXGRASPBENCH["rotation_limit"],
-        settings,
-    )
-    return {
-        "axes": labels,
-        "passed": passed.tolist(),
-        "success": bool(passed.all()),
-        "load": DEXGRASPBENCH["load_per_kg"] * settings.object_mass,
-        **DEXGRASPBENCH,
-    }
+    """DexGraspBench's verdict (:func:`sim_eval.dexgraspbench.hold_test`): their six loads from the initial pose."""
+    return hold_test(scene, settled, settings)
 
 
 def _weight(scene: GraspScene, settings: SimSettings) -> dict[str, Any]:

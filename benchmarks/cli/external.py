@@ -45,6 +45,13 @@ def _mapping(value: Any) -> dict[str, Any]:
     return value if isinstance(value, dict) else {}
 
 
+def _soft(block: dict[str, Any]) -> str:
+    """``, soft fingers (torsion 0.02 m)`` for a record of soft contacts; nothing for hard ones."""
+    if block.get("contact_model") != "soft":
+        return ""
+    return f", soft fingers (torsion {block.get('torsional_friction')} m)"
+
+
 def external_summary(record: dict[str, Any]) -> str:
     """Lines of an external evaluation's record: per grasp its method, score, Q1 and surface fit."""
     obj = _mapping(record.get("object"))
@@ -52,7 +59,7 @@ def external_summary(record: dict[str, Any]) -> str:
     entries = [e for e in block.get("grasps") or [] if isinstance(e, dict)]
     head = (
         f"external grasps ({obj.get('file') or 'given'}): {len(entries)} grasp(s), mu {block.get('mu')}, "
-        f"cone edges {block.get('cone_edges')}; contacts off the surface by at most "
+        f"cone edges {block.get('cone_edges')}{_soft(block)}; contacts off the surface by at most "
         f"{_number(block.get('max_surface_distance'), 3, 1e3)} mm (tolerance "
         f"{_number(block.get('surface_tolerance'), 3, 1e3)} mm, {block.get('n_projected', 0)} projected), "
         f"normals at most {_number(block.get('max_normal_angle'), 1)} deg off"
@@ -64,7 +71,7 @@ def external_summary(record: dict[str, Any]) -> str:
         moved = sum(bool(p) for p in entry.get("projected") or [])
         lines.append(
             f"  {entry.get('label')} ({entry.get('method') or 'external'}): score {_number(entry.get('score'), 4)}, "
-            f"ogcp Q1 {_number(entry.get('q1'), 4)} N, surface distance <= "
+            f"ogcp Q1 {_number(entry.get('q1'), 4)}, surface distance <= "
             f"{_number(max(distances, default=math.nan), 3, 1e3)} mm, normal <= "
             f"{_number(max(angles, default=math.nan), 1)} deg" + (f", {moved} projected" if moved else "")
         )

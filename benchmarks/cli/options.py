@@ -15,7 +15,12 @@ from pathlib import Path
 from typing import Any
 
 from planner.config.options import ConfigError, Option
-from planner.grasp.defaults import DIAGONAL
+from planner.grasp.defaults import (
+    CONTACT_MODELS,
+    DEFAULT_TORSIONAL_FRICTION,
+    DIAGONAL,
+    TORSIONAL_FRICTION,
+)
 from planner.infra.errors import OgcpError
 
 
@@ -140,3 +145,39 @@ def add_diagonal_option(parser: argparse.ArgumentParser, default: float) -> None
         help=f"scale the object to this bounding-box diagonal [m], {DIAGONAL.bounds()} (default {default:g} for "
         "built-in and fetched objects; mesh files keep their size unless given)",
     )
+
+
+def add_contact_model_options(parser: argparse.ArgumentParser | Any) -> None:
+    """``--contact-model`` and ``--torsional-friction`` (read with :func:`torsion_from_args`)."""
+    # None, not the defaults, so that inputs with a model of their own can refuse them.
+    parser.add_argument(
+        "--contact-model",
+        choices=CONTACT_MODELS,
+        default=None,
+        help="hard: point contacts with Coulomb friction; soft: they also resist a moment about the normal "
+        "(torsional friction, MuJoCo's condim 4), in Q1, the search's bounds and the simulation (default hard)",
+    )
+    parser.add_argument(
+        "--torsional-friction",
+        type=typed(TORSIONAL_FRICTION),
+        default=None,
+        metavar="METRES",
+        help=f"torsional friction coefficient of soft fingers [m], MuJoCo's (default {DEFAULT_TORSIONAL_FRICTION:g} "
+        f"with --contact-model soft; {valid(TORSIONAL_FRICTION)}); implies --contact-model soft",
+    )
+
+
+def contact_model_given(args: argparse.Namespace) -> bool:
+    """Whether ``--contact-model`` or ``--torsional-friction`` was given."""
+    return args.contact_model is not None or args.torsional_friction is not None
+
+
+def torsion_from_args(args: argparse.Namespace) -> float:
+    """The torsional friction coefficient [m] of the flags: 0 = hard fingers.
+
+    Raises:
+        OgcpError: For a coefficient with ``--contact-model hard``, or 0 with ``soft``.
+    """
+    from planner.grasp.contact_model import torsion_of
+
+    return torsion_of(args.contact_model, args.torsional_friction, "--torsional-friction")

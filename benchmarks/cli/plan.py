@@ -19,7 +19,17 @@ from typing import TYPE_CHECKING, Any
 # The contact sampling, the engines and the summaries (numpy, trimesh, scipy, numba) are
 # imported by the functions that use them.
 from benchmarks.cli.method_options import GROUPS, add_method_options, config_from_args, not_applicable
-from benchmarks.cli.options import add_diagonal_option, check_output, integer, positive_int, typed, valid
+from benchmarks.cli.options import (
+    add_contact_model_options,
+    add_diagonal_option,
+    check_output,
+    contact_model_given,
+    integer,
+    positive_int,
+    torsion_from_args,
+    typed,
+    valid,
+)
 from planner.config.methods import DEFAULT_FINGERS, DEFAULT_METHOD, DEFAULT_SEED
 from planner.config.options import JOBS, TIME_LIMIT
 from planner.grasp.defaults import (
@@ -80,6 +90,7 @@ def _add_contact_options(parser: argparse.ArgumentParser, n_default: int | None)
         default=None,
         help=f"friction-cone edges k (default {DEFAULT_CONE_EDGES}; {valid(CONE_EDGES)})",
     )
+    add_contact_model_options(parser)
     parser.add_argument(
         "--tip-radius",
         type=tip_radius,
@@ -111,7 +122,8 @@ def sample_from_args(mesh: trimesh.Trimesh, source: dict[str, Any], n: int, args
     radius = default_tip_radius(mesh) if args.tip_radius is None else args.tip_radius
     mu = DEFAULT_MU if args.mu is None else args.mu
     cone_edges = DEFAULT_CONE_EDGES if args.cone_edges is None else args.cone_edges
-    return sample_contacts(mesh, n, args.seed, mu, cone_edges, source, tip_radius=radius)
+    torsion = torsion_from_args(args)
+    return sample_contacts(mesh, n, args.seed, mu, cone_edges, source, tip_radius=radius, torsional_friction=torsion)
 
 
 def register(commands: Any) -> None:
@@ -196,6 +208,10 @@ def load_contact_set(spec: str, args: argparse.Namespace) -> ContactSet:
             raise OgcpError("--mu does not apply to a contact file (its wrenches are fixed)")
         if args.cone_edges is not None:
             raise OgcpError("--cone-edges does not apply to a contact file (its wrenches are fixed)")
+        if contact_model_given(args):
+            raise OgcpError(
+                "--contact-model and --torsional-friction do not apply to a contact file (its wrenches are fixed)"
+            )
         return ContactSet.load(spec)
     mesh, source = resolve_object(spec, args.diagonal)
     n = args.contacts if args.contacts is not None else DEFAULT_CONTACTS

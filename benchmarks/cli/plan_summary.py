@@ -13,6 +13,13 @@ from planner.records.plan import PlanHand, PlanOptimum, PlanView
 from planner.search.result import UNFINISHED, SearchResult
 
 
+def _soft_text(contacts: ContactSet) -> str:
+    """``   soft fingers, torsion 0.02 m`` for soft contacts; nothing for hard ones."""
+    if contacts.torsional_friction <= 0:
+        return ""
+    return f"   soft fingers, torsion {contacts.torsional_friction:g} m"
+
+
 def describe(run: MethodRun, contacts: ContactSet) -> str:
     """Readable multi-line summary of any method's run."""
     if isinstance(run.result, ESResult):
@@ -42,7 +49,10 @@ def search_summary(result: SearchResult, contacts: ContactSet) -> str:
     else:
         certificate = "optimal (certified)"
     lines = [
-        f"{_object_text(contacts)}   mu = {contacts.mu:g}   k = {contacts.cone_edges}   seed = {c['seed']}",
+        (
+            f"{_object_text(contacts)}   mu = {contacts.mu:g}   k = {contacts.cone_edges}{_soft_text(contacts)}"
+            f"   seed = {c['seed']}"
+        ),
         f"search: {method}, m = {c['m']}, Γ={c['successor']} b={c['branching']}, {heuristic}"
         + (", symmetry removal" if c["symmetry"] else ""),
         f"grasp: {list(result.grasp)}   Q1 = {result.q1:.6f}   Q_OWS = {result.q_ows:.6f}",

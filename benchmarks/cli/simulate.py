@@ -13,7 +13,16 @@ from typing import Any
 
 # Only light modules at the top (the settings and their defaults): the parser is built for every
 # command, ``--help`` included. numpy, the plan records and MuJoCo load in the handlers.
-from benchmarks.cli.options import add_diagonal_option, check_output, finite_number, typed, valid
+from benchmarks.cli.options import (
+    add_contact_model_options,
+    add_diagonal_option,
+    check_output,
+    contact_model_given,
+    finite_number,
+    torsion_from_args,
+    typed,
+    valid,
+)
 from planner.config.options import ConfigError, Option
 from planner.infra.atomic import write_json_atomic
 from planner.infra.errors import OgcpError
@@ -114,6 +123,12 @@ def register(commands: Any) -> None:
         help="ramp to failure (default) or DexGraspBench's fixed +-x,y,z load",
     )
     evaluate.add_argument("--weight-test", action="store_true", help="also hold m g along the six force axes")
+    model = evaluate.add_argument_group(
+        "contact model of the simulation",
+        "default: the plan's own (a grasps file's, else hard); given, it replaces it in the simulation and the "
+        "prediction, while Q1 stays the plan's",
+    )
+    add_contact_model_options(model)
     evaluate.add_argument(
         "--on-surface",
         choices=("project", "refuse"),
@@ -207,6 +222,7 @@ def _settings(args: argparse.Namespace) -> SimSettings:
         "protocol": args.protocol,
         "weight_test": args.weight_test,
         "threads": args.threads,
+        **({"torsional_friction": torsion_from_args(args)} if contact_model_given(args) else {}),
         **extra,
     }
     try:
@@ -285,6 +301,7 @@ def sim_summary(record: dict[str, Any]) -> str:
             test = test if isinstance(test, dict) else {}
             passed = dict(zip(_list(test.get("axes")), _list(test.get("passed"))))
             lines.append(f"  {name} test: {'pass' if test.get('success') is True else 'FAIL'} {passed}")
+            lines.extend(f"    {failure}" for failure in _list(test.get("failures")))
         if not np.isfinite(g.measured).any():
             continue
         lines.append("  direction    predicted [N]  measured [N]  fidelity")
@@ -310,8 +327,24 @@ def sim_summary(record: dict[str, Any]) -> str:
             f"predicted vs measured: Spearman {_fmt(p.get('spearman'))}, Kendall {_fmt(p.get('kendall'))}; "
             f"AUC(Q1, holds {m.get('holding_load', '-')} N) {_fmt(m.get('auc_q1_holds'))}"
         )
+    lines.extend(_dexgraspbench_line(m.get("dexgraspbench")))
     lines.append("(+ = held to the end of the ramp: a lower bound)")
     return "\n".join(lines)
+
+
+def _dexgraspbench_line(summary: Any) -> list[str]:
+    """The set's DexGraspBench success rate and ROC-AUCs of Q1 (``--protocol dexgraspbench``)."""
+    if not isinstance(summary, dict):
+        return []
+    found = summary.get("auc_q1")
+    auc: dict[str, Any] = found if isinstance(found, dict) else {}
+    line = (
+        f"DexGraspBench ({summary.get('source')}): success {summary.get('n_success', '-')} of "
+        f"{summary.get('n_evaluated', '-')} ({_fmt(summary.get('success_rate'), 1, 100)} %); AUC(Q1, success) "
+        f"Mann-Whitney {_fmt(auc.get('mann_whitney'))}, theirs ({auc.get('bins', '-')} bins) "
+        f"{_fmt(auc.get('dexgraspbench'))}"
+    )
+    return [line]
 
 
 def run_evaluate(args: argparse.Namespace) -> int:

@@ -59,7 +59,7 @@ def register(commands: Any) -> None:
         action="append",
         default=[],
         metavar="KEY=VALUE[,VALUE]",
-        help="run only matching cells; keys object, method, group, label, m, mu, contacts; "
+        help="run only matching cells; keys object, method, group, label, m, mu, contact_model, contacts; "
         "repeat to narrow (the rest: a later run with --resume)",
     )
     suite.add_argument(

@@ -32,6 +32,7 @@ if TYPE_CHECKING:
     from benchmarks.plots.grasp_figures import fig3_grasps
     from benchmarks.plots.hand_figures import fig10_sdh_grasps
     from benchmarks.plots.names import NAMES, TABLE
+    from benchmarks.plots.protocol import sim_protocol
     from benchmarks.plots.report import FIGURES, PlotReport, plot_run
     from benchmarks.plots.sim_figures_3d import sim_grasps
     from benchmarks.plots.simulation import sim_fidelity, sim_q1_vs_resistance, sim_survival, survival
@@ -67,6 +68,7 @@ _EXPORTS = {
     "sim_grasps": "benchmarks.plots.sim_figures_3d",
     "sim_q1_vs_resistance": "benchmarks.plots.simulation",
     "sim_survival": "benchmarks.plots.simulation",
+    "sim_protocol": "benchmarks.plots.protocol",
     "survival": "benchmarks.plots.simulation",
     "time_table": "benchmarks.plots.tables",
 }
@@ -96,6 +98,7 @@ __all__ = [
     "save_figure",
     "sim_fidelity",
     "sim_grasps",
+    "sim_protocol",
     "sim_q1_vs_resistance",
     "sim_survival",
     "survival",

@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from benchmarks.suite.config import EXTERNAL_METHOD
 from benchmarks.suite.manifest import ManifestSuite
 from benchmarks.suite.record import PROBLEM_FIELDS, CellRecord, Problem
 from benchmarks.suite.store import MANIFEST, RESULTS, read_results
@@ -159,8 +160,14 @@ class RunData:
         return groups
 
     def problem_names(self) -> dict[Problem, str]:
-        """A short name per problem: the object, plus what tells problems of one object apart."""
-        return problem_names(c.problem for c in self.cells)
+        """A short name per problem: the object, plus what tells problems of one object apart.
+
+        External cells' problems (their own contacts, no seed) are named among themselves, so
+        that they do not lengthen the names of the planners' problems of the same object.
+        """
+        names = problem_names(c.problem for c in self.cells if c.method != EXTERNAL_METHOD)
+        external = problem_names(c.problem for c in self.cells if c.method == EXTERNAL_METHOD)
+        return {**external, **names}
 
 
 def frozen(mapping: dict[str, Any], leave_out: Iterable[str] = ()) -> tuple[tuple[str, Any], ...]:
@@ -181,6 +188,7 @@ def problem_names(problems: Iterable[Problem]) -> dict[Problem, str]:
         "cone_edges": "k={}",
         "diagonal": "d={}",
         "tip_radius": "r={}",
+        "torsional_friction": "soft {} m",
     }
     for problem in unique:
         siblings = [p for p in unique if p[0] == problem[0]]

@@ -1,8 +1,10 @@
 """Fig. 3: the optimal grasp on each object, drawn on the shaded mesh.
 
 One panel per problem (object, m, ...) for its A* cell, or failing that its best cell of a
-certified method (:attr:`planner.methods.registry.MethodSpec.optimal`): the mesh rendered by the
-z-buffer rasteriser (:mod:`benchmarks.plots.raster`), the contact set as small yellow points and
+certified method (:attr:`planner.methods.registry.MethodSpec.optimal`), each followed by a panel
+per external cell on its object (another planner's best grasp, placed by :mod:`.external`): the
+mesh rendered by the z-buffer rasteriser (:mod:`benchmarks.plots.raster`), the contact set as
+small yellow points and
 the grasp's contacts with force arrows along the inward normals (or friction cones). Marks the
 mesh hides are left out, piece by piece, from the rasteriser's depth buffer. The mesh is a raster
 image inside a matplotlib axes, so titles, fonts and the saved formats match the other figures.
@@ -23,6 +25,7 @@ from planner.methods.registry import METHODS
 from sim_eval.plan_input import PlanInput, plan_input
 
 from .data import CellData, RunData, SkipFigure
+from .external import by_problem_with_external, host_problems, is_external
 from .raster import Raster, fit_view, look, render_mesh
 from .style import DOUBLE_COLUMN, SINGLE_COLUMN, method_colour, new_figure, styled
 
@@ -56,16 +59,17 @@ class NoGraspCells(SkipFigure):
 
 
 def grasp_cells(data: RunData) -> list[CellData]:
-    """The cell drawn per problem: its plain A* cell, else its best cell of a certified method.
+    """The cells drawn per problem: its plain A* cell, else its best cell of a certified method, then its external cells.
 
     Args:
         data: The run.
 
     Returns:
-        One cell per problem that has one, problems in order of first appearance.
+        Cells in panel order, problems in order of first appearance; an external cell follows
+        the cell of the planner problem on its object (:func:`.external.host_problems`).
     """
     chosen = []
-    for cells in data.by_problem().values():
+    for cells in by_problem_with_external(data).values():
         astar = [c for c in cells if c.method == "astar" and c.plain and c.plan_view.grasp is not None]
         certified = [
             c
@@ -79,7 +83,7 @@ def grasp_cells(data: RunData) -> list[CellData]:
             and c.plan_view.grasp is not None
         ]
         pick = astar[:1] or sorted(certified, key=lambda c: -(c.q1 or 0.0))[:1]
-        chosen += pick
+        chosen += pick + [c for c in cells if is_external(c) and c.plan_view.grasp is not None]
     return chosen
 
 
@@ -101,11 +105,12 @@ def fig3_grasps(data: RunData, notes: list[str] | None = None, cones: bool = Fal
     """
     cells = grasp_cells(data)
     if not cells:
-        raise NoGraspCells("needs an A* cell or a cell of another certified method")
+        raise NoGraspCells("needs an A* cell, a cell of another certified method or an external cell")
     names = data.problem_names()
+    hosts = host_problems(data)
     inputs = rebuilt_panels(data, [(cell, None) for cell in cells], "fig3_grasps", notes)
     if not inputs:
-        raise SkipFigure("no A* or certified cell's object and contact set could be rebuilt")
+        raise SkipFigure("no A*, certified or external cell's object and contact set could be rebuilt")
     figure, axes, pixels = panel_grid(len(inputs))
     RENDER_SECONDS.clear()
     for ax, (cell, _, rebuilt) in zip(axes, inputs, strict=True):
@@ -113,9 +118,10 @@ def fig3_grasps(data: RunData, notes: list[str] | None = None, cones: bool = Fal
         draw_grasp(ax, rebuilt, rebuilt.grasps[0], method_colour(cell.method), pixels, cones)
         RENDER_SECONDS.append(time.perf_counter() - started)
         quality = f", $Q_1$={cell.q1:.3f}" if cell.q1 is not None else ""
-        problem = names[cell.problem]
+        problem = names[hosts.get(cell.id, cell.problem)]
         m = f" m={len(rebuilt.grasps[0])}" if " m=" not in problem else ""
-        ax.set_title(f"{problem}{m}: {cell.label}{quality}")
+        label = f"{cell.label} (external)" if is_external(cell) and cell.label != cell.method else cell.label
+        ax.set_title(f"{problem}{m}: {label}{quality}")
     return figure
 
 

@@ -3,20 +3,27 @@
 The plan record's ``hand`` block holds the joint angles of the reachability model's nearest sample
 and the contact each finger takes (:class:`planner.records.plan.PlanHand`); it holds no hand pose,
 since the model matches the fingertips' *shape* (pairwise distances and normal differences), not
-their place. The palm is placed here by a least-squares rigid fit (Kabsch) of the fingertips, and
-of points a little along their pad normals, onto the contacts and their inward normals, so each
-finger's end sphere touches its contact from outside. Fingers and palm are capsules and a cylinder
-rasterised with the object (:mod:`benchmarks.plots.raster`), so each hides the other correctly.
+their place. Placed rigidly (:func:`palm_pose`), those angles leave the fingertips 14-24 mm off
+their contacts. The figure draws the refined pose instead (:func:`planner.hands.fit.fit_hand`):
+joint angles within their limits and the palm pose, solved from the recorded angles so that each
+finger's end sphere touches its contact from outside, pad towards the surface. Each panel's title
+gives the largest distance of a refined fingertip from its contact and the rigid fit's, and
+:data:`HAND_FITS` keeps the last figure's fits with the distance of every finger. Fingers and palm
+are capsules and a cylinder rasterised with the object (:mod:`benchmarks.plots.raster`), so each
+hides the other correctly. The fit has no collision terms: the title says when fingers touch each
+other, and the hand is not kept out of the object.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
+from planner.hands.fit import HandFit, fit_hand, rigid_fit
 from planner.hands.reachability import LINK_CLEARANCE, finger_chain, pad_normals
 from planner.hands.sdh import FINGER_BASES, PALM_HEIGHT
 from planner.records.plan import PlanHand
@@ -41,6 +48,25 @@ NORMAL_REACH = 0.03
 HAND_COLOUR = (0.42, 0.47, 0.56)
 #: Seconds spent drawing each panel of the last figure.
 RENDER_SECONDS: list[float] = []
+
+
+@dataclasses.dataclass(frozen=True)
+class PanelFit:
+    """How one panel's hand was posed.
+
+    Attributes:
+        title: The panel's problem and cell.
+        rigid_misfit: Largest fingertip distance from its target at the recorded angles, rigidly placed [m].
+        fit: The refined pose that is drawn; its ``residuals`` are per finger [m].
+    """
+
+    title: str
+    rigid_misfit: float
+    fit: HandFit
+
+
+#: The hand fits of the last figure's panels, in panel order.
+HAND_FITS: list[PanelFit] = []
 
 
 class NoHandCells(NoGraspCells):
@@ -91,11 +117,7 @@ def palm_pose(
     targets = points - LINK_RADIUS * normals
     source = np.vstack([tips, tips + NORMAL_REACH * pads])
     target = np.vstack([targets, targets + NORMAL_REACH * normals])
-    s0, t0 = source.mean(axis=0), target.mean(axis=0)
-    u, _, vt = np.linalg.svd((source - s0).T @ (target - t0))
-    flip = np.diag([1.0, 1.0, np.sign(np.linalg.det(vt.T @ u.T))])
-    rotation = vt.T @ flip @ u.T
-    translation = t0 - rotation @ s0
+    rotation, translation = rigid_fit(source, target)
     misfit = float(np.linalg.norm(tips @ rotation.T + translation - targets, axis=1).max())
     return rotation, translation, misfit
 
@@ -121,7 +143,7 @@ def hand_mesh(angles: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray
 
 @styled
 def fig10_sdh_grasps(data: RunData, notes: list[str] | None = None) -> Figure:
-    """Fig. 10: the SDH at its recorded joint angles on each object's best reachable grasp.
+    """Fig. 10: the SDH, its recorded joint angles refined, on each object's best reachable grasp.
 
     Args:
         data: The run.
@@ -143,17 +165,25 @@ def fig10_sdh_grasps(data: RunData, notes: list[str] | None = None) -> Figure:
         raise SkipFigure("no SDH cell's object and contact set could be rebuilt")
     figure, axes, pixels = panel_grid(len(inputs))
     RENDER_SECONDS.clear()
+    HAND_FITS.clear()
     for ax, (cell, hand, rebuilt) in zip(axes, inputs, strict=True):
         started = time.perf_counter()
-        misfit = draw_hand(ax, rebuilt, hand, method_colour(cell.method), pixels)
+        posed = draw_hand(ax, rebuilt, hand, method_colour(cell.method), pixels)
         RENDER_SECONDS.append(time.perf_counter() - started)
+        HAND_FITS.append(dataclasses.replace(posed, title=f"{names[cell.problem]}: {cell.label}"))
         quality = f", $Q_1$={cell.q1:.3f}" if cell.q1 is not None else ""
-        ax.set_title(f"{names[cell.problem]}: {cell.label}{quality}\ntip misfit {misfit * 1e3:.0f} mm")
+        ax.set_title(f"{names[cell.problem]}: {cell.label}{quality}\n{fit_caption(posed)}")
     return figure
 
 
-def draw_hand(ax: Axes, rebuilt: PlanInput, hand: PlanHand, colour: str, pixels: int = 800) -> float:
-    """Draw the object, the grasp's contacts and the posed hand into ``ax``.
+def fit_caption(posed: PanelFit) -> str:
+    """One short line on the drawn pose: the largest fingertip distance from its contact, and the rigid fit's."""
+    clash = ", fingers touch" if not posed.fit.collision_free else ""
+    return f"tips within {posed.fit.max_residual * 1e3:.1f} mm (rigid: {posed.rigid_misfit * 1e3:.0f} mm){clash}"
+
+
+def draw_hand(ax: Axes, rebuilt: PlanInput, hand: PlanHand, colour: str, pixels: int = 800) -> PanelFit:
+    """Draw the object, the grasp's contacts and the hand in its refined pose into ``ax``.
 
     Args:
         ax: The panel (its axis frame is switched off).
@@ -163,15 +193,16 @@ def draw_hand(ax: Axes, rebuilt: PlanInput, hand: PlanHand, colour: str, pixels:
         pixels: Side of the square rendered image [px].
 
     Returns:
-        The largest fingertip misfit of the pose fit [m].
+        The drawn pose (title left empty) with the recorded angles' rigid misfit.
     """
     mesh, contacts = rebuilt.mesh, rebuilt.contacts
     angles = np.asarray(hand.joint_angles, dtype=float)
     index = np.asarray(hand.finger_contacts, dtype=int)
     points, normals = contacts.positions[index], contacts.normals[index]
-    rotation, translation, misfit = palm_pose(angles, points, normals)
-    vertices, faces = hand_mesh(angles)
-    vertices = vertices @ rotation.T + translation
+    _, _, misfit = palm_pose(angles, points, normals)
+    fit = fit_hand(points, normals, angles, offset=LINK_RADIUS)
+    vertices, faces = hand_mesh(fit.joint_angles)
+    vertices = fit.to_world(vertices)
     camera = best_view(mesh.vertices, mesh.faces, points, normals, occluder=(vertices, faces))
     view = fit_view(np.vstack([mesh.vertices, vertices]), camera, pixels, pixels)
     scene = render_mesh(mesh.vertices, mesh.faces, view).over(render_mesh(vertices, faces, view, HAND_COLOUR))
@@ -185,4 +216,4 @@ def draw_hand(ax: Axes, rebuilt: PlanInput, hand: PlanHand, colour: str, pixels:
     ax.set_ylim(pixels, 0)
     ax.set_aspect("equal")
     ax.axis("off")
-    return misfit
+    return PanelFit("", misfit, fit)

@@ -15,6 +15,7 @@ FIGURE_NAMES = (
     "sim_q1_vs_resistance",
     "sim_fidelity",
     "sim_survival",
+    "sim_protocol",
     "fig10_sdh_grasps",
     "sim_grasps",
 )

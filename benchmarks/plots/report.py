@@ -14,6 +14,7 @@ from .figures import fig4_q1_histograms, fig6_states_per_level, fig7_iterations_
 from .grasp_figures import NoGraspCells, fig3_grasps
 from .hand_figures import fig10_sdh_grasps
 from .names import FIGURE_NAMES, NAMES, TABLE
+from .protocol import sim_protocol
 from .sim_figures_3d import sim_grasps
 from .simulation import sim_fidelity, sim_q1_vs_resistance, sim_survival
 from .style import DEFAULT_DPI, FORMATS, SAVE_FORMATS, save_figure
@@ -40,6 +41,7 @@ FIGURES: dict[str, FigureBuilder] = dict(
             sim_q1_vs_resistance,
             sim_fidelity,
             sim_survival,
+            sim_protocol,
             fig10_sdh_grasps,
             sim_grasps,
         ),

@@ -1,12 +1,15 @@
-"""Per-object picture of a simulated grasp: where the tips sat and which push broke the grasp.
+"""Per-object picture of a simulated grasp: where the tips settled and which push broke the grasp.
 
 For each problem, its simulated A* cell (else its first simulated cell) and that cell's grasp
 labelled ``best`` (else its valid grasp of largest measured minimum): the mesh, the fingertips as
-shaded spheres at the contacts they started on in the simulation (``realized`` of an
-``ogcp.sim/2`` record, :class:`sim_eval.result.SimGraspRecord`), and the disturbance direction of
-least measured resistance as an arrow from the centre of mass: straight for a force, an arc around
-the axis for a torque. Records without realized contacts (``ogcp.sim/1``) put the spheres on the
-planned contacts, and the title says so. The arrow's part inside the object is drawn dashed.
+shaded spheres where they sat after preload and settling (``realized.settled_centres`` of an
+``ogcp.sim/2`` record, :class:`sim_eval.result.SimGraspRecord`: the state every disturbance trial
+starts from), and the disturbance direction of least measured resistance as an arrow from the
+centre of mass: straight for a force, an arc around the axis for a torque. Older records draw what
+they have, and the title says so: records without settled centres put the spheres where the tips
+started (on the realized contacts, ``tips at start positions``), ``ogcp.sim/1`` records without
+realized contacts on the planned contacts (``tips at planned contacts``). The arrow's part inside
+the object is drawn dashed.
 """
 
 from __future__ import annotations
@@ -18,6 +21,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
+from planner.grasp.contact_set import ContactSet
 from planner.grasp.reach import default_tip_radius
 from sim_eval.plan_input import PlanInput
 from sim_eval.result import SimGraspRecord
@@ -35,6 +39,8 @@ if TYPE_CHECKING:
 ARROW_LENGTH = 0.45
 ARROW_COLOUR = "#D55E00"
 TIP_COLOUR = (0.90, 0.62, 0.0)
+#: Title suffix per source of the drawn tip positions (see :func:`tip_centres`).
+TIP_CAPTIONS = {"settled": "", "start": " (tips at start positions)", "planned": " (tips at planned contacts)"}
 
 
 class NoSimulatedCells(NoGraspCells):
@@ -89,10 +95,10 @@ def sim_grasps(data: RunData, notes: list[str] | None = None) -> Figure:
         raise SkipFigure("no simulated cell's object and contact set could be rebuilt")
     figure, axes, pixels = panel_grid(len(inputs))
     for ax, (cell, grasp, rebuilt) in zip(axes, inputs, strict=True):
-        planned = draw_sim_grasp(ax, rebuilt, grasp, _tip_radius(cell, rebuilt), method_colour(cell.method), pixels)
+        tips = draw_sim_grasp(ax, rebuilt, grasp, _tip_radius(cell, rebuilt), method_colour(cell.method), pixels)
         weakest = int(np.nanargmin(grasp.measured))
         bound = "≥" if len(grasp.censored) > weakest and grasp.censored[weakest] else "="
-        where = " (tips at planned contacts)" if planned else ""
+        where = TIP_CAPTIONS[tips]
         ax.set_title(
             f"{names[cell.problem]}: {cell.label} {grasp.label}{where}\n"
             f"weakest {grasp.direction_labels[weakest]} {bound} {grasp.measured[weakest]:.3g} N"
@@ -111,9 +117,36 @@ def _tip_radius(cell: CellData, rebuilt: PlanInput) -> float:
     return default_tip_radius(rebuilt.mesh)
 
 
+def tip_centres(
+    grasp: SimGraspRecord, contacts: ContactSet, radius: float
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], str]:
+    """Where to draw a simulated grasp's tips, and the contacts that aim the camera.
+
+    Args:
+        grasp: The simulated grasp (``grasp`` indices present).
+        contacts: The plan's contact set.
+        radius: Fingertip radius [m].
+
+    Returns:
+        Tip sphere centres (m, 3) [m], contact points (m, 3) [m], their inward normals (m, 3), and
+        where the centres come from: ``settled`` (after preload and settling), ``start`` (on the
+        realized contacts, before settling) or ``planned`` (on the planned contacts).
+    """
+    index = np.asarray(grasp.grasp, dtype=int)
+    points = np.asarray(grasp.realized.get("points") or [], dtype=float).reshape(-1, 3)
+    normals = np.asarray(grasp.realized.get("normals") or [], dtype=float).reshape(-1, 3)
+    if points.shape != (len(index), 3) or normals.shape != points.shape:
+        points, normals = contacts.positions[index], contacts.normals[index]
+        return points - radius * normals, points, normals, "planned"
+    settled = np.asarray(grasp.realized.get("settled_centres") or [], dtype=float).reshape(-1, 3)
+    if settled.shape == points.shape and np.isfinite(settled).all():
+        return settled, points, normals, "settled"
+    return points - radius * normals, points, normals, "start"  # inward normals: the tip sits outside
+
+
 def draw_sim_grasp(
     ax: Axes, rebuilt: PlanInput, grasp: SimGraspRecord, radius: float, colour: str, pixels: int = 800
-) -> bool:
+) -> str:
     """Draw the object, the tip spheres and the weakest disturbance into ``ax``.
 
     Args:
@@ -125,16 +158,10 @@ def draw_sim_grasp(
         pixels: Side of the square rendered image [px].
 
     Returns:
-        Whether the tips were put on the planned contacts (no realized contacts recorded).
+        Where the tips were drawn: ``settled``, ``start`` or ``planned`` (see :func:`tip_centres`).
     """
-    mesh, contacts = rebuilt.mesh, rebuilt.contacts
-    index = np.asarray(grasp.grasp, dtype=int)
-    points = np.asarray(grasp.realized.get("points") or [], dtype=float).reshape(-1, 3)
-    normals = np.asarray(grasp.realized.get("normals") or [], dtype=float).reshape(-1, 3)
-    planned = points.shape != (len(index), 3) or normals.shape != points.shape
-    if planned:
-        points, normals = contacts.positions[index], contacts.normals[index]
-    centres = points - radius * normals  # inward normals: the tip sits outside
+    mesh = rebuilt.mesh
+    centres, points, normals, source = tip_centres(grasp, rebuilt.contacts, radius)
     diagonal = float(np.linalg.norm(mesh.bounds[1] - mesh.bounds[0]))
     com = np.asarray(mesh.center_mass if mesh.is_watertight else mesh.bounds.mean(axis=0), dtype=float)
     path = _arrow_path(grasp.directions[int(np.nanargmin(grasp.measured))], com, ARROW_LENGTH * diagonal)
@@ -148,7 +175,7 @@ def draw_sim_grasp(
     ax.set_ylim(pixels, 0)
     ax.set_aspect("equal")
     ax.axis("off")
-    return planned
+    return source
 
 
 def _arrow_path(direction: NDArray[np.float64], com: NDArray[np.float64], length: float) -> NDArray[np.float64]:

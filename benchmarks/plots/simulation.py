@@ -4,7 +4,8 @@ They read the ``ogcp.sim/1`` record of simulated cells: per grasp ``valid``, ``q
 ``measured_min`` and the per-direction ``predicted``, ``measured`` and ``censored``
 lists. Only valid grasps (every preload gate passed) count. A censored direction held
 to the end of the ramp, so its measured value is a lower bound; those points are drawn
-hollow.
+hollow. External cells (another planner's grasps) are drawn in the panel of the planners'
+problem on the same object (:mod:`.external`), beside A*, ES and HFTS.
 """
 
 from __future__ import annotations
@@ -15,7 +16,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .data import CellData, RunData, SkipFigure, number
-from .facets import MU, facet_figure, facet_names, faceted, mu_label, mu_order, row_names
+from .external import by_problem_with_external
+from .facets import facet_figure, facet_names, faceted, friction, mu_label, mu_order, row_names, soft_cells
 from .figures import MAX_PANELS
 from .style import method_colour, new_figure, series_colour, shared_legend, styled
 
@@ -83,8 +85,9 @@ def valid_grasps(cell: CellData) -> list[SimGrasp]:
 
 
 def _simulated(run: RunData) -> dict[Any, list[tuple[CellData, list[SimGrasp]]]]:
+    """Valid simulated grasps per problem and cell; external cells join the planners' problem of their object."""
     groups: dict[Any, list[tuple[CellData, list[SimGrasp]]]] = {}
-    for problem, cells in run.by_problem().items():
+    for problem, cells in by_problem_with_external(run).items():
         for cell in cells:
             grasps = valid_grasps(cell)
             if grasps:
@@ -120,8 +123,9 @@ def sim_q1_vs_resistance(run: RunData, notes: list[str] | None = None) -> Figure
     figure, axes = facet_figure(run, [(problem, None) for problem in groups], panel_height=2.0)
     lower_bounds = False
     for ax, (problem, cells) in zip(axes, groups.items()):
-        # A grasp returned by several methods (A* and ES) is one sample of the correlation.
-        unique: dict[tuple[int, ...], tuple[float, float]] = {}
+        # A grasp returned by several methods (A* and ES) is one sample of the correlation; an
+        # external cell's indices are into its own contacts, so grasps are told apart by problem too.
+        unique: dict[tuple[Any, tuple[int, ...]], tuple[float, float]] = {}
         for cell, grasps in cells:
             points = [
                 (g.q1, g.measured_min, g.min_censored)
@@ -130,7 +134,7 @@ def sim_q1_vs_resistance(run: RunData, notes: list[str] | None = None) -> Figure
             ]
             for g in grasps:
                 if g.q1 is not None and g.measured_min is not None:
-                    unique.setdefault(g.grasp, (g.q1, g.measured_min))
+                    unique.setdefault((cell.problem, g.grasp), (g.q1, g.measured_min))
             if not points:
                 continue
             q1, low, cut = (np.array(v) for v in zip(*points))
@@ -260,8 +264,10 @@ def sim_survival(run: RunData, notes: list[str] | None = None) -> Figure:
     split = faceted(run)
     names = row_names(run) if split else run.problem_names()
     facets: dict[Any, _Curves] = {}
-    for problem, cells in sorted(groups.items(), key=lambda item: mu_order(item[0][MU]) if split else (False, 0.0)):
-        curves = facets.setdefault(problem[MU] if split else None, _Curves())
+    for problem, cells in sorted(
+        groups.items(), key=lambda item: mu_order(friction(item[0])) if split else (False, 0.0, 0.0)
+    ):
+        curves = facets.setdefault(friction(problem) if split else None, _Curves())
         for cell, grasps in cells:
             low = [g.measured_min for g in grasps if g.measured_min is not None]
             curves.per_method.setdefault(cell.label, (cell, []))[1].extend(low)
@@ -277,7 +283,7 @@ def sim_survival(run: RunData, notes: list[str] | None = None) -> Figure:
     # One facet keeps the two panels side by side; several stack them, a column per mu.
     figure, axes = new_figure(2 * n, panel_height=2.3, max_columns=max(n, 2))
     for j, (mu, curves) in enumerate(facets.items()):
-        prefix = f"{mu_label(mu)}: " if split else ""
+        prefix = f"{mu_label(mu, soft_cells(run))}: " if split else ""
         _survival_panels((axes[j], axes[n + j]), curves, objects, prefix)
     return figure
 

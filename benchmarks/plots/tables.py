@@ -3,7 +3,9 @@
 Rows are problems (objects), columns the plain variant of each method: A*, WA* per eps,
 Dijkstra, ES, ES (pruned), HFTS, each only where the run has it. A cell is the median CPU
 time over the matching cells (several seeds); HFTS's time is the sum over its runs, ES's
-the sum over its workers. Minutes when any value reaches ten minutes, else seconds.
+the sum over its workers. Minutes when any value reaches ten minutes, else seconds. External
+cells (another planner's grasps) have no column: ogcp times only their evaluation, not their
+planning; Fig. 3 and the simulation figures show them beside A* (:mod:`.external`).
 """
 
 from __future__ import annotations

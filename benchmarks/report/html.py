@@ -256,14 +256,14 @@ def write_view(result: str | Path, out: str | Path | None = None) -> ReportResul
     schema = str(record.get("schema", "")) if isinstance(record, dict) else ""
     scenes = Scenes()
     if schema.startswith("ogcp.plan/"):
-        scenes.add_plan(result.stem, record)
+        scenes.add_plan(result.stem, record, plan_file=result)
     elif schema.startswith("ogcp.sim/"):
         scenes.add_sim(result.stem, record)
     elif schema.startswith("ogcp.cell/"):
         cell = CellRecord.from_dict(record)
         if cell.plan is None:
             raise OgcpError(f"{result}: the cell has no plan to show (status {cell.status})")
-        scenes.add_plan(cell.describe(), cell.plan, cell.simulation)
+        scenes.add_plan(cell.describe(), cell.plan, cell.simulation, plan_file=result)
     else:
         raise OgcpError(f"{result} is not a plan, simulation or cell record (schema {schema or 'missing'!r})")
     path = Path(out) if out is not None else result.with_suffix(".html")

@@ -3,9 +3,10 @@
 A scene is what the viewer draws for one grasp: the object mesh (shared by every grasp on that
 object, so a report holds each mesh once), the contact set's points (shared per contact set),
 the grasp's contacts and inward normals, and the simulated outcome. Meshes are rebuilt from the
-records (:func:`sim_eval.plan_input.plan_input` for plans, the recorded object description for
-simulation records), never stored in them, and coarsened by vertex clustering to at most
-:data:`MAX_FACES` faces so that a report stays small.
+records (:func:`sim_eval.plan_input.plan_input` for plans, which shows the contacts a plan
+records, on its mesh found as ``ogcp evaluate`` finds it; the recorded object description,
+re-sampled, for simulation records on their own), never stored in them, and coarsened by vertex
+clustering to at most :data:`MAX_FACES` faces so that a report stays small.
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ import json
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -146,14 +148,21 @@ class Scenes:
             )
         return self._mesh_index[key]
 
-    def _contact_set(self, source: dict[str, Any], plan: dict[str, Any] | None) -> tuple[int, ContactSet | None]:
-        """The index and rebuilt contact set of a contact-set source (-1, None when it cannot be rebuilt)."""
+    def _contact_set(
+        self, source: dict[str, Any], plan: dict[str, Any] | None, plan_file: Path | None = None
+    ) -> tuple[int, ContactSet | None]:
+        """The index and rebuilt contact set of a contact-set source (-1, None when it cannot be rebuilt).
+
+        A plan's set is the one it records, checked against its mesh as ``ogcp evaluate`` does
+        (:func:`sim_eval.plan_input.plan_input`; the mesh file is looked for next to ``plan_file``
+        first); only a record without a plan is re-sampled from its description.
+        """
         key = _key(source)
         if key in self._set_index:
             return self._set_index[key]
         try:
             if plan is not None:
-                rebuilt = plan_input(plan)
+                rebuilt = plan_input(plan, plan_file)
                 mesh, contacts = rebuilt.mesh, rebuilt.contacts
             else:
                 mesh, contacts = _rebuild(source)
@@ -168,16 +177,20 @@ class Scenes:
         self._set_index[key] = (index, contacts)
         return self._set_index[key]
 
-    def add_plan(self, title: str, plan: dict[str, Any], sim: dict[str, Any] | None = None) -> None:
+    def add_plan(
+        self, title: str, plan: dict[str, Any], sim: dict[str, Any] | None = None, plan_file: str | Path | None = None
+    ) -> None:
         """Add the grasps of a plan: every simulated grasp, else the plan's best grasp.
 
         Args:
             title: What the grasps are (object, method), shown above the view.
             plan: The ``ogcp.plan/1`` record.
             sim: Its ``ogcp.sim/1`` or ``/2`` record, if it was simulated.
+            plan_file: The file the record was read from: a mesh file is looked for relative to
+                it first, as ``ogcp evaluate`` does (None: only the recorded paths).
         """
         source = (plan.get("contact_set") or {}).get("source") or plan.get("source") or {}
-        index, contacts = self._contact_set(dict(source), plan)
+        index, contacts = self._contact_set(dict(source), plan, None if plan_file is None else Path(plan_file))
         if sim is not None:
             self._add_sim(title, SimRecord.from_dict(sim), index, contacts)
             return

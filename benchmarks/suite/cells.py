@@ -97,17 +97,25 @@ def contact_set(cell: Cell) -> ContactSet:
         cell.mu,
         cell.cone_edges,
         cell.tip_radius,
+        cell.torsional_friction,
     )
 
 
 @lru_cache(maxsize=8)
 def _contacts(
-    spec: str, diagonal: float | None, n: int, seed: int, mu: float, cone_edges: int, tip_radius: float | None
+    spec: str,
+    diagonal: float | None,
+    n: int,
+    seed: int,
+    mu: float,
+    cone_edges: int,
+    tip_radius: float | None,
+    torsion: float = 0.0,
 ) -> ContactSet:
     """Sample a cell's contacts; ``tip_radius`` None is the object's default fingertip, 0 plain sampling [m]."""
     mesh, source = resolve_object(spec, diagonal)
     radius = default_tip_radius(mesh) if tip_radius is None else tip_radius
-    return sample_contacts(mesh, n, seed, mu, cone_edges, source, tip_radius=radius)
+    return sample_contacts(mesh, n, seed, mu, cone_edges, source, tip_radius=radius, torsional_friction=torsion)
 
 
 def plan_record(cell: Cell, contacts: ContactSet, time_limit: float | None = None) -> dict[str, Any]:

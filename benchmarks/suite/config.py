@@ -31,6 +31,7 @@ GROUP_KEYS = (
     "contact_seeds",
     "contacts",
     "cone_edges",
+    "contact_model",
     "description",
     "diagonal",
     "methods",
@@ -40,6 +41,7 @@ GROUP_KEYS = (
     "objects",
     "simulate",
     "tip_radius",
+    "torsional_friction",
 )
 TOP_KEYS = (*GROUP_KEYS, "group", "schema_version", "simulation")
 #: ``tip_radius`` of a cell's id and params when the contacts are kept for the default fingertip.
@@ -103,6 +105,7 @@ class Cell:
             (:func:`planner.grasp.reach.default_tip_radius` of the object, resolved when sampling).
         grasps_path: Absolute path of the ``ogcp.grasps/1`` file of an external cell, else None
             (not part of the id: its content hash, in ``variant``, is).
+        torsional_friction: Torsional friction coefficient of soft fingers [m]; 0 = hard fingers.
     """
 
     object: ObjectSpec
@@ -119,6 +122,7 @@ class Cell:
     simulate: bool = True
     tip_radius: float | None = None
     grasps_path: str | None = None
+    torsional_friction: float = 0.0
 
     @property
     def tip_radius_key(self) -> float | str | None:
@@ -148,6 +152,8 @@ class Cell:
         }
         if self.tip_radius_key is not None:
             form["tip_radius"] = self.tip_radius_key
+        if self.torsional_friction > 0:  # hard cells keep the ids they had before soft fingers
+            form["torsional_friction"] = self.torsional_friction
         return form
 
     @property
@@ -170,6 +176,7 @@ class Cell:
             variant=dict(self.variant),
             label=self.label,
             tip_radius=self.tip_radius_key,
+            torsional_friction=self.torsional_friction or None,
         ).to_dict()
 
 

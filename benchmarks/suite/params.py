@@ -12,7 +12,8 @@ from typing import Any
 
 from planner.config.methods import DEFAULT_HAND_THRESHOLD
 from planner.config.options import ConfigError, Option
-from planner.grasp.defaults import CONTACT_SEED
+from planner.grasp.contact_model import torsion_of
+from planner.grasp.defaults import CONTACT_MODEL, CONTACT_SEED, TORSIONAL_FRICTION
 from planner.infra.errors import OgcpError
 from planner.methods.registry import EXHAUSTIVE_METHODS, METHODS, OPTIMAL_METHODS
 
@@ -22,6 +23,7 @@ __all__ = [
     "OPTIMAL_METHODS",
     "TITLES",
     "complete",
+    "contact_models",
     "default_label",
     "seed_values",
     "values_of",
@@ -112,3 +114,31 @@ def _short(value: Any) -> str:
     if isinstance(value, bool):
         return str(value).lower()
     return f"{value:g}" if isinstance(value, float) else str(value)
+
+
+def contact_models(where: str, table: dict[str, Any]) -> list[float]:
+    """A group's contact models as torsional friction coefficients [m] (0 = hard), in the order given.
+
+    ``contact_model`` (one name or a list) and ``torsional_friction`` (one value or a list) sweep
+    like ``mu``: ``contact_model = ["hard", "soft"]`` with ``torsional_friction = [0.01, 0.02]``
+    gives hard fingers and soft ones at both coefficients; a coefficient alone implies soft.
+
+    Raises:
+        OgcpError: For an unknown model, a coefficient out of range, one given with only the hard
+            model, or soft fingers with a zero coefficient.
+    """
+    given = table.get("contact_model")
+    names: list[str | None] = values_of(f"{where}.contact_model", given, CONTACT_MODEL) if given is not None else [None]
+    torsions: list[float | None] = (
+        values_of(f"{where}.torsional_friction", table["torsional_friction"], TORSIONAL_FRICTION)
+        if "torsional_friction" in table
+        else [None]
+    )
+    found: list[float] = []
+    for name in names:
+        # Beside soft fingers, the hard model takes none of the listed coefficients.
+        for torsion in [None] if name == "hard" and len(names) > 1 else torsions:
+            value = torsion_of(name, torsion, f"{where}.torsional_friction")
+            if value not in found:
+                found.append(value)
+    return found

@@ -26,7 +26,15 @@ from benchmarks.suite.config import (
     Suite,
     best_grasp,
 )
-from benchmarks.suite.params import METHOD_PARAMS, UNLABELLED, complete, default_label, seed_values, values_of
+from benchmarks.suite.params import (
+    METHOD_PARAMS,
+    UNLABELLED,
+    complete,
+    contact_models,
+    default_label,
+    seed_values,
+    values_of,
+)
 from planner.config.methods import DEFAULT_FINGERS, DEFAULT_SEED, HAND_FINGERS
 from planner.config.options import Option
 from planner.grasp.defaults import (
@@ -39,6 +47,7 @@ from planner.grasp.defaults import (
     TIP_RADIUS,
     check_contact_memory,
 )
+from planner.grasp.wrench import primitives_per_contact
 from planner.infra.assets import asset_path, assets_dir
 from planner.infra.errors import OgcpError, choice_error
 from planner.objects import BUILTIN_OBJECTS, DEFAULT_DIAGONAL, MESH_SUFFIXES, file_sha256
@@ -161,6 +170,7 @@ class _Parser:
         seeds = seed_values(f"{where}.contact_seeds", table.get("contact_seeds", DEFAULT_SEED))
         ms = values_of(f"{where}.m", table.get("m", DEFAULT_FINGERS), FINGERS)
         mus = values_of(f"{where}.mu", table.get("mu", DEFAULT_MU), MU)
+        torsions = contact_models(where, table)
         edges = CONE_EDGES.check(f"{where}.cone_edges", table.get("cone_edges", DEFAULT_CONE_EDGES))
         simulate = Option("bool", True).check(f"{where}.simulate", table.get("simulate", True))
         diagonal = DIAGONAL.check(f"{where}.diagonal", table.get("diagonal", DEFAULT_DIAGONAL))
@@ -179,27 +189,29 @@ class _Parser:
         external = [self.external_cell(where, group, objects, simulate, v) for v in every if v[0] == EXTERNAL_METHOD]
         if max(ms) > min(contacts):
             raise OgcpError(f"{where}.m: m = {max(ms)} exceeds the contact count {min(contacts)}")
-        count = math.prod(map(len, (objects, contacts, seeds, ms, mus, tips, variants))) + len(external)
+        count = math.prod(map(len, (objects, contacts, seeds, ms, mus, torsions, tips, variants))) + len(external)
         self.cell_count += count
         if self.cell_count > MAX_CELLS:  # counted before the cells are made
             raise OgcpError(
                 f"{where}: {count} cells ({len(objects)} objects x {len(contacts)} contact counts x {len(seeds)} "
-                f"seeds x {len(ms)} m x {len(mus)} mu x {len(tips)} tip radii x {len(variants)} method variants"
+                f"seeds x {len(ms)} m x {len(mus)} mu x {len(torsions)} contact models x {len(tips)} tip radii x "
+                f"{len(variants)} method variants"
                 f" + {len(external)} external grasps files), "
                 f"{self.cell_count} with the groups before; at most {MAX_CELLS} per suite: split it into several suites"
             )
         try:
             # Before any cell runs: the largest set of the group, and each exhaustive search's chunks.
-            check_contact_memory(max(contacts), edges)
+            primitives = primitives_per_contact(edges, max(torsions))
+            check_contact_memory(max(contacts), primitives)
             for _, params, _, _ in variants:
                 if "chunk" in params:
-                    check_contact_memory(max(contacts), edges, max(ms), params["chunk"])
+                    check_contact_memory(max(contacts), primitives, max(ms), params["chunk"])
         except OgcpError as exc:
             raise OgcpError(f"{where}.contacts: {exc}") from exc
         self.check_labels(every)
         cells = list(external)
-        for obj, n, seed, m, mu, tip, (method, params, label, vwhere) in itertools.product(
-            objects, contacts, seeds, ms, mus, tips, variants
+        for obj, n, seed, m, mu, torsion, tip, (method, params, label, vwhere) in itertools.product(
+            objects, contacts, seeds, ms, mus, torsions, tips, variants
         ):
             if params.get("hand") is not None and m != HAND_FINGERS:
                 raise OgcpError(
@@ -220,6 +232,7 @@ class _Parser:
                     (group,),
                     simulate,
                     tip,
+                    torsional_friction=torsion,
                 )
             )
         return cells
@@ -277,6 +290,7 @@ class _Parser:
             # 0: no reach-aware sampling, so the id and params carry no tip radius.
             0.0,
             path,
+            grasps.torsional_friction,
         )
 
     def objects(self, where: str, value: Any) -> list[ObjectSpec]:

@@ -24,7 +24,17 @@ CELL_SCHEMA = "ogcp.cell/1"
 TRACEBACK_LINES = 15
 #: Params that make two cells plan on the same contact set: object, |C|, contact seed, m, mu, k, diagonal
 #: and the fingertip radius the contacts were kept for (absent, so None, for plain sampling).
-PROBLEM_FIELDS = ("object", "contacts", "contact_seed", "m", "mu", "cone_edges", "diagonal", "tip_radius")
+PROBLEM_FIELDS = (
+    "object",
+    "contacts",
+    "contact_seed",
+    "m",
+    "mu",
+    "cone_edges",
+    "diagonal",
+    "tip_radius",
+    "torsional_friction",
+)
 
 Problem = tuple[Any, ...]
 
@@ -47,6 +57,8 @@ class CellParams:
         tip_radius: Fingertip radius the contacts were kept for: ``"default"`` (the
             simulation's default fingertip of the object), a radius [m], or None for the
             paper's plain sampling (then the key is left out, as in records made before it).
+        torsional_friction: Torsional friction coefficient of soft fingers [m]; None for hard
+            fingers (the key is left out, and so is ``contact_model``, as in records made before it).
     """
 
     object: str
@@ -60,12 +72,17 @@ class CellParams:
     variant: Mapping[str, Any]
     label: str
     tip_radius: float | str | None = None
+    torsional_friction: float | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """JSON form (the record's ``params`` object): the :data:`PROBLEM_FIELDS` first, then the rest in field order."""
         values = {f.name: dict(self.variant) if f.name == "variant" else getattr(self, f.name) for f in fields(self)}
         if self.tip_radius is None:
             del values["tip_radius"]  # plain sampling: the params of plain cells are unchanged
+        if self.torsional_friction is None:
+            del values["torsional_friction"]  # hard fingers: the params of hard cells are unchanged
+        else:
+            values["contact_model"] = "soft"
         order = [name for name in PROBLEM_FIELDS if name in values]
         return {name: values[name] for name in [*order, *(k for k in values if k not in order)]}
 

@@ -22,6 +22,7 @@ SELECTORS: dict[str, Callable[[Cell], tuple[str, ...]]] = {
     "contacts": lambda cell: (str(cell.contacts),),
     # As a suite writes it: mu = 0.5 is selected by --only mu=0.5.
     "mu": lambda cell: (f"{cell.mu:g}",),
+    "contact_model": lambda cell: ("soft" if cell.torsional_friction > 0 else "hard",),
 }
 
 Selection = dict[str, frozenset[str]]

@@ -340,4 +340,6 @@ def _digest(contacts: ContactSet) -> str:
     for array in (contacts.positions, contacts.normals, contacts.com):
         h.update(np.ascontiguousarray(array).tobytes())
     h.update(repr((contacts.torque_scale, contacts.mu, contacts.cone_edges)).encode())
+    if contacts.torsional_friction:  # hard sets keep the digests their checkpoints were written with
+        h.update(repr(contacts.torsional_friction).encode())
     return h.hexdigest()[:16]

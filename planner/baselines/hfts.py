@@ -161,7 +161,15 @@ class Hierarchy:
 def _signed_q1(contacts: ContactSet, positions: NDArray[np.float64], normals: NDArray[np.float64]) -> float:
     if np.any(np.linalg.norm(normals, axis=1) < 1e-12):
         return -math.inf
-    w = contact_wrenches(positions, normals, contacts.com, contacts.torque_scale, contacts.mu, contacts.cone_edges)
+    w = contact_wrenches(
+        positions,
+        normals,
+        contacts.com,
+        contacts.torque_scale,
+        contacts.mu,
+        contacts.cone_edges,
+        contacts.torsional_friction,
+    )
     return signed_q1(w.reshape(-1, 6))
 
 

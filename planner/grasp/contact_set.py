@@ -2,8 +2,9 @@
 
 A :class:`ContactSet` carries everything Q1 needs, so every method that receives the same
 set computes the same quality: positions, inward unit normals, the wrench reference
-(centre of mass), the torque scale rho, the friction coefficient mu and the number of
-cone edges k.
+(centre of mass), the torque scale rho, the friction coefficient mu, the number of
+cone edges k and the contact model (hard fingers, or soft fingers with a torsional
+friction coefficient; see :mod:`planner.grasp.wrench`).
 """
 
 from __future__ import annotations
@@ -32,10 +33,11 @@ from planner.grasp.defaults import (
     MAX_MU,
     MIN_DIAGONAL,
     TIP_RADIUS,
+    TORSIONAL_FRICTION,
     check_contact_memory,
 )
 from planner.grasp.reach import fill_reachable, reach_settings
-from planner.grasp.wrench import contact_wrenches
+from planner.grasp.wrench import contact_wrenches, primitives_per_contact
 from planner.infra.atomic import write_json_atomic
 from planner.infra.errors import OgcpError
 from planner.infra.tolerance import TOL
@@ -67,6 +69,9 @@ class ContactSet:
         mu: Coulomb friction coefficient.
         cone_edges: Number of friction-cone edges k.
         source: Provenance of the set (object, sampling seed, ...), JSON-ready.
+        torsional_friction: Torsional friction coefficient gamma [m] (MuJoCo's, condim 4):
+            0 for hard fingers (point contacts), > 0 for soft fingers that also resist a
+            moment of up to gamma times the normal force about the normal.
     """
 
     positions: NDArray[np.float64]
@@ -76,6 +81,7 @@ class ContactSet:
     mu: float = DEFAULT_MU
     cone_edges: int = DEFAULT_CONE_EDGES
     source: dict[str, Any] = field(default_factory=dict)
+    torsional_friction: float = 0.0
 
     def __post_init__(self) -> None:
         try:
@@ -105,8 +111,9 @@ class ContactSet:
         if not (math.isfinite(self.torque_scale) and self.torque_scale > 0):
             raise OgcpError(f"torque scale rho must be a positive number of metres, got {self.torque_scale!r}")
         _check_friction(self.mu, self.cone_edges)
+        TORSIONAL_FRICTION.check("torsional_friction [m]", self.torsional_friction)
         # A loaded set is checked too: its size was never asked for, but planning allocates by it.
-        check_contact_memory(len(positions), int(self.cone_edges))
+        check_contact_memory(len(positions), primitives_per_contact(int(self.cone_edges), self.torsional_friction))
         object.__setattr__(self, "positions", _readonly(positions))
         # Rows that are already unit length are kept bit-for-bit, so a JSON round trip
         # (or re-wrapping a set) reproduces the normals exactly.
@@ -116,19 +123,31 @@ class ContactSet:
         object.__setattr__(self, "torque_scale", float(self.torque_scale))
         object.__setattr__(self, "mu", float(self.mu))
         object.__setattr__(self, "cone_edges", int(self.cone_edges))
+        object.__setattr__(self, "torsional_friction", float(self.torsional_friction))
+
+    @property
+    def contact_model(self) -> str:
+        """``"soft"`` when the contacts resist torsion (``torsional_friction`` > 0), else ``"hard"``."""
+        return "soft" if self.torsional_friction > 0 else "hard"
 
     def __len__(self) -> int:
         return len(self.positions)
 
     @cached_property
     def wrenches(self) -> NDArray[np.float64]:
-        """Cone-edge wrenches of every contact, shape (n, k, 6) [N] (torque / rho)."""
-        w = contact_wrenches(self.positions, self.normals, self.com, self.torque_scale, self.mu, self.cone_edges)
+        """Wrench primitives of every contact, shape (n, K, 6) [N] (torque / rho).
+
+        K = k cone edges for hard fingers, :func:`~planner.grasp.wrench.primitives_per_contact`
+        for soft ones.
+        """
+        w = contact_wrenches(
+            self.positions, self.normals, self.com, self.torque_scale, self.mu, self.cone_edges, self.torsional_friction
+        )
         w.setflags(write=False)
         return w
 
     def subset_wrenches(self, indices: NDArray[np.intp]) -> NDArray[np.float64]:
-        """Wrenches of the given contacts stacked, shape (len(indices) * k, 6).
+        """Wrenches of the given contacts stacked, shape (len(indices) * K, 6).
 
         Args:
             indices: Contact indices, shape (m,), each in ``[0, n)``.
@@ -159,6 +178,7 @@ class ContactSet:
             "torque_scale": self.torque_scale,
             "mu": self.mu,
             "cone_edges": self.cone_edges,
+            **({"torsional_friction": self.torsional_friction} if self.torsional_friction else {}),
             "source": self.source,
         }
 
@@ -189,6 +209,7 @@ class ContactSet:
                 mu=float(data.get("mu", DEFAULT_MU)),
                 cone_edges=data.get("cone_edges", DEFAULT_CONE_EDGES),
                 source=dict(data.get("source", {})),
+                torsional_friction=data.get("torsional_friction", 0.0),
             )
         except OgcpError as exc:
             raise OgcpError(f"{where}: {exc}") from exc
@@ -258,7 +279,7 @@ def _check_friction(mu: Any, cone_edges: Any) -> None:
 
 
 def _check_sampling(
-    mesh: trimesh.Trimesh, n: Any, seed: Any, mu: Any, cone_edges: Any, tip_radius: float | None
+    mesh: trimesh.Trimesh, n: Any, seed: Any, mu: Any, cone_edges: Any, tip_radius: float | None, torsion: Any
 ) -> None:
     """Everything :func:`sample_contacts` is given, checked before it allocates anything of size n.
 
@@ -273,7 +294,8 @@ def _check_sampling(
     _check_friction(mu, cone_edges)
     if tip_radius is not None:
         TIP_RADIUS.check("tip radius [m]", tip_radius)
-    check_contact_memory(count, int(cone_edges))
+    TORSIONAL_FRICTION.check("torsional_friction [m]", torsion)
+    check_contact_memory(count, primitives_per_contact(int(cone_edges), float(torsion)))
     diagonal = (
         float(np.linalg.norm(np.ptp(np.asarray(mesh.vertices, dtype=float), axis=0))) if len(mesh.vertices) else 0.0
     )
@@ -317,6 +339,7 @@ def sample_contacts(
     *,
     tip_radius: float | None = None,
     reach_tolerance: float | None = None,
+    torsional_friction: float = 0.0,
 ) -> ContactSet:
     """Sample exactly ``n`` contacts evenly over a mesh surface.
 
@@ -341,6 +364,7 @@ def sample_contacts(
             A positive r is recorded in ``source["tip_radius"]``.
         reach_tolerance: Cut depth a kept contact's sphere may have [m]; None = 1 % of r
             (:data:`planner.grasp.reach.REACH_TOLERANCE`). Recorded with r.
+        torsional_friction: Torsional friction coefficient [m] of soft fingers; 0 = hard fingers.
 
     Returns:
         The contact set; normals are the inward face normals at the samples.
@@ -352,7 +376,7 @@ def sample_contacts(
             too little of the surface is reachable by the tip to give n contacts. All are
             checked before anything of size n is allocated.
     """
-    _check_sampling(mesh, n, seed, mu, cone_edges, tip_radius)
+    _check_sampling(mesh, n, seed, mu, cone_edges, tip_radius, torsional_friction)
     n, seed = int(n), int(seed)
     reach = reach_settings(tip_radius, reach_tolerance)
     # trimesh logs a warning when even sampling falls short; the shortfall is filled below.
@@ -376,4 +400,4 @@ def sample_contacts(
     if reach is not None:
         # Only reach-aware sets carry these keys, so records of plain sets are unchanged.
         record.update({"tip_radius": reach[0], "reach_tolerance": reach[1]})
-    return ContactSet(points, -mesh.face_normals[faces], com, rho, mu, cone_edges, record)
+    return ContactSet(points, -mesh.face_normals[faces], com, rho, mu, cone_edges, record, float(torsional_friction))

@@ -41,10 +41,26 @@ MAX_CONE_EDGES = 64
 MIN_DIAGONAL = 1e-3
 MAX_DIAGONAL = 100.0
 
+#: Contact models: point contacts with Coulomb friction, or soft fingers that also resist a
+#: moment about the normal (torsional friction).
+CONTACT_MODELS = ("hard", "soft")
+#: Torsional friction coefficient [m] of soft fingers when none is given: DexGraspBench's
+#: value (MuJoCo's own default is 0.005). Like MuJoCo's, it is a length, not scaled with the object.
+DEFAULT_TORSIONAL_FRICTION = 0.02
+#: Largest torsional friction coefficient [m]: the largest object's diagonal (a moment per unit
+#: normal force beyond the object's size has no physical meaning).
+MAX_TORSIONAL_FRICTION = MAX_DIAGONAL
+
 #: Friction coefficient mu.
 MU = Option("float", DEFAULT_MU, "friction coefficient mu", minimum=0, exclusive=True, maximum=MAX_MU)
 #: Friction-cone edges k.
 CONE_EDGES = Option("int", DEFAULT_CONE_EDGES, "friction-cone edges k", minimum=3, maximum=MAX_CONE_EDGES)
+#: Contact model.
+CONTACT_MODEL = Option("choice", "hard", "contact model", choices=CONTACT_MODELS)
+#: Torsional friction coefficient gamma [m] of soft fingers (0 = hard fingers).
+TORSIONAL_FRICTION = Option(
+    "float", None, "torsional friction coefficient [m] of soft fingers", minimum=0, maximum=MAX_TORSIONAL_FRICTION
+)
 #: Contacts sampled from the surface; their memory is checked by :func:`check_contact_memory`.
 CONTACTS = Option("int", DEFAULT_CONTACTS, "number of contacts sampled from the surface", minimum=1)
 #: Seed of the contact sampling (the methods' seeds have the same range).

@@ -73,7 +73,7 @@ class GraspQuality:
             return 0.0
         indices = np.flatnonzero(np.unpackbits(union, count=self.n))
         hints = None
-        if vectors is not None and len(indices) * self.contacts.cone_edges > KERNEL_MAX:
+        if vectors is not None and len(indices) * self.contacts.wrenches.shape[1] > KERNEL_MAX:
             # Hints only steer the qhull loop, which sets the kernel takes never reach.
             hints = self.bounds.lowest_directions(vectors, HINT_DIRECTIONS)
         cert = q1_certificate(self.contacts.subset_wrenches(indices), hints)

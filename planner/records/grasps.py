@@ -28,6 +28,7 @@ import numpy as np
 import trimesh
 from numpy.typing import ArrayLike, NDArray
 
+from planner.grasp.contact_model import torsion_of
 from planner.grasp.defaults import CONE_EDGES, DEFAULT_CONE_EDGES, DIAGONAL, MU
 from planner.infra.atomic import read_json, write_json_atomic
 from planner.infra.errors import OgcpError
@@ -124,6 +125,8 @@ class ExternalGrasps:
         base: Folder a relative mesh path is relative to (the record file's); None: the
             current folder.
         path: The file the record was read from, None when not read from a file.
+        torsional_friction: Torsional friction coefficient of soft fingers [m] (the record's
+            ``contact_model = "soft"`` and ``torsional_friction``); 0 = hard fingers.
     """
 
     grasps: tuple[ExternalGrasp, ...]
@@ -135,6 +138,7 @@ class ExternalGrasps:
     method: str | None = None
     base: Path | None = None
     path: Path | None = None
+    torsional_friction: float = 0.0
 
     def method_of(self, grasp: ExternalGrasp) -> str | None:
         """The planner of a grasp: its own ``method``, else the record's."""
@@ -178,6 +182,8 @@ class ExternalGrasps:
         if self.sha256 is not None:
             obj["sha256"] = self.sha256
         record: dict[str, Any] = {"schema": GRASPS_SCHEMA, "object": obj, "mu": self.mu, "cone_edges": self.cone_edges}
+        if self.torsional_friction > 0:
+            record.update(contact_model="soft", torsional_friction=self.torsional_friction)
         if self.method is not None:
             record["method"] = self.method
         record["grasps"] = [g.to_dict() for g in self.grasps]
@@ -213,6 +219,7 @@ class ExternalGrasps:
             raise OgcpError(f"{where}: mu: missing (the friction coefficient of the contacts, e.g. 0.5)")
         mu = MU.check(f"{where}: mu", data["mu"])
         cone_edges = CONE_EDGES.check(f"{where}: cone_edges", data.get("cone_edges", DEFAULT_CONE_EDGES))
+        torsion = torsion_of(data.get("contact_model"), data.get("torsional_friction"), f"{where}: torsional_friction")
         method = data.get("method")
         method = None if method is None else _text(where, "method", method)
         grasps = data.get("grasps")
@@ -227,6 +234,7 @@ class ExternalGrasps:
             sha256=sha256,
             method=method,
             base=base,
+            torsional_friction=torsion,
         )
 
     @classmethod
@@ -238,6 +246,7 @@ class ExternalGrasps:
         labels: Sequence[str] | None = None,
         method: str | None = None,
         scores: Sequence[float | None] | None = None,
+        torsional_friction: float = 0.0,
     ) -> ExternalGrasps:
         """Grasps given as arrays, checked as a record's are (the messages name the same paths).
 
@@ -248,6 +257,7 @@ class ExternalGrasps:
             labels: A label per grasp (default ``grasp-<i>``).
             method: The planner of every grasp.
             scores: The planner's score per grasp (None where it has none).
+            torsional_friction: Torsional friction coefficient of soft fingers [m]; 0 = hard.
 
         Raises:
             OgcpError: For a bad array, count of labels or scores, mu or k.
@@ -270,6 +280,8 @@ class ExternalGrasps:
             entries.append(entry)
         # Checked as a record with a stand-in object, which the result then drops: the caller has the mesh.
         record = {"schema": GRASPS_SCHEMA, "object": {"mesh": "-"}, "mu": mu, "cone_edges": cone_edges}
+        if torsional_friction:
+            record["torsional_friction"] = torsional_friction
         if method is not None:
             record["method"] = method
         return replace(cls.from_dict({**record, "grasps": entries}, where="given grasps"), mesh=None)

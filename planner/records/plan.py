@@ -133,6 +133,8 @@ def contact_set_record(contacts: ContactSet) -> dict[str, Any]:
         "torque_scale": contacts.torque_scale,
         "mu": contacts.mu,
         "cone_edges": contacts.cone_edges,
+        "contact_model": contacts.contact_model,
+        "torsional_friction": contacts.torsional_friction,
         "source": contacts.source,
         "positions": contacts.positions.tolist(),
         "normals": contacts.normals.tolist(),
@@ -218,6 +220,7 @@ class ContactSampling:
         mu: Friction coefficient.
         cone_edges: Friction-cone edges k.
         com: Recorded centre of mass [m], None if the plan has none.
+        torsional_friction: Torsional friction coefficient [m]; 0 = hard fingers.
         tip_radius: Fingertip radius the contacts were kept for [m]; None = plain sampling
             (plans made before reach-aware sampling, or with tip radius 0).
         reach_tolerance: Cut depth allowed with it [m]; None with ``tip_radius``.
@@ -231,6 +234,7 @@ class ContactSampling:
     com: tuple[float, ...] | None
     tip_radius: float | None = None
     reach_tolerance: float | None = None
+    torsional_friction: float = 0.0
 
 
 def load_plan(path: str | Path) -> dict[str, Any]:
@@ -269,6 +273,8 @@ def contact_sampling(record: dict[str, Any]) -> ContactSampling:
         # Absent in plain-sampled sets: they are sampled again without a tip, as before.
         tip_radius=None if tip is None else float(tip),
         reach_tolerance=None if tip is None or tolerance is None else float(tolerance),
+        # Absent in plans made before soft fingers: they were all hard.
+        torsional_friction=float(block.get("torsional_friction") or 0.0),
     )
 
 
@@ -319,6 +325,7 @@ def recorded_contacts(record: dict[str, Any]) -> ContactSet | None:
             block.get("mu", DEFAULT_MU),
             block.get("cone_edges", DEFAULT_CONE_EDGES),
             dict(source),
+            block.get("torsional_friction") or 0.0,
         )
     except (TypeError, ValueError) as exc:
         raise OgcpError(f"plan field contact_set: the recorded contacts are not a contact set ({exc})") from None

@@ -91,6 +91,10 @@ EDITS: dict[str, tuple[Edit, str]] = {
     "normal": (_nudge_normal, "inward normal of contact {g1} recorded [0.01, 1, 0], rebuilt [0, 1, 0]"),
     "mu": (_set("contact_set.mu", 0.8), "mu recorded 0.8, but its q1 and q_ows fit mu 0.5"),
     "cone_edges": (_set("contact_set.cone_edges", 6), "cone_edges recorded 6, but its q1 and q_ows fit cone_edges 8"),
+    "torsional_friction": (
+        _set("contact_set.torsional_friction", 0.01),
+        "torsional_friction recorded 0.01, but its q1 and q_ows fit torsional_friction 0",
+    ),
     "rho": (_set("contact_set.torque_scale", 0.12), "torque scale rho [m] recorded 0.12, rebuilt 0.1;"),
     "com": (_set("contact_set.com", [0.001, 0.0, 0.0]), "centre of mass [m] recorded [0.001, 0, 0], rebuilt [0, 0, 0]"),
     "size": (_set("contact_set.size", 31), "contact set size recorded 31, rebuilt 30"),
@@ -119,7 +123,10 @@ def test_friction_model_changed_away_from_the_defaults_names_both_fields(box_pla
     message = _refused(record)
     recorded = f"[{box_plan['q1']:.12g}, {box_plan['q_ows']:.12g}]"
     assert message.startswith(f"{REFUSAL}(q1, q_ows) recorded {recorded}, rebuilt ["), message
-    assert "recomputed with the recorded mu 0.7 and cone_edges 6: was mu or cone_edges changed?" in message
+    assert (
+        "recomputed with the recorded mu 0.7, cone_edges 6 and torsional_friction 0: was one of them changed?"
+        in message
+    )
 
 
 @pytest.mark.parametrize("key, value", [("diagonal", 0.3), ("tip_radius", 0.02)])

@@ -27,11 +27,11 @@ def _parts(mesh: trimesh.Trimesh) -> list:
     return [(np.asarray(mesh.vertices), np.asarray(mesh.faces))]
 
 
-def _ramp(mesh, positions, normals, direction, expected, settings=None, rho=0.1):
-    """Failure load of one ramp whose rate reaches ``expected`` after settings.ramp_time."""
+def _ramp(mesh, positions, normals, direction, expected, settings=None, rho=0.1, torsion=0.0):
+    """Failure load of one ramp whose rate reaches ``expected`` after settings.ramp_time (soft fingers: torsion > 0)."""
     settings = settings or SimSettings(threads=1)
     com, inertia = object_inertia(mesh, settings.object_mass)
-    scene = build_scene(_parts(mesh), com, inertia, positions, normals, settings, MU, 0.008)
+    scene = build_scene(_parts(mesh), com, inertia, positions, normals, settings, MU, 0.008, torsion=torsion)
     settled = settle(scene, settings)
     assert settled.gates["valid"], settled.gates
     d = np.asarray(direction, dtype=float)[None, :]

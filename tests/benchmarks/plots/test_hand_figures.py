@@ -12,12 +12,13 @@ import pytest
 from benchmarks import plots
 from benchmarks.plots.data import load_run
 from benchmarks.plots.grasp_figures import NoGraspCells, upright
-from benchmarks.plots.hand_figures import LINK_RADIUS, NoHandCells, fig10_sdh_grasps, palm_pose
+from benchmarks.plots.hand_figures import HAND_FITS, LINK_RADIUS, NoHandCells, fig10_sdh_grasps, palm_pose
 from benchmarks.plots.raster import look
-from benchmarks.plots.sim_figures_3d import NoSimulatedCells, sim_grasps
+from benchmarks.plots.sim_figures_3d import NoSimulatedCells, _tip_radius, sim_grasps, simulated_grasps, tip_centres
 from benchmarks.suite.parse import parse_suite
 from benchmarks.suite.runner import SuiteRunner
 from planner.hands.reachability import finger_chain, pad_normals
+from sim_eval.plan_input import plan_input
 
 matplotlib.use("Agg")
 SDH_SUITE = """
@@ -100,7 +101,11 @@ def sim_run(tmp_path_factory) -> Path:
 def test_fig10_draws_one_hand_panel_per_object_and_writes_its_files(sdh_run, tmp_path):
     figure = fig10_sdh_grasps(load_run(sdh_run))
     assert [ax.get_title().split(":")[0] for ax in figure.axes] == ["box"]
-    assert "tip misfit" in figure.axes[0].get_title()
+    assert "tips within" in figure.axes[0].get_title()
+    # The drawn fingertips sit on their contacts (the recorded angles, placed rigidly, miss by ~2 cm).
+    [posed] = HAND_FITS
+    assert posed.title == "box: A* SDH" and posed.fit.residuals.shape == (3,)
+    assert posed.fit.max_residual < 2e-3 < posed.rigid_misfit
     report = plots.plot_run(sdh_run, tmp_path / "out", only=["fig10_sdh_grasps"], formats=["png"], dpi=60)
     assert [p.name for p in report.written] == ["fig10_sdh_grasps.png"]
 
@@ -128,3 +133,26 @@ def test_sim_grasps_draws_the_realized_tips_or_says_it_used_the_planned_ones(sim
         cells.append(cell)
     old = plots.RunData(data.directory, tuple(cells), (), None)
     assert "tips at planned contacts" in sim_grasps(old).axes[0].get_title()
+
+
+def test_sim_grasps_draws_the_settled_tips_and_older_records_their_start(sim_run):
+    data = load_run(sim_run)
+    [(cell, grasp)] = simulated_grasps(data)
+    rebuilt = plan_input(cell.plan)
+    radius = _tip_radius(cell, rebuilt)
+    centres, points, normals, source = tip_centres(grasp, rebuilt.contacts, radius)
+    # Recorded by the simulation: the tips after preload and settling, in the mesh's frame, each
+    # still touching its realized contact (a tip radius from it, give or take the contact's squeeze).
+    assert source == "settled" and len(grasp.realized["settled_centres"]) == len(grasp.grasp)
+    np.testing.assert_allclose(np.linalg.norm(centres - points, axis=1), radius, rtol=0.1)
+    assert not np.allclose(centres, points - radius * normals, atol=1e-9)  # not the start positions
+    started = dataclasses.replace(grasp, realized={k: v for k, v in grasp.realized.items() if k != "settled_centres"})
+    assert tip_centres(started, rebuilt.contacts, radius)[3] == "start"
+    cells = [
+        dataclasses.replace(c, simulation=dataclasses.replace(c.simulation, grasps=(started,)))
+        if c.simulation is not None
+        else c
+        for c in data.cells
+    ]
+    title = sim_grasps(plots.RunData(data.directory, tuple(cells), (), None)).axes[0].get_title()
+    assert "tips at start positions" in title

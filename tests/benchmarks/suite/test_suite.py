@@ -170,7 +170,7 @@ BAD_SUITES = [
     ("schema_version = 2", "schema_version: unsupported value 2; valid values: 1"),
     (
         "schema_version = 1\nobjects = ['box']\nmethodz = 1\n[[methods]]\nmethod = 'astar'",
-        "top level: unknown key 'methodz'; valid keys: cone_edges, contact_seeds, contacts",
+        "top level: unknown key 'methodz'; valid keys: cone_edges, contact_model, contact_seeds, contacts",
     ),
     (
         "schema_version = 1\nobjects = ['box']\n[[methods]]\nmethod = 'astra'",
@@ -506,7 +506,7 @@ def test_slices_selected_with_only_add_up_to_the_full_run(tiny_file, serial_run,
     ]
     for only, message in [
         (["object=bunny"], "no cell of this suite has it; the suite has object = box, sphere"),
-        (["colour=red"], "valid choices: contacts, group, label, m, method, mu, object"),
+        (["colour=red"], "valid choices: contact_model, contacts, group, label, m, method, mu, object"),
         (["object"], "--only takes KEY=VALUE"),
     ]:
         with pytest.raises(OgcpError, match=message):
