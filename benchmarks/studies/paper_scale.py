@@ -13,8 +13,10 @@ import csv
 import sys
 from pathlib import Path
 
-from planner import GraspPlanner, builtin_mesh, sample_contacts
+from planner import GraspPlanner, sample_contacts
 from planner.baselines.es import ExhaustiveSearch
+from planner.grasp.reach import default_tip_radius
+from planner.objects.resolve import resolve_object
 
 FIELDS = ("object", "n", "m", "method", "eps", "q1", "grasp", "created", "visited", "b_star", "wall_s", "cpu_s")
 
@@ -54,7 +56,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", type=Path, required=True, help="output directory")
     parser.add_argument("-n", type=int, default=1000, help="contacts per object (default 1000)")
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--objects", default="box,sphere,donut,amphora")
+    parser.add_argument(
+        "--objects", default="box,sphere,donut,amphora", help="built-in or fetched names (ogcp assets fetch paper)"
+    )
+    parser.add_argument(
+        "--fingertip", action="store_true", help="sample with the default tip radius, as ogcp plan and the suites do"
+    )
     parser.add_argument("--eps", default="0.4", help="comma-separated WA* eps values")
     parser.add_argument("--es", action="store_true", help="also run exhaustive search (long)")
     parser.add_argument("--jobs", type=int, default=2, help="processes for ES")
@@ -67,7 +74,9 @@ def main(argv: list[str] | None = None) -> int:
     for name, m, method, eps in runs(args):
         if (name, m, method, eps) in done:
             continue
-        contacts = sample_contacts(builtin_mesh(name), args.n, seed=args.seed, source={"kind": "builtin", "name": name})
+        mesh, source = resolve_object(name)
+        radius = default_tip_radius(mesh) if args.fingertip else None
+        contacts = sample_contacts(mesh, args.n, seed=args.seed, source=source, tip_radius=radius)
         print(f"{name} n={args.n} m={m} {method} eps={eps} ...", file=sys.stderr, flush=True)
         if method == "es":
             es = ExhaustiveSearch(jobs=args.jobs, checkpoint=args.out / f"es_{name}_{args.n}", progress=True)

@@ -3,24 +3,65 @@
 Super-contact quality (paper Eq. 9) is Q1 of the union of the super-contacts, so the cache
 is keyed by the union's packed membership bitmask: two states with the same union never
 cost two Q1 evaluations.
+
+The search asks for the Q1 of a state's heuristic children one at a time (branch and
+bound), but knows them all in advance. With ``OGCP_Q1_THREADS`` = 2 or more in the
+environment (opt-in), :meth:`GraspQuality.prefetch` starts their evaluations in that many
+worker threads (the compiled kernel releases the GIL) and :meth:`GraspQuality.of_masks`
+takes a started evaluation's certificate instead of computing it. Everything else happens
+in the order of the requests, so the results, the learned directions and the statistics
+are those of a sequential run, bit for bit. It trades CPU time (children the branch and
+bound never asks for, thread overhead) for wall time, and wins only where a core is idle:
+A* on the sphere at 1000 contacts took 35 s instead of 47 s for 14 % more CPU time with one
+core free, but was slower on a 2-core machine that other processes kept busy.
 """
 
 from __future__ import annotations
 
 import functools
+import os
+import warnings
 from collections.abc import Sequence
+from concurrent.futures import Future, ThreadPoolExecutor
 
 import numpy as np
 from numpy.typing import NDArray
 
 from planner.grasp.contact_set import ContactSet
-from planner.grasp.quality import KERNEL_MAX, q1_certificate
+from planner.grasp.quality import KERNEL_MAX, Q1Certificate, q1_certificate
 from planner.grasp.support_bound import SupportBound, Vector
 from planner.infra.tolerance import TOL
 
 PackedMask = NDArray[np.uint8]
 #: Directions of lowest support passed to the exact engine as a warm start.
 HINT_DIRECTIONS = 12
+
+
+def _prefetch_threads() -> int:
+    """Worker threads of :meth:`GraspQuality.prefetch` from ``OGCP_Q1_THREADS`` (default 1: off).
+
+    At most the number of cores; a value that is not a whole number >= 1 is reported in one
+    warning and ignored (an environment variable has no command line to refuse it).
+    """
+    text = os.environ.get("OGCP_Q1_THREADS", "1").strip()
+    if not text.isdigit() or int(text) < 1:
+        warnings.warn(f"OGCP_Q1_THREADS={text!r}: expected a whole number >= 1; searching in one thread", stacklevel=2)
+        return 1
+    return min(int(text), os.cpu_count() or 1)
+
+
+PREFETCH_THREADS = _prefetch_threads()
+#: The prefetch threads by process id: a forked child inherits the executor but not its threads.
+_POOL: dict[int, ThreadPoolExecutor] = {}
+
+
+def _pool() -> ThreadPoolExecutor:
+    """This process's prefetch threads, started at its first prefetch."""
+    pool = _POOL.get(os.getpid())
+    if pool is None:
+        _POOL.clear()
+        pool = _POOL[os.getpid()] = ThreadPoolExecutor(PREFETCH_THREADS, thread_name_prefix="ogcp-q1")
+    return pool
 
 
 class GraspQuality:
@@ -47,6 +88,8 @@ class GraspQuality:
         self.evaluations = 0
         self.cache_hits = 0
         self.hull_calls = 0
+        #: Evaluations started by :meth:`prefetch`, by union key, not yet asked for.
+        self._started: dict[bytes, Future[Q1Certificate]] = {}
 
     def mask_of(self, indices: NDArray[np.intp]) -> PackedMask:
         """Packed membership mask of contact indices."""
@@ -71,17 +114,44 @@ class GraspQuality:
             self.bound_rejections += 1
             self._cache[key] = 0.0
             return 0.0
-        indices = np.flatnonzero(np.unpackbits(union, count=self.n))
-        hints = None
-        if vectors is not None and len(indices) * self.contacts.wrenches.shape[1] > KERNEL_MAX:
-            # Hints only steer the qhull loop, which sets the kernel takes never reach.
-            hints = self.bounds.lowest_directions(vectors, HINT_DIRECTIONS)
-        cert = q1_certificate(self.contacts.subset_wrenches(indices), hints)
+        started = self._started.pop(key, None)
+        if started is not None:
+            cert = started.result()  # the same certificate as computed here: the same function
+        else:
+            indices = np.flatnonzero(np.unpackbits(union, count=self.n))
+            hints = None
+            if vectors is not None and len(indices) * self.contacts.wrenches.shape[1] > KERNEL_MAX:
+                # Hints only steer the qhull loop, which sets the kernel takes never reach.
+                hints = self.bounds.lowest_directions(vectors, HINT_DIRECTIONS)
+            cert = q1_certificate(self.contacts.subset_wrenches(indices), hints)
         self.evaluations += 1
         self.hull_calls += cert.hull_calls
         self.bounds.add(cert.direction)
         self._cache[key] = cert.q1
         return cert.q1
+
+    def prefetch(self, requests: Sequence[tuple[Sequence[PackedMask], Sequence[Vector]]]) -> None:
+        """Start the Q1 evaluations that :meth:`of_masks` will probably be asked for, in threads.
+
+        Only unions the kernel takes (no hints, so the certificate is the one
+        :meth:`of_masks` would compute) that are neither cached, started nor rejected by the
+        support bound now are started; nothing is started unless :data:`PREFETCH_THREADS` >= 2.
+
+        Args:
+            requests: (masks, support vectors) of each union, in the order they will be asked for.
+        """
+        if PREFETCH_THREADS < 2 or len(requests) < 2:
+            return
+        width = self.contacts.wrenches.shape[1]
+        for masks, vectors in requests:
+            union = functools.reduce(np.bitwise_or, masks)
+            key = union.tobytes()
+            if key in self._cache or key in self._started or self.bounds.bound(vectors) <= TOL.force_closure:
+                continue
+            indices = np.flatnonzero(np.unpackbits(union, count=self.n))
+            if len(indices) * width > KERNEL_MAX:
+                continue
+            self._started[key] = _pool().submit(q1_certificate, self.contacts.subset_wrenches(indices))
 
     def of_indices(self, indices: NDArray[np.intp]) -> float:
         """Q1 of a set of contacts [-]."""

@@ -46,6 +46,8 @@ class SupportBound:
 
     def add(self, directions: NDArray[np.float64]) -> None:
         """Append unit directions (shape (j, 6)) that are not near-duplicates, up to capacity."""
+        if self.count >= self.capacity:
+            return  # full after a few hundred evaluations; the search calls this after every one
         for u in np.atleast_2d(directions):
             if self.count >= self.capacity or not np.all(np.isfinite(u)):
                 return

@@ -107,7 +107,8 @@ def _alloc(alive: np.ndarray, free: np.ndarray, nfree: int, hw: int) -> tuple[in
     return s, nfree, hw
 
 
-@cached_njit()
+# nogil: the search evaluates several sets at once in threads (planner.grasp.subset_quality).
+@cached_njit(nogil=True)
 def _q1_kernel(
     P: np.ndarray, n: int, ws: tuple, certify: bool, stats: np.ndarray, threshold: float, direction: np.ndarray
 ) -> tuple[int, float]:
