@@ -180,4 +180,4 @@ def torsion_from_args(args: argparse.Namespace) -> float:
     """
     from planner.grasp.contact_model import torsion_of
 
-    return torsion_of(args.contact_model, args.torsional_friction, "--torsional-friction")
+    return torsion_of(args.contact_model, args.torsional_friction, "--contact-model", "--torsional-friction")

@@ -138,7 +138,7 @@ def contact_models(where: str, table: dict[str, Any]) -> list[float]:
     for name in names:
         # Beside soft fingers, the hard model takes none of the listed coefficients.
         for torsion in [None] if name == "hard" and len(names) > 1 else torsions:
-            value = torsion_of(name, torsion, f"{where}.torsional_friction")
+            value = torsion_of(name, torsion, f"{where}.contact_model", f"{where}.torsional_friction")
             if value not in found:
                 found.append(value)
     return found

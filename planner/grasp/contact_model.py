@@ -13,13 +13,19 @@ from planner.grasp.defaults import CONTACT_MODEL, DEFAULT_TORSIONAL_FRICTION, TO
 from planner.infra.errors import OgcpError
 
 
-def torsion_of(model: str | None, torsion: float | None, where: str = "") -> float:
+def torsion_of(
+    model: str | None,
+    torsion: float | None,
+    model_name: str = "contact_model",
+    torsion_name: str = "torsional_friction [m]",
+) -> float:
     """The torsional friction coefficient [m] of a contact model and an optional coefficient.
 
     Args:
         model: ``"hard"`` or ``"soft"``; None = soft when ``torsion`` is given, else hard.
         torsion: Torsional friction coefficient [m]; None = the soft default.
-        where: Prefix of error messages (a flag or a suite key), e.g. ``"--torsional-friction"``.
+        model_name: The model's name in error messages (a flag, a suite key or a file's field).
+        torsion_name: The coefficient's name in error messages, e.g. ``"--torsional-friction"``.
 
     Returns:
         0.0 for hard fingers, the coefficient (> 0) for soft ones.
@@ -28,11 +34,11 @@ def torsion_of(model: str | None, torsion: float | None, where: str = "") -> flo
         OgcpError: For an unknown model, a coefficient outside its range, a coefficient given
             with the hard model, or a zero coefficient with the soft one.
     """
-    prefix = f"{where}: " if where else ""
+    prefix = f"{torsion_name}: "
     if model is not None:
-        CONTACT_MODEL.check(f"{where or 'contact'} model" if not where else where, model)
+        CONTACT_MODEL.check(model_name, model)
     if torsion is not None:
-        torsion = TORSIONAL_FRICTION.check(where or "torsional_friction [m]", torsion)
+        torsion = TORSIONAL_FRICTION.check(torsion_name, torsion)
     resolved = model or ("soft" if torsion is not None else "hard")
     if resolved == "hard":
         if torsion:

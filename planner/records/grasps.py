@@ -219,7 +219,12 @@ class ExternalGrasps:
             raise OgcpError(f"{where}: mu: missing (the friction coefficient of the contacts, e.g. 0.5)")
         mu = MU.check(f"{where}: mu", data["mu"])
         cone_edges = CONE_EDGES.check(f"{where}: cone_edges", data.get("cone_edges", DEFAULT_CONE_EDGES))
-        torsion = torsion_of(data.get("contact_model"), data.get("torsional_friction"), f"{where}: torsional_friction")
+        torsion = torsion_of(
+            data.get("contact_model"),
+            data.get("torsional_friction"),
+            f"{where}: contact_model",
+            f"{where}: torsional_friction",
+        )
         method = data.get("method")
         method = None if method is None else _text(where, "method", method)
         grasps = data.get("grasps")

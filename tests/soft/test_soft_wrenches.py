@@ -117,3 +117,23 @@ def test_contact_model_resolution(model, torsion, expected):
 def test_bad_contact_models_are_one_line_errors(model, torsion, message):
     with pytest.raises(OgcpError, match=message):
         torsion_of(model, torsion)
+
+
+@pytest.mark.parametrize(
+    "fields,message",
+    [
+        ({"contact_model": "squishy"}, "f.json: contact_model 'squishy'; valid choices: hard, soft"),
+        ({"torsional_friction": "a lot"}, "f.json: torsional_friction: expected a number"),
+        ({"contact_model": "hard", "torsional_friction": 0.01}, "f.json: torsional_friction: a torsional"),
+    ],
+)
+def test_a_grasps_record_names_the_bad_model_field(fields, message):
+    from planner.records.grasps import ExternalGrasps
+
+    pinch = [{"position": [x, 0.0, 0.0], "normal": [-x / abs(x), 0.0, 0.0]} for x in (0.05, -0.05)]
+    record = {"schema": "ogcp.grasps/1", "object": {"mesh": "box"}, "mu": 0.5, "grasps": [{"contacts": pinch}]}
+    assert ExternalGrasps.from_dict(record, "f.json").torsional_friction == 0.0
+    soft = ExternalGrasps.from_dict({**record, "contact_model": "soft"}, "f.json")
+    assert soft.torsional_friction == 0.02 and soft.to_dict()["contact_model"] == "soft"
+    with pytest.raises(OgcpError, match=message):
+        ExternalGrasps.from_dict({**record, **fields}, "f.json")
