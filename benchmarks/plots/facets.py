@@ -41,11 +41,6 @@ def frictions(run: RunData) -> list[Friction]:
     return sorted({friction(c.problem) for c in run.cells if c.problem[MU] is not None}, key=mu_order)
 
 
-def mu_values(run: RunData) -> list[float]:
-    """The run's distinct friction coefficients, ascending (cells without one are left out)."""
-    return sorted({float(c.problem[MU]) for c in run.cells if c.problem[MU] is not None})
-
-
 def faceted(run: RunData) -> bool:
     """Whether the run's figures facet by friction: cells at two or more mu values or contact models."""
     return len(frictions(run)) > 1

@@ -44,12 +44,12 @@ import numpy as np
 import trimesh
 from numpy.typing import NDArray
 
-from benchmarks.studies.convert_grasps import UNITS, converter_parser, run_converter
+from benchmarks.studies.convert_grasps import UNITS, converter_parser, record_head, run_converter
 from planner.grasp.defaults import DEFAULT_CONE_EDGES
 from planner.infra.atomic import write_json_atomic
 from planner.infra.errors import OgcpError
 from planner.objects import resolve_object
-from planner.records.grasps import GRASPS_SCHEMA, ExternalGrasps, is_object_name, load_grasps, mesh_reference
+from planner.records.grasps import ExternalGrasps, is_object_name, load_grasps
 
 #: Largest deviation from 1 of a configuration's axis length (Dex-Net refuses beyond it).
 AXIS_TOLERANCE = 1e-5
@@ -165,6 +165,8 @@ def convert(
     diagonal: float | None = None,
     cone_edges: int = DEFAULT_CONE_EDGES,
     method: str | None = None,
+    contact_model: str | None = None,
+    torsional_friction: float | None = None,
     units: str = "m",
     skip_missed: bool = False,
 ) -> ExternalGrasps:
@@ -181,6 +183,8 @@ def convert(
         diagonal: Scale the object to this bounding-box diagonal [m].
         cone_edges: Friction-cone edges k.
         method: The planner that made the grasps.
+        contact_model: ``hard`` or ``soft`` (written to the record; None: the record's default, hard).
+        torsional_friction: Torsional friction coefficient of soft fingers [m] (None: the default).
         units: Units of the centres and widths (``m``, ``cm``, ``mm``).
         skip_missed: Drop grasps a jaw of which meets no surface, instead of refusing the file.
 
@@ -224,12 +228,7 @@ def convert(
         )
     if not entries:
         raise OgcpError(f"{source}: no grasp left: every jaw pair misses the object")
-    obj: dict[str, Any] = {"mesh": mesh if is_object_name(mesh) else mesh_reference(mesh, out.parent)}
-    if diagonal is not None:
-        obj["diagonal"] = diagonal
-    record: dict[str, Any] = {"schema": GRASPS_SCHEMA, "object": obj, "mu": mu, "cone_edges": cone_edges}
-    if method is not None:
-        record["method"] = method
+    record = record_head(out, mesh, mu, diagonal, cone_edges, method, contact_model, torsional_friction)
     record["grasps"] = entries
     # Checked before writing, so that a bad input never leaves a file behind.
     ExternalGrasps.from_dict(record, where=str(source), base=out.parent)
@@ -257,6 +256,8 @@ def main(argv: list[str] | None = None) -> int:
             diagonal=args.diagonal,
             cone_edges=args.cone_edges,
             method=args.method,
+            contact_model=args.contact_model,
+            torsional_friction=args.torsional_friction,
             units=args.units,
             skip_missed=args.skip_missed,
         ),

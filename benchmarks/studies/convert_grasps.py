@@ -109,6 +109,8 @@ def convert(
     diagonal: float | None = None,
     cone_edges: int = DEFAULT_CONE_EDGES,
     method: str | None = None,
+    contact_model: str | None = None,
+    torsional_friction: float | None = None,
     units: str = "m",
     outward: bool = False,
 ) -> ExternalGrasps:
@@ -127,18 +129,41 @@ def convert(
         raise OgcpError(f"{source}: unknown format {source.suffix!r}; valid: .csv, .npy")
     if not source.is_file():
         raise OgcpError(f"{source}: no such file")
-    # A built-in or fetched name as given; a path relative to the output's folder.
-    obj: dict[str, Any] = {"mesh": mesh if is_object_name(mesh) else mesh_reference(mesh, out.parent)}
-    if diagonal is not None:
-        obj["diagonal"] = diagonal
-    record: dict[str, Any] = {"schema": GRASPS_SCHEMA, "object": obj, "mu": mu, "cone_edges": cone_edges}
-    if method is not None:
-        record["method"] = method
+    record = record_head(out, mesh, mu, diagonal, cone_edges, method, contact_model, torsional_friction)
     record["grasps"] = read(source, UNITS[units], -1.0 if outward else 1.0)
     # Checked before writing, so that a bad input never leaves a file behind.
     ExternalGrasps.from_dict(record, where=str(source), base=out.parent)
     write_json_atomic(out, record)
     return load_grasps(out)
+
+
+def record_head(
+    out: Path,
+    mesh: str,
+    mu: float,
+    diagonal: float | None,
+    cone_edges: int,
+    method: str | None,
+    contact_model: str | None,
+    torsional_friction: float | None,
+) -> dict[str, Any]:
+    """An ``ogcp.grasps/1`` record without its grasps: the object, the friction model and the planner.
+
+    The mesh is written as given when it is a built-in or fetched name, else as a path relative
+    to the output's folder. Unset optional fields are left out (the schema's defaults); the
+    values are checked when the whole record is read (``ExternalGrasps.from_dict``).
+    """
+    obj: dict[str, Any] = {"mesh": mesh if is_object_name(mesh) else mesh_reference(mesh, out.parent)}
+    if diagonal is not None:
+        obj["diagonal"] = diagonal
+    record: dict[str, Any] = {"schema": GRASPS_SCHEMA, "object": obj, "mu": mu, "cone_edges": cone_edges}
+    if contact_model is not None:
+        record["contact_model"] = contact_model
+    if torsional_friction is not None:
+        record["torsional_friction"] = torsional_friction
+    if method is not None:
+        record["method"] = method
+    return record
 
 
 def converter_parser(
@@ -152,6 +177,12 @@ def converter_parser(
     parser.add_argument("--mu", type=float, required=True, help="friction coefficient of the contacts")
     parser.add_argument("--diagonal", type=float, default=None, help="scale the object to this diagonal [m]")
     parser.add_argument("--cone-edges", type=int, default=DEFAULT_CONE_EDGES, help="friction-cone edges k")
+    parser.add_argument(
+        "--contact-model", default=None, help="hard or soft fingers (soft: with torsional friction; default hard)"
+    )
+    parser.add_argument(
+        "--torsional-friction", type=float, default=None, help="torsional friction coefficient of soft fingers [m]"
+    )
     default = f" (default {method_default})" if method_default else ""
     parser.add_argument("--method", default=method_default, help=f"the planner that made the grasps{default}")
     parser.add_argument("--units", choices=tuple(UNITS), default="m", help=f"{units_help} (default m)")
@@ -186,6 +217,8 @@ def main(argv: list[str] | None = None) -> int:
             diagonal=args.diagonal,
             cone_edges=args.cone_edges,
             method=args.method,
+            contact_model=args.contact_model,
+            torsional_friction=args.torsional_friction,
             units=args.units,
             outward=args.outward,
         ),

@@ -52,8 +52,3 @@ def torsion_of(
     if torsion <= 0:
         raise OgcpError(f"{prefix}soft fingers need a torsional friction coefficient > 0 [m], got {torsion:g}")
     return float(torsion)
-
-
-def model_name(torsion: float) -> str:
-    """``"soft"`` for a coefficient > 0, else ``"hard"``."""
-    return "soft" if torsion > 0 else "hard"

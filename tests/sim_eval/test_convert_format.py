@@ -101,3 +101,21 @@ def test_bad_files_are_one_line_errors_and_the_cli_writes(tmp_path: Path, capsys
     assert load_grasps(out).method == "dexnet"
     assert main([str(bad), "-o", str(out), "--mesh", "box", "--mu", "0.4"]) == 2
     assert "convert_dexnet: error:" in capsys.readouterr().err
+
+
+def test_parallel_jaw_grasps_as_soft_fingers_can_close(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    # A parallel jaw is two contacts: only soft fingers (torsional friction) can put it in force closure.
+    source = tmp_path / "dexnet.npy"
+    np.save(source, np.array(ROWS[:2]))
+    out = tmp_path / "soft.json"
+    args = [str(source), "-o", str(out), "--mesh", "box", "--mu", "0.5", "--contact-model", "soft"]
+    assert main(args) == 0
+    soft = load_grasps(out)
+    assert soft.torsional_friction == 0.02
+    result = evaluate_grasps(None, soft, SETTINGS, HULL)
+    assert all(g["q1"] > 0 for g in result.object["external"]["grasps"])
+    assert result.settings["contact_model"]["simulated"] == "soft"
+    capsys.readouterr()
+    assert main([*args[:-1], "gel", "-o", str(tmp_path / "x.json")]) == 2
+    assert "contact_model 'gel'; valid choices: hard, soft" in capsys.readouterr().err
+    assert not (tmp_path / "x.json").exists()
