@@ -195,7 +195,6 @@ def register(commands: Any) -> None:
 def load_contact_set(spec: str, args: argparse.Namespace) -> ContactSet:
     """Contact set from a contact JSON file, or sampled from a mesh or built-in object."""
     from planner.grasp.contact_set import ContactSet
-    from planner.objects.resolve import resolve_object
 
     if spec.lower().endswith(".json"):
         if args.contacts is not None:
@@ -213,9 +212,27 @@ def load_contact_set(spec: str, args: argparse.Namespace) -> ContactSet:
                 "--contact-model and --torsional-friction do not apply to a contact file (its wrenches are fixed)"
             )
         return ContactSet.load(spec)
-    mesh, source = resolve_object(spec, args.diagonal)
+    from planner.objects.contact_cache import ContactRequest, cached_contacts
+
     n = args.contacts if args.contacts is not None else DEFAULT_CONTACTS
-    return sample_from_args(mesh, source, n, args)
+    request = ContactRequest(
+        spec=spec,
+        diagonal=args.diagonal,
+        n=n,
+        seed=args.seed,
+        mu=DEFAULT_MU if args.mu is None else args.mu,
+        cone_edges=DEFAULT_CONE_EDGES if args.cone_edges is None else args.cone_edges,
+        tip_radius=args.tip_radius,
+        torsional_friction=torsion_from_args(args),
+    )
+
+    def sample() -> ContactSet:
+        from planner.objects.resolve import resolve_object  # trimesh: only when the cache has no entry
+
+        mesh, source = resolve_object(spec, args.diagonal)
+        return sample_from_args(mesh, source, n, args)
+
+    return cached_contacts(request, sample)
 
 
 def run_options_from_args(spec: MethodSpec, args: argparse.Namespace) -> RunOptions:

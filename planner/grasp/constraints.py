@@ -15,7 +15,6 @@ from typing import Protocol
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.spatial import cKDTree
 
 from planner.grasp.contact_set import ContactSet
 from planner.infra.errors import OgcpError
@@ -119,6 +118,8 @@ class MaxFingerSpread:
         for a, b in itertools.combinations(range(len(super_contacts)), 2):
             pa = contacts.positions[super_contacts[a]]
             pb = contacts.positions[super_contacts[b]]
+            from scipy.spatial import cKDTree  # only here: an import of 0.2 s that most runs never need
+
             nearest, _ = cKDTree(pb).query(pa, k=1, distance_upper_bound=self.spread * (1 + 1e-12))
             if not np.any(np.isfinite(nearest)):
                 return False

@@ -17,10 +17,9 @@ from dataclasses import dataclass, field
 from functools import cached_property
 from numbers import Real
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import trimesh
 from numpy.typing import NDArray
 
 # The defaults live in a module without numpy and trimesh, for readers that need nothing else.
@@ -36,11 +35,14 @@ from planner.grasp.defaults import (
     TORSIONAL_FRICTION,
     check_contact_memory,
 )
-from planner.grasp.reach import fill_reachable, reach_settings
 from planner.grasp.wrench import contact_wrenches, primitives_per_contact
 from planner.infra.atomic import write_json_atomic
 from planner.infra.errors import OgcpError
 from planner.infra.tolerance import TOL
+
+if TYPE_CHECKING:
+    # Sampling imports trimesh where it is used: planning from a contact file needs no mesh library.
+    import trimesh
 
 SCHEMA = "ogcp.contacts/1"
 #: ``source["sampling"]`` of a set from :func:`sample_contacts`.
@@ -376,6 +378,10 @@ def sample_contacts(
             too little of the surface is reachable by the tip to give n contacts. All are
             checked before anything of size n is allocated.
     """
+    import trimesh.sample
+
+    from planner.grasp.reach import fill_reachable, reach_settings
+
     _check_sampling(mesh, n, seed, mu, cone_edges, tip_radius, torsional_friction)
     n, seed = int(n), int(seed)
     reach = reach_settings(tip_radius, reach_tolerance)

@@ -27,15 +27,18 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.spatial import ConvexHull, QhullError
 
 from planner.grasp.kernel import FALLBACK, canonical_plane, evaluate_batch, kernel_q1, last_active
 from planner.grasp.wrench import check_finite, finite_array, shaped_array
 from planner.infra.errors import OgcpError
 from planner.infra.tolerance import TOL
+
+if TYPE_CHECKING:
+    from scipy.spatial import ConvexHull
 
 DIM = 6
 #: The compiled kernel takes sets below 4096 wrenches (its ridge keys hold 12-bit indices).
@@ -98,6 +101,8 @@ def _affine_rank_ok(points: NDArray[np.float64]) -> bool:
 
 
 def _hull(points: NDArray[np.float64]) -> ConvexHull | None:
+    from scipy.spatial import ConvexHull, QhullError  # the fallback paths only: scipy.spatial costs 0.2 s to import
+
     try:
         return ConvexHull(points)
     except (QhullError, ValueError):

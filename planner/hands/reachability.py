@@ -26,8 +26,6 @@ from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.spatial import cKDTree
-from scipy.spatial.distance import cdist
 
 from planner.config.methods import DEFAULT_HAND_THRESHOLD
 from planner.grasp.contact_set import ContactSet
@@ -146,6 +144,8 @@ class SDHReachability:
         self.q, codes = self._load_or_sample()
         self.scale = np.maximum(codes.std(axis=0), 1e-9)
         self.codes = codes / self.scale
+        from scipy.spatial import cKDTree  # here, not at the top: every plan imports this module
+
         self._tree = cKDTree(self.codes)
 
     def _load_or_sample(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -214,6 +214,8 @@ class SDHReachability:
         """Sound: False only if no grasp drawn from the super-contacts is reachable."""
         if len(super_contacts) != 3:
             raise OgcpError(f"the SDH has 3 fingers; m = {len(super_contacts)} cannot be assigned")
+        from scipy.spatial.distance import cdist
+
         lo, hi = np.zeros((3, 3, 2)), np.zeros((3, 3, 2))
         for i, j in itertools.combinations(range(3), 2):
             pi, pj = contacts.positions[super_contacts[i]], contacts.positions[super_contacts[j]]

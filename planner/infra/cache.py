@@ -129,7 +129,7 @@ def verify_entry(folder: str | Path) -> bool:
             actual = path.stat().st_size
             if actual != size:
                 raise DamagedEntryError(f"{name} holds {actual} bytes, its manifest says {size}")
-            if _sha256(path) != digest:
+            if file_sha256(path) != digest:
                 raise DamagedEntryError(f"the sha256 of {name} differs from its manifest")
         except FileNotFoundError:
             raise DamagedEntryError(f"{name} is missing") from None
@@ -181,7 +181,8 @@ def discard_entry(folder: str | Path) -> None:
         trash.unlink(missing_ok=True)
 
 
-def _sha256(path: Path) -> str:
+def file_sha256(path: Path) -> str:
+    """Hex sha256 of a file's bytes."""
     with open(path, "rb") as handle:
         return hashlib.file_digest(handle, "sha256").hexdigest()
 

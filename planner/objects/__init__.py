@@ -14,10 +14,11 @@ from typing import TYPE_CHECKING
 from planner.infra.lazy import lazy_exports
 
 if TYPE_CHECKING:
+    from planner.infra.cache import file_sha256
     from planner.objects.builtin import BUILTIN_OBJECTS, DEFAULT_DIAGONAL, builtin_mesh, normalise_scale
     from planner.objects.fetch import ObjectStatus, fetch_objects, is_cached, list_objects, load_fetched
     from planner.objects.fetchable import FETCH_GROUPS, FETCHABLE_OBJECTS, PAPER_OBJECTS, FetchableObject
-    from planner.objects.loading import MESH_SUFFIXES, file_sha256, load_mesh
+    from planner.objects.loading import MESH_SUFFIXES, load_mesh
     from planner.objects.repair import repair_mesh
     from planner.objects.resolve import resolve_object
 
@@ -33,7 +34,7 @@ _EXPORTS = {
     "ObjectStatus": "planner.objects.fetch",
     "builtin_mesh": "planner.objects.builtin",
     "fetch_objects": "planner.objects.fetch",
-    "file_sha256": "planner.objects.loading",
+    "file_sha256": "planner.infra.cache",
     "is_cached": "planner.objects.fetch",
     "list_objects": "planner.objects.fetch",
     "load_fetched": "planner.objects.fetch",

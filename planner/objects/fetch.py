@@ -22,12 +22,12 @@ from typing import Any
 import numpy as np
 import trimesh
 
-from planner.infra.cache import LOAD_ERRORS, DamagedEntryError, cache_dir, verify_entry, write_entry
+from planner.infra.cache import LOAD_ERRORS, DamagedEntryError, cache_dir, file_sha256, verify_entry, write_entry
 from planner.infra.errors import OgcpError, choice_error
 from planner.objects import fetchable as registry
 from planner.objects.builtin import BUILTIN_OBJECTS, DEFAULT_DIAGONAL, builtin_mesh, normalise_scale
 from planner.objects.fetchable import FETCH_GROUPS, FETCHABLE_OBJECTS, PAPER_OBJECTS, FetchableObject
-from planner.objects.loading import file_sha256, load_mesh
+from planner.objects.loading import load_mesh
 from planner.objects.repair import repair_mesh
 
 __all__ = [

@@ -9,7 +9,6 @@ with a single right answer, each announced by a :class:`MeshOrientationWarning`.
 
 from __future__ import annotations
 
-import hashlib
 import warnings
 from pathlib import Path
 
@@ -21,15 +20,6 @@ from planner.objects.file_checks import check_mesh_file
 from planner.objects.repair import MeshOrientationWarning, require_solid
 
 MESH_SUFFIXES = (".obj", ".stl", ".ply", ".off", ".glb", ".gltf")
-
-
-def file_sha256(path: Path) -> str:
-    """Hex sha256 of a file's bytes."""
-    digest = hashlib.sha256()
-    with open(path, "rb") as handle:
-        for block in iter(lambda: handle.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
 
 
 def load_mesh(path: str | Path, solid: bool = True) -> trimesh.Trimesh:

@@ -7,11 +7,12 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
+from planner.infra.cache import file_sha256
 from planner.infra.errors import OgcpError
 from planner.objects.builtin import BUILTIN_OBJECTS, DEFAULT_DIAGONAL, builtin_mesh, normalise_scale
 from planner.objects.fetch import load_fetched
 from planner.objects.fetchable import FETCHABLE_OBJECTS
-from planner.objects.loading import file_sha256, load_mesh
+from planner.objects.loading import load_mesh
 
 
 def resolve_object(spec: str, diagonal: float | None = None) -> tuple[trimesh.Trimesh, dict[str, object]]:
