@@ -115,11 +115,11 @@ class MaxFingerSpread:
 
     def admits(self, super_contacts: Sequence[Indices], contacts: ContactSet) -> bool:
         """Necessary condition: every pair of super-contacts has two points within reach."""
+        from scipy.spatial import cKDTree  # only here: an import of 0.2 s that most runs never need
+
         for a, b in itertools.combinations(range(len(super_contacts)), 2):
             pa = contacts.positions[super_contacts[a]]
             pb = contacts.positions[super_contacts[b]]
-            from scipy.spatial import cKDTree  # only here: an import of 0.2 s that most runs never need
-
             nearest, _ = cKDTree(pb).query(pa, k=1, distance_upper_bound=self.spread * (1 + 1e-12))
             if not np.any(np.isfinite(nearest)):
                 return False
