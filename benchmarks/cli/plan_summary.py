@@ -65,7 +65,7 @@ def search_summary(result: SearchResult, contacts: ContactSet) -> str:
         f"visited per level: {list(s.visited_per_level)}",
         (
             f"Q1 evaluations: {s.q1_evaluations} (cache hits {s.q1_cache_hits}, rejected by bound {s.bound_rejections}), "
-            f"hull calls {s.hull_calls}"
+            f"hull calls {s.hull_calls}, facet bounds {s.facet_bounds}"
         ),
         f"time: {s.wall_seconds:.2f} s wall, {s.cpu_seconds:.2f} s CPU; peak memory {s.peak_rss_bytes / 2**20:.0f} MiB",
         "contacts (index: position [m] / inward normal):",

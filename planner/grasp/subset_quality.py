@@ -4,16 +4,18 @@ Super-contact quality (paper Eq. 9) is Q1 of the union of the super-contacts, so
 is keyed by the union's packed membership bitmask: two states with the same union never
 cost two Q1 evaluations.
 
-The search asks for the Q1 of a state's heuristic children one at a time (branch and
-bound), but knows them all in advance. With ``OGCP_Q1_THREADS`` = 2 or more in the
-environment (opt-in), :meth:`GraspQuality.prefetch` starts their evaluations in that many
-worker threads (the compiled kernel releases the GIL) and :meth:`GraspQuality.of_masks`
-takes a started evaluation's certificate instead of computing it. Everything else happens
-in the order of the requests, so the results, the learned directions and the statistics
-are those of a sequential run, bit for bit. It trades CPU time (children the branch and
-bound never asks for, thread overhead) for wall time, and wins only where a core is idle:
-A* on the sphere at 1000 contacts took 35 s instead of 47 s for 14 % more CPU time with one
-core free, but was slower on a 2-core machine that other processes kept busy.
+The search mostly needs to know that a union is no better than a value it already holds,
+which an upper bound proves: :meth:`GraspQuality.tighten` climbs from the support bound to
+facet bounds (:mod:`planner.grasp.kernel.ray_bound`, about 10 µs each) and only then to the
+exact value (100-300 µs).
+
+With ``OGCP_Q1_THREADS`` = 2 or more in the environment (opt-in), a union whose facet bounds
+did not settle it has its exact evaluation started in a worker thread at once (the compiled
+kernel releases the GIL), and :meth:`GraspQuality.of_masks` takes the started certificate
+instead of computing it. Everything else happens in the order of the requests, so the
+results, the learned directions and the statistics are those of a sequential run, bit for
+bit. It trades CPU time (unions never asked for after all, thread overhead) for wall time,
+and wins only where a core is idle.
 """
 
 from __future__ import annotations
@@ -28,6 +30,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from planner.grasp.contact_set import ContactSet
+from planner.grasp.kernel.geometry import CUT_MARGIN
 from planner.grasp.quality import KERNEL_MAX, Q1Certificate, q1_certificate
 from planner.grasp.support_bound import SupportBound, Vector
 from planner.infra.tolerance import TOL
@@ -35,6 +38,10 @@ from planner.infra.tolerance import TOL
 PackedMask = NDArray[np.uint8]
 #: Directions of lowest support passed to the exact engine as a warm start.
 HINT_DIRECTIONS = 12
+#: Start directions of :meth:`GraspQuality.tighten`'s facet bounds (lowest support first).
+FACET_STARTS = 4
+#: The level of :meth:`GraspQuality.tighten` that is Q1 itself.
+EXACT = 3
 
 
 def _prefetch_threads() -> int:
@@ -77,6 +84,7 @@ class GraspQuality:
         bound_rejections: Cache misses settled as Q1 = 0 by the support bound.
         cache_hits: Lookups answered from the cache.
         hull_calls: qhull invocations spent by those computations.
+        facet_bounds: Facet bounds computed by :meth:`tighten`.
     """
 
     def __init__(self, contacts: ContactSet, seed: int = 0) -> None:
@@ -88,6 +96,9 @@ class GraspQuality:
         self.evaluations = 0
         self.cache_hits = 0
         self.hull_calls = 0
+        self.facet_bounds = 0
+        #: (facet bound, level) per union key of the unions not evaluated exactly (:meth:`tighten`).
+        self._upper: dict[bytes, tuple[float, int]] = {}
         #: Evaluations started by :meth:`prefetch`, by union key, not yet asked for.
         self._started: dict[bytes, Future[Q1Certificate]] = {}
 
@@ -110,6 +121,10 @@ class GraspQuality:
         if cached is not None:
             self.cache_hits += 1
             return cached
+        return self._evaluate(union, key, vectors)
+
+    def _evaluate(self, union: PackedMask, key: bytes, vectors: Sequence[Vector] | None) -> float:
+        """Q1 of a union not in the cache, which then holds it [-]."""
         if vectors is not None and self.bounds.bound(vectors) <= TOL.force_closure:
             self.bound_rejections += 1
             self._cache[key] = 0.0
@@ -128,30 +143,67 @@ class GraspQuality:
         self.hull_calls += cert.hull_calls
         self.bounds.add(cert.direction)
         self._cache[key] = cert.q1
+        self._upper.pop(key, None)
         return cert.q1
 
-    def prefetch(self, requests: Sequence[tuple[Sequence[PackedMask], Sequence[Vector]]]) -> None:
-        """Start the Q1 evaluations that :meth:`of_masks` will probably be asked for, in threads.
+    def tighten(
+        self, masks: Sequence[PackedMask], vectors: Sequence[Vector], level: int, bound: float
+    ) -> tuple[float, int]:
+        """Tighten an upper bound of Q1 of the union by one level: (bound [-], level reached).
 
-        Only unions the kernel takes (no hints, so the certificate is the one
-        :meth:`of_masks` would compute) that are neither cached, started nor rejected by the
-        support bound now are started; nothing is started unless :data:`PREFETCH_THREADS` >= 2.
+        Levels: 0, the support bound (the caller's); 1, the facet bound
+        (:func:`planner.grasp.kernel.ray_bound.facet_bound`) from the direction of lowest
+        support, about 10 µs; 2, facet bounds from the next ``FACET_STARTS - 1`` directions;
+        :data:`EXACT`, Q1 itself (:meth:`of_masks`, 100-300 µs). A cached value is returned
+        at once, as exact; so is Q1 = 0 when a facet bound proves it. Facet bounds carry
+        ``CUT_MARGIN``, so that they bound the computed (canonical) Q1, which may sit a
+        rounding error above the true value, and a tie is always settled by exact values.
 
         Args:
-            requests: (masks, support vectors) of each union, in the order they will be asked for.
+            masks: Packed membership masks of the super-contacts.
+            vectors: Their support vectors.
+            level: The level of the bound the caller holds (0-2).
+            bound: That bound [-].
         """
-        if PREFETCH_THREADS < 2 or len(requests) < 2:
+        union = functools.reduce(np.bitwise_or, masks)
+        key = union.tobytes()
+        cached = self._cache.get(key)
+        if cached is not None:
+            self.cache_hits += 1
+            return cached, EXACT
+        known = self._upper.get(key)
+        if known is not None and known[1] > level:
+            return known
+        if level >= 2 or bound <= TOL.force_closure:
+            return self._evaluate(union, key, vectors), EXACT
+        members = np.flatnonzero(np.unpackbits(union, count=self.n))
+        first, last = (0, 1) if level == 0 else (1, FACET_STARTS)
+        raw = self.bounds.facet_bound(members, first, last)
+        if known is not None:
+            raw = min(raw, known[0] - CUT_MARGIN)
+        self.facet_bounds += last - first
+        if raw <= TOL.force_closure:
+            self.bound_rejections += 1
+            self._upper.pop(key, None)
+            self._cache[key] = 0.0
+            return 0.0, EXACT
+        tightened = self._upper[key] = (raw + CUT_MARGIN, level + 1)
+        if level == 1:
+            # Its facet bounds did not settle it: it is likely to be evaluated next.
+            self._prefetch(union, key, members)
+        return tightened
+
+    def _prefetch(self, union: PackedMask, key: bytes, members: NDArray[np.intp]) -> None:
+        """Start the exact evaluation of a union in a thread (:data:`PREFETCH_THREADS` >= 2 only).
+
+        Only unions the kernel takes (no hints, so the certificate is the one
+        :meth:`of_masks` would compute) that are not started yet.
+        """
+        if PREFETCH_THREADS < 2 or key in self._started:
             return
-        width = self.contacts.wrenches.shape[1]
-        for masks, vectors in requests:
-            union = functools.reduce(np.bitwise_or, masks)
-            key = union.tobytes()
-            if key in self._cache or key in self._started or self.bounds.bound(vectors) <= TOL.force_closure:
-                continue
-            indices = np.flatnonzero(np.unpackbits(union, count=self.n))
-            if len(indices) * width > KERNEL_MAX:
-                continue
-            self._started[key] = _pool().submit(q1_certificate, self.contacts.subset_wrenches(indices))
+        if len(members) * self.contacts.wrenches.shape[1] > KERNEL_MAX:
+            return
+        self._started[key] = _pool().submit(q1_certificate, self.contacts.subset_wrenches(members))
 
     def of_indices(self, indices: NDArray[np.intp]) -> float:
         """Q1 of a set of contacts [-]."""

@@ -50,6 +50,8 @@ class SearchStats:
         peak_rss_bytes: Peak resident memory of the process when the search ended [bytes]
             (the operating system's high-water mark: it includes whatever the process held
             before the search; 0 where the platform does not report it).
+        facet_bounds: Facet bounds of Q1 computed (each settles a state's child, or its g
+            for A*, without an exact value when it is low enough).
     """
 
     created: int
@@ -69,6 +71,7 @@ class SearchStats:
     wall_seconds: float
     cpu_seconds: float
     peak_rss_bytes: int = 0
+    facet_bounds: int = 0
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready form."""
@@ -90,6 +93,7 @@ class SearchStats:
             "wall_seconds": self.wall_seconds,
             "cpu_seconds": self.cpu_seconds,
             "peak_rss_bytes": self.peak_rss_bytes,
+            "facet_bounds": self.facet_bounds,
         }
 
 

@@ -24,14 +24,14 @@ def test_prefetch_gives_the_sequential_search(object_contacts, monkeypatch, name
     sequential = GraspPlanner(method=method, eps=eps).plan(contacts, m)
     monkeypatch.setattr(subset_quality, "PREFETCH_THREADS", 2)
     started = []
-    original = subset_quality.GraspQuality.prefetch
+    original = subset_quality.GraspQuality._prefetch
 
-    def counting(self, requests):
+    def counting(self, union, key, members):
         before = len(self._started)
-        original(self, requests)
+        original(self, union, key, members)
         started.append(len(self._started) - before)
 
-    monkeypatch.setattr(subset_quality.GraspQuality, "prefetch", counting)
+    monkeypatch.setattr(subset_quality.GraspQuality, "_prefetch", counting)
     threaded = GraspPlanner(method=method, eps=eps).plan(contacts, m)
     assert sum(started) > 0  # the threads did take part
     assert _summary(threaded) == _summary(sequential)
