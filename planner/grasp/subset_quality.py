@@ -176,9 +176,8 @@ class GraspQuality:
             return known
         if level >= 2 or bound <= TOL.force_closure:
             return self._evaluate(union, key, vectors), EXACT
-        members = np.flatnonzero(np.unpackbits(union, count=self.n))
         first, last = (0, 1) if level == 0 else (1, FACET_STARTS)
-        raw = self.bounds.facet_bound(members, first, last)
+        raw = self.bounds.facet_bound(union, first, last)
         if known is not None:
             raw = min(raw, known[0] - CUT_MARGIN)
         self.facet_bounds += last - first
@@ -190,10 +189,10 @@ class GraspQuality:
         tightened = self._upper[key] = (raw + CUT_MARGIN, level + 1)
         if level == 1:
             # Its facet bounds did not settle it: it is likely to be evaluated next.
-            self._prefetch(union, key, members)
+            self._prefetch(union, key)
         return tightened
 
-    def _prefetch(self, union: PackedMask, key: bytes, members: NDArray[np.intp]) -> None:
+    def _prefetch(self, union: PackedMask, key: bytes) -> None:
         """Start the exact evaluation of a union in a thread (:data:`PREFETCH_THREADS` >= 2 only).
 
         Only unions the kernel takes (no hints, so the certificate is the one
@@ -201,6 +200,7 @@ class GraspQuality:
         """
         if PREFETCH_THREADS < 2 or key in self._started:
             return
+        members = np.flatnonzero(np.unpackbits(union, count=self.n))
         if len(members) * self.contacts.wrenches.shape[1] > KERNEL_MAX:
             return
         self._started[key] = _pool().submit(q1_certificate, self.contacts.subset_wrenches(members))

@@ -71,21 +71,17 @@ class SupportBound:
         fresh = self._support[members, done : self.count].max(axis=0)
         return fresh if cached is None else np.concatenate([cached, fresh])
 
-    def facet_bound(self, members: NDArray[np.intp], first: int, last: int) -> float:
+    def facet_bound(self, union: NDArray[np.uint8], first: int, last: int) -> float:
         """The best facet bound of Q1 of a union of contacts (:func:`~planner.grasp.kernel.ray_bound.union_facet_bound`) [-].
 
         Args:
-            members: Contact indices of the union.
+            union: The union's membership flags, packed (``numpy.packbits``).
             first: Rank (lowest support first) of the first direction that starts a facet bound.
             last: One past the rank of the last.
         """
         from planner.grasp.kernel.ray_bound import union_facet_bound
 
-        return float(
-            union_facet_bound(
-                self._wrenches, members, self._support[:, : self.count], self.directions[: self.count], first, last
-            )
-        )
+        return float(union_facet_bound(self._wrenches, union, self._support, self.directions, self.count, first, last))
 
     def lowest_directions(self, vectors: Sequence[Vector], count: int) -> NDArray[np.float64]:
         """The ``count`` directions along which the union's support is smallest, shape (count, 6)."""

@@ -180,6 +180,8 @@ class PartitionTree:
         self.members: list[Indices] = [np.arange(n_contacts, dtype=np.intp)]
         self.masks: list[NDArray[np.uint8]] = [self._mask(self.members[0])]
         self.depth: list[int] = [0]
+        #: Nodes of one contact (the search's hot test for terminal states).
+        self.leaves: set[int] = {0} if n_contacts == 1 else set()
         self._children: dict[int, tuple[int, ...]] = {}
 
     def _mask(self, indices: Indices) -> NDArray[np.uint8]:
@@ -201,6 +203,8 @@ class PartitionTree:
         else:
             ids = []
             for part in self.partitioner.split(self.members[node]):
+                if len(part) == 1:
+                    self.leaves.add(len(self.members))
                 ids.append(len(self.members))
                 self.members.append(part)
                 self.masks.append(self._mask(part))

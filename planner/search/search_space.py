@@ -6,10 +6,10 @@ See :mod:`planner.search.grasp_planner` for the design; :mod:`planner.search.bes
 from __future__ import annotations
 
 import itertools
-from collections.abc import Sequence
+from collections.abc import Hashable, Sequence
 from typing import Any
 
-from planner.grasp.constraints import Constraint
+from planner.grasp.constraints import Constraint, DistinctContacts
 from planner.grasp.contact_set import ContactSet
 from planner.grasp.subset_quality import GraspQuality, PackedMask
 from planner.grasp.support_bound import Vector
@@ -34,6 +34,8 @@ class SearchSpace:
         self.m = m
         self.config = config
         self.constraints = constraints
+        self._distinct = any(isinstance(c, DistinctContacts) for c in constraints)
+        self._other_constraints = [c for c in constraints if not isinstance(c, DistinctContacts)]
         self.oracle = GraspQuality(contacts, config["seed"])
 
         def partitioner(kind: str, branching: int) -> Any:
@@ -66,13 +68,33 @@ class SearchSpace:
         return max(self.tree.depth[node] for node in state)
 
     def is_terminal(self, state: State) -> bool:
-        return all(self.tree.size(node) == 1 for node in state)
+        return self.tree.leaves.issuperset(state)
 
-    def valid(self, parts: Sequence[Indices], terminal: bool) -> bool:
+    def valid(self, parts: Sequence[Indices], terminal: bool, keys: Sequence[Hashable] | None = None) -> bool:
+        """Whether the state (or, if terminal, the grasp) of these super-contacts passes every constraint.
+
+        Args:
+            parts: Contact indices of each super-contact.
+            terminal: Every part is one contact.
+            keys: One key per part, equal exactly when the parts are the same set, where
+                parts with different keys are disjoint: true of the partition-tree nodes of
+                one state (a node and a leaf left above its depth never nest) and of the
+                parts a partitioner splits them into. Distinct contacts then come down to
+                a count (no part used more often than it has contacts) instead of Hall's
+                matching.
+        """
+        constraints = self.constraints
+        if keys is not None and self._distinct:
+            counts: dict[Hashable, int] = {}
+            for key, part in zip(keys, parts, strict=True):
+                count = counts[key] = counts.get(key, 0) + 1
+                if count > len(part):
+                    return False
+            constraints = self._other_constraints
         if terminal:
             grasp = [int(p[0]) for p in parts]
-            return all(c.accepts(grasp, self.contacts) for c in self.constraints)
-        return all(c.admits(parts, self.contacts) for c in self.constraints)
+            return all(c.accepts(grasp, self.contacts) for c in constraints)
+        return all(c.admits(parts, self.contacts) for c in constraints)
 
     def successors(self, state: State) -> list[State]:
         """Γ restricted to valid states (Eq. 15), sorted unless finger order is kept."""
@@ -80,7 +102,7 @@ class SearchSpace:
         unique = dict.fromkeys(combos if self.config["ordered"] else (tuple(sorted(c)) for c in combos))
         result = []
         for child in unique:
-            if not self.valid(self.members(child), self.is_terminal(child)):
+            if not self.valid(self.members(child), self.is_terminal(child), child):
                 self.pruned += 1
                 continue
             if self.symmetry is not None and not self.symmetry.is_new(self.depth(child), self.members(child)):
@@ -96,7 +118,14 @@ class SearchSpace:
         return vec
 
     def node_vectors(self, state: State) -> list[Vector]:
-        return [self.vector(node, self.tree.members[node]) for node in state]
+        count = self.oracle.bounds.count
+        vectors = []
+        for node in state:
+            vec = self._vectors.get(node)
+            if vec is None or len(vec) != count:  # new, or directions were learned since
+                vec = self.vector(node, self.tree.members[node])
+            vectors.append(vec)
+        return vectors
 
     def upper(self, vectors: Sequence[Vector]) -> float:
         self.bound_evaluations += 1
@@ -127,7 +156,7 @@ class SearchSpace:
         if self.heuristic_shares_tree:
             combos = dict.fromkeys(tuple(sorted(c)) for c in itertools.product(*(self.tree.children(n) for n in state)))
             for child in combos:
-                if self.valid(self.members(child), self.is_terminal(child)):
+                if self.valid(self.members(child), self.is_terminal(child), child):
                     children.append(([self.tree.masks[n] for n in child], self.node_vectors(child), child))
             return children
         options = []
@@ -141,6 +170,6 @@ class SearchSpace:
             options.append([(p, mask, ("h", node, i)) for i, (p, mask) in enumerate(parts)])
         for combo in itertools.product(*options):
             members = [p for p, _, _ in combo]
-            if self.valid(members, all(len(p) == 1 for p in members)):
+            if self.valid(members, all(len(p) == 1 for p in members), [key for _, _, key in combo]):
                 children.append(([mask for _, mask, _ in combo], [self.vector(key, p) for p, _, key in combo], None))
         return children

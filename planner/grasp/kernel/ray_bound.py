@@ -207,9 +207,10 @@ def facet_bound(P: np.ndarray, c: np.ndarray) -> tuple[float, np.ndarray]:
 @cached_njit()
 def union_facet_bound(
     wrenches: np.ndarray,
-    members: np.ndarray,
+    union: np.ndarray,
     support: np.ndarray,
     directions: np.ndarray,
+    count: int,
     first: int,
     last: int,
 ) -> float:
@@ -220,16 +221,27 @@ def union_facet_bound(
 
     Args:
         wrenches: Cone-edge wrenches of every contact, shape (n, k, 6).
-        members: Contact indices of the union, shape (s,).
-        support: Support of every contact along each direction of D, shape (n, |D|).
-        directions: The unit directions D, shape (|D|, 6).
+        union: The union's membership flags packed as ``numpy.packbits`` packs them
+            (big-endian bits), shape (ceil(n / 8),).
+        support: Support of every contact along each direction, shape (n, >= count).
+        directions: Unit directions, shape (>= count, 6); D is the first ``count``.
+        count: |D|.
         first: Rank of the first start direction (0: the lowest support).
         last: One past the rank of the last.
 
     Returns:
         The smallest bound found (inf when no direction is ranked there).
     """
-    count = directions.shape[0]
+    n = wrenches.shape[0]
+    members = np.empty(n, dtype=np.int64)
+    size = 0
+    for byte in range(union.shape[0]):
+        bits = union[byte]
+        for bit in range(8):
+            if bits & (128 >> bit):
+                members[size] = 8 * byte + bit
+                size += 1
+    members = members[:size]
     joint = np.full(count, -np.inf)
     for c in members:
         for j in range(count):

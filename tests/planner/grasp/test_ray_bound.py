@@ -83,12 +83,15 @@ def test_union_facet_bound_starts_from_the_lowest_support_directions():
     directions = np.array([_unit(rng) for _ in range(50)])
     support = np.max(wrenches @ directions.T, axis=1)  # (30, 50)
     members = np.array([2, 5, 11, 17, 23, 29], dtype=np.intp)
+    flags = np.zeros(30, dtype=bool)
+    flags[members] = True
+    union = np.packbits(flags)
     points = wrenches[members].reshape(-1, 6)
     order = np.argsort(np.max(support[members], axis=0), kind="stable")
     for first, last in ((0, 1), (1, 4), (0, 8)):
         expected = min(facet_bound(points, directions[j])[0] for j in order[first:last])
-        assert union_facet_bound(wrenches, members, support, directions, first, last) == pytest.approx(expected)
-    assert union_facet_bound(wrenches, members, support, directions, 60, 70) == np.inf
+        assert union_facet_bound(wrenches, union, support, directions, 50, first, last) == pytest.approx(expected)
+    assert union_facet_bound(wrenches, union, support, directions, 50, 60, 70) == np.inf
 
 
 def test_tighten_climbs_to_the_exact_value(object_contacts):

@@ -26,9 +26,9 @@ def test_prefetch_gives_the_sequential_search(object_contacts, monkeypatch, name
     started = []
     original = subset_quality.GraspQuality._prefetch
 
-    def counting(self, union, key, members):
+    def counting(self, union, key):
         before = len(self._started)
-        original(self, union, key, members)
+        original(self, union, key)
         started.append(len(self._started) - before)
 
     monkeypatch.setattr(subset_quality.GraspQuality, "_prefetch", counting)
