@@ -35,3 +35,15 @@ def super_contact(box1000: ContactSet) -> np.ndarray:
 @pytest.fixture(scope="session")
 def sphere1000() -> ContactSet:
     return sample_contacts(builtin_mesh("sphere"), 1000, seed=0)
+
+
+@pytest.fixture(scope="session")
+def mid_unions(sphere1000: ContactSet) -> list[tuple[np.ndarray, np.ndarray]]:
+    """200 random 12-contact unions of the 1000-contact sphere (96 wrenches each), with a
+    random unit start direction each: the size the search's exact values mostly have."""
+    rng = np.random.default_rng(2)
+    unions = []
+    for _ in range(200):
+        start = rng.normal(size=6)
+        unions.append((sphere1000.subset_wrenches(rng.choice(1000, 12, replace=False)), start / np.linalg.norm(start)))
+    return unions

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from benchmarks.studies.q1_speed import scipy_q1
+from planner.grasp.kernel.ray_bound import facet_bound
 from planner.grasp.quality import q1
 
 
@@ -55,3 +56,16 @@ def test_sphere_grasps_es_path(benchmark, sphere1000):
     table = support_table(wrenches, default_directions())
     values, _ = benchmark(exact_q1_batch, wrenches, grasps, table)
     assert np.mean(values > 0) > 0.3
+
+
+def test_mid_unions_exact(benchmark, mid_unions):
+    benchmark.group = "q1-mid"
+    values = benchmark(lambda: [q1(w) for w, _ in mid_unions])
+    assert min(values) >= 0
+
+
+def test_mid_unions_facet_bound(benchmark, mid_unions):
+    """The upper bound the search tries before an exact value (one start direction)."""
+    benchmark.group = "q1-mid"
+    bounds = benchmark(lambda: [facet_bound(w, start)[0] for w, start in mid_unions])
+    assert all(b >= q1(w) - 1e-12 for b, (w, _) in zip(bounds, mid_unions, strict=True))

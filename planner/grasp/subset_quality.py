@@ -42,6 +42,9 @@ HINT_DIRECTIONS = 12
 FACET_STARTS = 4
 #: The level of :meth:`GraspQuality.tighten` that is Q1 itself.
 EXACT = 3
+#: Facet bounds kept at most (about 300 bytes each); beyond, the store starts afresh, which
+#: costs recomputation only (a search at m >= 5 asks for millions).
+UPPER_CAPACITY = 1_000_000
 
 
 def _prefetch_threads() -> int:
@@ -186,6 +189,8 @@ class GraspQuality:
             self._upper.pop(key, None)
             self._cache[key] = 0.0
             return 0.0, EXACT
+        if len(self._upper) >= UPPER_CAPACITY:
+            self._upper.clear()
         tightened = self._upper[key] = (raw + CUT_MARGIN, level + 1)
         if level == 1:
             # Its facet bounds did not settle it: it is likely to be evaluated next.

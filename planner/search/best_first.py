@@ -1,11 +1,13 @@
 """One best-first search run: the open list, lazily exact values, statistics (see :mod:`planner.search.grasp_planner`).
 
 Open-list entries pass through stages, each keyed by a lower bound of the state's f that
-only rises: ``BOUND`` (from the support bound U), ``EXACT_G`` (exact g), ``PARTIAL``
-(branch and bound over the heuristic children under way) and ``EXACT`` (exact f). A
-state is expanded only from ``EXACT``. With WA* (eps > 0) a state's exact key is the
-paper's ``g + (1 + eps) h``; the key of a state not yet scored is ``(1 + eps)`` times its
-lower bound of f. Both are at most ``(1 + eps) f``, which is all the WA* guarantee needs
+only rises: ``BOUND`` (from the support bound U), ``EXACT_G`` (g, exact for terminal
+states, else from a facet bound: see :meth:`~planner.search.search_space.SearchSpace.g_quality`),
+``PARTIAL`` (branch and bound over the heuristic children under way) and ``EXACT`` (exact
+f). A state is expanded only from ``EXACT``. With WA* (eps > 0) a state's exact key is the
+paper's ``g + (1 + eps) h`` (with that g, which can only raise it); the key of a state not
+yet scored is ``(1 + eps)`` times its lower bound of f. Both are at most ``(1 + eps) f``,
+which is all the WA* guarantee needs
 (the open state on an optimal path keeps a key <= (1 + eps) C*), and the inflated lower
 bounds spare WA* the exact evaluation of every state with g below the returned cost,
 which unweighted lower bounds would demand.
@@ -31,7 +33,7 @@ import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, TypeGuard
 
 import numpy as np
 
@@ -297,8 +299,9 @@ class Search(SearchSpace):
         to the open list with it as soon as it would no longer be the first there, so a
         state whose f turns out above the final frontier stops costing evaluations as
         soon as its bound says so. Most children settle on a facet bound below the best
-        value, at a tenth of the cost of an exact one. A state with no valid child below
-        it is dropped.
+        value, at a tenth of the cost of an exact one. WA*'s terminal children skip the
+        facet bounds: an exact value makes each one it reaches a candidate for the grasp
+        it returns. A state with no valid child below it is dropped.
         """
         q0 = self.q0
         if self.is_terminal(state) or self.heuristic_kind == "none":
@@ -307,7 +310,14 @@ class Search(SearchSpace):
         pending = self._pending.pop(state, None)
         if pending is None:
             children = self.heuristic_children(state)
-            heap = [(-self.upper(vectors), i, 0) for i, (_, vectors, _) in enumerate(children)]
+            # WA* returns the best grasp it has evaluated: its terminal children skip the facet
+            # bounds (the next tightening of a bound one level below exact is the exact value),
+            # so every one the branch and bound reaches becomes a candidate, as before facet bounds.
+            exact_first = self.eps > 0 and self.children_can_win
+            heap = [
+                (-self.upper(vectors), i, EXACT_Q1 - 1 if exact_first and self.wins(child) else 0)
+                for i, (_, vectors, child) in enumerate(children)
+            ]
             heapq.heapify(heap)
         else:
             children, heap = pending
@@ -325,7 +335,7 @@ class Search(SearchSpace):
             masks, vectors, child = children[i]
             value, level = self.oracle.tighten(masks, vectors, level, bound)
             if level == EXACT_Q1:
-                if child is not None and self.children_can_win and self.is_terminal(child):
+                if self.wins(child):
                     self.offer(value, child, state, ident)
             else:
                 value = min(value, bound)  # both bound Q1
@@ -336,6 +346,10 @@ class Search(SearchSpace):
         # With eps = 0 the key is f itself, not g + (f - g), which can round below f.
         key = f if self.eps == 0 else g + (1.0 + self.eps) * (f - g)
         self.push(open_list, f, depth, state, EXACT, g, ident, key=key)
+
+    def wins(self, child: State | None) -> TypeGuard[State]:
+        """Whether a heuristic child is a grasp that may become the incumbent."""
+        return child is not None and self.children_can_win and self.is_terminal(child)
 
     def finish(self, open_list: list[Entry], wall0: float, cpu0: float) -> SearchResult:
         """Return the incumbent, expanding the state that found it if it is not created yet."""

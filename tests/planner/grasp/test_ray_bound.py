@@ -126,3 +126,19 @@ def test_tighten_settles_zero_without_an_exact_value(object_contacts):
     while level != EXACT:
         value, level = oracle.tighten(masks, vectors, level, value)
     assert value == 0.0 and oracle.evaluations == 0
+
+
+def test_the_facet_bound_store_is_capped(object_contacts, monkeypatch):
+    from planner.grasp import subset_quality
+
+    monkeypatch.setattr(subset_quality, "UPPER_CAPACITY", 5)
+    contacts = object_contacts("sphere", 120, 0)
+    oracle = GraspQuality(contacts, seed=0)
+    rng = np.random.default_rng(8)
+    for _ in range(30):
+        members = [np.sort(rng.choice(len(contacts), size=4, replace=False)) for _ in range(3)]
+        masks = [oracle.mask_of(m) for m in members]
+        vectors = [oracle.bounds.vector(m) for m in members]
+        value, level = oracle.tighten(masks, vectors, 0, oracle.bounds.bound(vectors))
+        assert level == EXACT or value >= GraspQuality(contacts, seed=0).of_masks(masks)
+        assert len(oracle._upper) <= 5
