@@ -177,7 +177,8 @@ class Search(SearchSpace):
             depth = -neg_depth
             if stage == BOUND:
                 q = self.g_quality(state)
-                g = q0 - q
+                # A facet bound may exceed q0; g >= 0 keeps WA*'s keys at most (1 + eps) f.
+                g = q0 - min(q0, q)
                 if self.is_terminal(state):
                     self.offer(q, state, None, ident)
                 if self.is_terminal(state) or self.heuristic_kind == "none":
