@@ -102,7 +102,7 @@ class GraspQuality:
         self.facet_bounds = 0
         #: (facet bound, level) per union key of the unions not evaluated exactly (:meth:`tighten`).
         self._upper: dict[bytes, tuple[float, int]] = {}
-        #: Evaluations started by :meth:`prefetch`, by union key, not yet asked for.
+        #: Evaluations started by :meth:`_prefetch`, by union key, not yet asked for.
         self._started: dict[bytes, Future[Q1Certificate]] = {}
 
     def mask_of(self, indices: NDArray[np.intp]) -> PackedMask:
