@@ -36,12 +36,11 @@ from dataclasses import dataclass
 from typing import Any, TypeGuard
 
 import numpy as np
+from numpy.typing import NDArray
 
 from planner.grasp.constraints import Constraint
 from planner.grasp.contact_set import ContactSet
 from planner.grasp.subset_quality import EXACT as EXACT_Q1
-from planner.grasp.subset_quality import PackedMask
-from planner.grasp.support_bound import Vector
 from planner.infra.errors import OgcpError, SearchTimeout
 from planner.search.result import (
     SearchResult,
@@ -55,10 +54,15 @@ from planner.search.search_space import SearchSpace, State
 BOUND, EXACT_G, PARTIAL, EXACT = 0, 1, 2, 3
 #: (key, -depth, tie, state, lower bound of the unweighted f, stage, g or NaN, state id)
 Entry = tuple[float, int, int, State, float, int, float, int]
-#: Heuristic children: (masks, support vectors, state or None).
-Children = list[tuple[list[PackedMask], list[Vector], State | None]]
-#: Max-heap of the children's upper bounds of Q1: (-bound, child index, level of the bound).
-Bounds = list[tuple[float, int, int]]
+#: Heuristic children waiting in a state's branch and bound: their keys
+#: (:data:`~planner.search.search_space.ChildKey`), one row each, shape (children, m). Masks
+#: and vectors are looked up again when one is tightened: at m >= 5 millions wait, most
+#: never touched, and 4 bytes per node keep them small.
+Children = NDArray[np.int32]
+#: A state's branch and bound under way: its children, their upper bounds of Q1 [-] and the
+#: level of each bound (arrays of shape (children,); 9 bytes a child, where a heap of tuples
+#: took 90, and the largest is found by argmax).
+Pending = tuple[Children, NDArray[np.float64], NDArray[np.int8]]
 #: Iterations between two looks at the clock for progress reports (a report costs nothing
 #: but a clock reading; the clock is read every iteration for the deadline anyway).
 PROGRESS_SECONDS = 0.5
@@ -116,7 +120,7 @@ class Search(SearchSpace):
         self.stop = stop
         #: Called about every :data:`PROGRESS_SECONDS` with (best Q1 or None, certified bound) [-].
         self.on_progress: Callable[[float | None, float], object] = lambda best, bound: None
-        self._pending: dict[State, tuple[Children, Bounds]] = {}
+        self._pending: dict[State, Pending] = {}
         # Heuristic children are successors only on the expansion tree and without the
         # symmetry filter; otherwise only created terminal states become incumbents.
         self.children_can_win = self.heuristic_shares_tree and self.symmetry is None
@@ -292,11 +296,11 @@ class Search(SearchSpace):
     def refine(self, open_list: list[Entry], state: State, depth: int, lower: float, g: float, ident: int) -> None:
         """Branch and bound over the heuristic children, on ever tighter upper bounds of their Q1.
 
-        The children wait on a max-heap of upper bounds, each at a level of
+        The children wait with upper bounds, each at a level of
         :meth:`planner.grasp.subset_quality.GraspQuality.tighten`: the support bound, then
-        facet bounds, then the exact value. The child on top is tightened by one level
-        until the top is an exact value: that is the best child, and f = q0 - its Q1.
-        Meanwhile f >= q0 - (the top bound) is a valid lower bound, and the state returns
+        facet bounds, then the exact value. The child of the largest bound is tightened by
+        one level until the largest is an exact value: that is the best child, and
+        f = q0 - its Q1. Meanwhile f >= q0 - (the largest bound) is a valid lower bound, and the state returns
         to the open list with it as soon as it would no longer be the first there, so a
         state whose f turns out above the final frontier stops costing evaluations as
         soon as its bound says so. Most children settle on a facet bound below the best
@@ -310,40 +314,43 @@ class Search(SearchSpace):
             return
         pending = self._pending.pop(state, None)
         if pending is None:
-            children = self.heuristic_children(state)
-            # WA* returns the best grasp it has evaluated: its terminal children skip the facet
-            # bounds (the next tightening of a bound one level below exact is the exact value),
-            # so every one the branch and bound reaches becomes a candidate, as before facet bounds.
-            exact_first = self.eps > 0 and self.children_can_win
-            heap = [
-                (-self.upper(vectors), i, EXACT_Q1 - 1 if exact_first and self.wins(child) else 0)
-                for i, (_, vectors, child) in enumerate(children)
-            ]
-            heapq.heapify(heap)
+            found = self.heuristic_children(state)
+            if not found:
+                return  # no valid grasp below this state
+            children = np.array([key for key, _ in found], dtype=np.int32).reshape(len(found), self.m)
+            bounds = np.array([self.upper(vectors) for _, vectors in found])
+            levels = np.zeros(len(found), dtype=np.int8)
+            if self.eps > 0 and self.children_can_win:
+                # WA* returns the best grasp it has evaluated: its terminal children skip the facet
+                # bounds (the next tightening of a bound one level below exact is the exact value),
+                # so every one the branch and bound reaches becomes a candidate.
+                for i, (child_key, _) in enumerate(found):
+                    if self.wins(self.child_state(child_key)):
+                        levels[i] = EXACT_Q1 - 1
         else:
-            children, heap = pending
-        while heap:
-            top, i, level = heap[0]
-            bound = -top
+            children, bounds, levels = pending
+        while True:
+            i = int(bounds.argmax())  # the first of equal bounds: the lowest index
+            bound, level = float(bounds[i]), int(levels[i])
             # Children's q lie in [0, q0]: clip the bound like the successor bounds.
             lower = max(lower, q0 - min(q0, max(0.0, bound)))
             if level == EXACT_Q1:
                 break
             if open_list and (1.0 + self.eps) * lower > open_list[0][0]:
-                self._pending[state] = (children, heap)
+                self._pending[state] = (children, bounds, levels)
                 self.push(open_list, lower, depth, state, PARTIAL, g, ident)
                 return
-            masks, vectors, child = children[i]
+            child_key = tuple(children[i].tolist())
+            child = self.child_state(child_key)
+            masks, vectors = self.child_masks(child_key), self.child_vectors(child_key)
             value, level = self.oracle.tighten(masks, vectors, level, bound)
             if level == EXACT_Q1:
                 if self.wins(child):
                     self.offer(value, child, state, ident)
             else:
                 value = min(value, bound)  # both bound Q1
-            heapq.heapreplace(heap, (-value, i, level))
-        if not heap:
-            return  # no valid grasp below this state
-        f = q0 - (-heap[0][0])
+            bounds[i], levels[i] = value, level
+        f = q0 - bound
         # With eps = 0 the key is f itself, not g + (f - g), which can round below f.
         key = f if self.eps == 0 else g + (1.0 + self.eps) * (f - g)
         self.push(open_list, f, depth, state, EXACT, g, ident, key=key)

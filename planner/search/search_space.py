@@ -17,6 +17,9 @@ from planner.search.partitions import Indices, PartitionTree, make_partitioner
 from planner.search.symmetry import SymmetryFilter
 
 State = tuple[int, ...]
+#: A heuristic child: its state, or ``node * b_h + part`` per super-contact when Γh has
+#: its own partitioner (of branching b_h, so at most b_h parts per node).
+ChildKey = tuple[int, ...]
 
 
 class SearchSpace:
@@ -150,15 +153,20 @@ class SearchSpace:
         q = self.oracle.tighten([self.tree.masks[node] for node in state], vectors, 0, bound)[0]
         return min(q, bound)
 
-    def heuristic_children(self, state: State) -> list[tuple[list[PackedMask], list[Vector], State | None]]:
-        """Valid Γh children as (masks, support vectors, state); never symmetry-filtered
-        (admissibility). The state (sorted node tuple) is None when Γh is not the expansion tree."""
-        children: list[tuple[list[PackedMask], list[Vector], State | None]] = []
+    def heuristic_children(self, state: State) -> list[tuple[ChildKey, list[Vector]]]:
+        """Valid Γh children as (key, support vectors); never symmetry-filtered (admissibility).
+
+        A key (:data:`ChildKey`) is the child's state (sorted node tuple) when Γh is the
+        expansion tree. It is all a caller needs to keep: the search holds
+        millions of children waiting at m >= 5, and :meth:`child_masks` and
+        :meth:`child_vectors` give the rest back when a child is tightened.
+        """
+        children: list[tuple[ChildKey, list[Vector]]] = []
         if self.heuristic_shares_tree:
             combos = dict.fromkeys(tuple(sorted(c)) for c in itertools.product(*(self.tree.children(n) for n in state)))
             for child in combos:
                 if self.valid(self.members(child), self.is_terminal(child), child):
-                    children.append(([self.tree.masks[n] for n in child], self.node_vectors(child), child))
+                    children.append((child, self.node_vectors(child)))
             return children
         options = []
         for node in state:
@@ -168,9 +176,32 @@ class SearchSpace:
                 split = self.heuristic_partitioner.split(self.tree.members[node])
                 parts = [(p, self.oracle.mask_of(p)) for p in split]
                 self._heuristic_parts[node] = parts
-            options.append([(p, mask, ("h", node, i)) for i, (p, mask) in enumerate(parts)])
+            stride = self.config["heuristic_branching"]
+            assert len(parts) <= stride, "a partitioner splits into at most b parts"
+            options.append([node * stride + i for i in range(len(parts))])
         for combo in itertools.product(*options):
-            members = [p for p, _, _ in combo]
-            if self.valid(members, all(len(p) == 1 for p in members), [key for _, _, key in combo]):
-                children.append(([mask for _, mask, _ in combo], [self.vector(key, p) for p, _, key in combo], None))
+            members = [self._heuristic_part(key)[0] for key in combo]
+            if self.valid(members, all(len(p) == 1 for p in members), combo):
+                children.append((combo, self.child_vectors(combo)))
         return children
+
+    def child_state(self, key: ChildKey) -> State | None:
+        """The state of a Γh child, or None when Γh is not the expansion tree."""
+        return key if self.heuristic_shares_tree else None
+
+    def child_masks(self, key: ChildKey) -> list[PackedMask]:
+        """Packed masks of a Γh child's super-contacts."""
+        if self.heuristic_shares_tree:
+            return [self.tree.masks[node] for node in key]
+        return [self._heuristic_part(part)[1] for part in key]
+
+    def child_vectors(self, key: ChildKey) -> list[Vector]:
+        """Support vectors of a Γh child's super-contacts."""
+        if self.heuristic_shares_tree:
+            return self.node_vectors(key)
+        return [self.vector(("h", part), self._heuristic_part(part)[0]) for part in key]
+
+    def _heuristic_part(self, part: int) -> tuple[Indices, PackedMask]:
+        """Members and mask of a part of Γh's own partitioner, by its key ``node * b_h + i``."""
+        node, i = divmod(part, self.config["heuristic_branching"])
+        return self._heuristic_parts[node][i]

@@ -5,9 +5,11 @@ from __future__ import annotations
 import itertools
 
 import numpy as np
+import pytest
 
 from planner.grasp.constraints import DistinctContacts, MaxFingerSpread
 from planner.search import GraspPlanner
+from planner.search.best_first import Search
 from planner.search.search_space import SearchSpace
 
 
@@ -61,8 +63,32 @@ def test_heuristic_parts_keyed_by_node_and_part_agree(object_contacts):
             del space.valid
 
         def unions(found):
-            return [b"".join(mask.tobytes() for mask in masks) for masks, _, _ in found]
+            return [b"".join(mask.tobytes() for mask in space.child_masks(key)) for key, _ in found]
 
         assert unions(children) == unions(generic)
         checked += len(children)
+    assert checked > 0
+
+
+@pytest.mark.parametrize("heuristic_branching", [2, 3])
+def test_waiting_children_are_compact_and_their_bounds_hold(object_contacts, heuristic_branching):
+    """A state's branch and bound left waiting keeps keys and bounds in arrays, and every
+    bound it holds is an upper bound of that child's exact Q1 (with Γh on the expansion
+    tree and on its own partitioner)."""
+    contacts = object_contacts("box", 60, 0)
+    planner = GraspPlanner(method="astar", heuristic_branching=heuristic_branching)
+    config = planner.resolved_config()
+    config["m"] = 4
+    search = Search(contacts, 4, config, [DistinctContacts()])
+    result = search.run()
+    assert result.status == "optimal" and search._pending
+    checked = 0
+    for children, bounds, levels in search._pending.values():
+        assert children.dtype == np.int32 and children.shape == (len(bounds), 4)
+        assert bounds.dtype == np.float64 and levels.dtype == np.int8 and len(levels) == len(bounds)
+        for row, bound, level in zip(children[:4], bounds, levels, strict=False):
+            key = tuple(row.tolist())
+            exact = search.oracle.of_masks(search.child_masks(key))
+            assert exact <= bound + 1e-12, (key, int(level))
+            checked += 1
     assert checked > 0
