@@ -150,7 +150,12 @@ class GraspQuality:
         return cert.q1
 
     def tighten(
-        self, masks: Sequence[PackedMask], vectors: Sequence[Vector], level: int, bound: float
+        self,
+        masks: Sequence[PackedMask],
+        vectors: Sequence[Vector] | None,
+        level: int,
+        bound: float,
+        start: int | None = None,
     ) -> tuple[float, int]:
         """Tighten an upper bound of Q1 of the union by one level: (bound [-], level reached).
 
@@ -164,9 +169,13 @@ class GraspQuality:
 
         Args:
             masks: Packed membership masks of the super-contacts.
-            vectors: Their support vectors.
+            vectors: Their support vectors, or None (then a union about to be evaluated,
+                at level 2 or with a bound below the force-closure tolerance, is evaluated
+                without the support-bound rejection: give them there).
             level: The level of the bound the caller holds (0-2).
             bound: That bound [-].
+            start: At level 0, the direction of D of lowest support, if the caller knows
+                it (the first of equal ones: where the first facet bound starts anyway).
         """
         union = functools.reduce(np.bitwise_or, masks)
         key = union.tobytes()
@@ -180,7 +189,10 @@ class GraspQuality:
         if level >= 2 or bound <= TOL.force_closure:
             return self._evaluate(union, key, vectors), EXACT
         first, last = (0, 1) if level == 0 else (1, FACET_STARTS)
-        raw = self.bounds.facet_bound(union, first, last)
+        if level == 0 and start is not None:
+            raw = self.bounds.facet_bound_along(union, start)
+        else:
+            raw = self.bounds.facet_bound(union, first, last)
         if known is not None:
             raw = min(raw, known[0] - CUT_MARGIN)
         self.facet_bounds += last - first

@@ -83,12 +83,29 @@ class SupportBound:
 
         return float(union_facet_bound(self._wrenches, union, self._support, self.directions, self.count, first, last))
 
+    def facet_bound_along(self, union: NDArray[np.uint8], start: int) -> float:
+        """The facet bound of Q1 of a union of contacts from direction ``start`` of D [-]
+        (:func:`~planner.grasp.kernel.ray_bound.union_facet_bound_along`)."""
+        from planner.grasp.kernel.ray_bound import union_facet_bound_along
+
+        return float(union_facet_bound_along(self._wrenches, union, self.directions[start]))
+
     def lowest_directions(self, vectors: Sequence[Vector], count: int) -> NDArray[np.float64]:
         """The ``count`` directions along which the union's support is smallest, shape (count, 6)."""
         length = min(len(v) for v in vectors)
         joint = np.max([v[:length] for v in vectors], axis=0)
         take = min(count, length)
         return self.directions[np.argpartition(joint, take - 1)[:take]]
+
+    @staticmethod
+    def lowest(vectors: Sequence[Vector]) -> tuple[float, int]:
+        """:meth:`bound` and the direction of D that gives it (the first of equal ones): ([-], index)."""
+        length = min(len(v) for v in vectors)
+        joint = vectors[0][:length]
+        for v in vectors[1:]:
+            joint = np.maximum(joint, v[:length])
+        index = int(joint.argmin())
+        return float(joint[index]), index
 
     @staticmethod
     def bound(vectors: Sequence[Vector]) -> float:

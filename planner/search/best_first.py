@@ -42,6 +42,7 @@ from planner.grasp.constraints import Constraint
 from planner.grasp.contact_set import ContactSet
 from planner.grasp.subset_quality import EXACT as EXACT_Q1
 from planner.infra.errors import OgcpError, SearchTimeout
+from planner.infra.tolerance import TOL
 from planner.search.result import (
     SearchResult,
     SearchStats,
@@ -59,10 +60,11 @@ Entry = tuple[float, int, int, State, float, int, float, int]
 #: and vectors are looked up again when one is tightened: at m >= 5 millions wait, most
 #: never touched, and 4 bytes per node keep them small.
 Children = NDArray[np.int32]
-#: A state's branch and bound under way: its children, their upper bounds of Q1 [-] and the
-#: level of each bound (arrays of shape (children,); 9 bytes a child, where a heap of tuples
-#: took 90, and the largest is found by argmax).
-Pending = tuple[Children, NDArray[np.float64], NDArray[np.int8]]
+#: A state's branch and bound under way: its children, their upper bounds of Q1 [-], the
+#: level of each bound, the direction of D of each support bound (-1: not known; arrays of
+#: shape (children,): 13 bytes a child, where a heap of tuples took 90, and the largest is
+#: found by argmax) and |D| when they were listed.
+Pending = tuple[Children, NDArray[np.float64], NDArray[np.int8], NDArray[np.int32], int]
 #: Iterations between two looks at the clock for progress reports (a report costs nothing
 #: but a clock reading; the clock is read every iteration for the deadline anyway).
 PROGRESS_SECONDS = 0.5
@@ -314,21 +316,18 @@ class Search(SearchSpace):
             return
         pending = self._pending.pop(state, None)
         if pending is None:
-            found = self.heuristic_children(state)
-            if not found:
+            children, bounds, starts, terminal = self.heuristic_bounds(state)
+            listed = self.oracle.bounds.count
+            if not len(bounds):
                 return  # no valid grasp below this state
-            children = np.array([key for key, _ in found], dtype=np.int32).reshape(len(found), self.m)
-            bounds = np.array([self.upper(vectors) for _, vectors in found])
-            levels = np.zeros(len(found), dtype=np.int8)
+            levels = np.zeros(len(bounds), dtype=np.int8)
             if self.eps > 0 and self.children_can_win:
                 # WA* returns the best grasp it has evaluated: its terminal children skip the facet
                 # bounds (the next tightening of a bound one level below exact is the exact value),
                 # so every one the branch and bound reaches becomes a candidate.
-                for i, (child_key, _) in enumerate(found):
-                    if self.wins(self.child_state(child_key)):
-                        levels[i] = EXACT_Q1 - 1
+                levels[terminal] = EXACT_Q1 - 1
         else:
-            children, bounds, levels = pending
+            children, bounds, levels, starts, listed = pending
         while True:
             i = int(bounds.argmax())  # the first of equal bounds: the lowest index
             bound, level = float(bounds[i]), int(levels[i])
@@ -337,13 +336,18 @@ class Search(SearchSpace):
             if level == EXACT_Q1:
                 break
             if open_list and (1.0 + self.eps) * lower > open_list[0][0]:
-                self._pending[state] = (children, bounds, levels)
+                self._pending[state] = (children, bounds, levels, starts, listed)
                 self.push(open_list, lower, depth, state, PARTIAL, g, ident)
                 return
             child_key = tuple(children[i].tolist())
             child = self.child_state(child_key)
-            masks, vectors = self.child_masks(child_key), self.child_vectors(child_key)
-            value, level = self.oracle.tighten(masks, vectors, level, bound)
+            # Vectors serve only an exact evaluation (its cheap rejection): skip the lookup below.
+            exact_next = level == EXACT_Q1 - 1 or bound <= TOL.force_closure
+            vectors = self.child_vectors(child_key) if exact_next else None
+            # The direction of the listing's bound starts the first facet bound, unless
+            # directions were learned since (then the union's lowest is looked up again).
+            start = int(starts[i]) if level == 0 and starts[i] >= 0 and listed == self.oracle.bounds.count else None
+            value, level = self.oracle.tighten(self.child_masks(child_key), vectors, level, bound, start)
             if level == EXACT_Q1:
                 if self.wins(child):
                     self.offer(value, child, state, ident)

@@ -9,6 +9,9 @@ import itertools
 from collections.abc import Hashable, Sequence
 from typing import Any
 
+import numpy as np
+from numpy.typing import NDArray
+
 from planner.grasp.constraints import Constraint, DistinctContacts
 from planner.grasp.contact_set import ContactSet
 from planner.grasp.subset_quality import GraspQuality, PackedMask
@@ -57,7 +60,21 @@ class SearchSpace:
             else partitioner(self.heuristic_kind, config["heuristic_branching"])
         )
         self._heuristic_parts: dict[int, list[tuple[Indices, PackedMask]]] = {}
+        #: Support vectors of Γh's own parts, by key (tree nodes' live in ``_node_vectors``).
         self._vectors: dict[Any, Vector] = {}
+        # Per tree node, grown as the tree grows: support vectors (rows filled up to
+        # ``_filled`` directions), sizes, child nodes; the compiled listing of Γh children reads them.
+        branching = config["branching"]
+        self._node_vectors = np.zeros((0, self.oracle.bounds.capacity))
+        self._filled = np.zeros(0, dtype=np.int64)
+        self._sizes = np.zeros(0, dtype=np.int64)
+        self._table = np.zeros((0, branching), dtype=np.int64)
+        self._widths = np.zeros(0, dtype=np.int64)
+        # One call per state lists Γh's children where they are combinations of tree nodes
+        # and distinct contacts is the only constraint (other constraints judge in Python).
+        self._compiled_children = (
+            self.heuristic_shares_tree and self._distinct and not self._other_constraints and branching**m <= 256
+        )
         self.symmetry = SymmetryFilter(contacts) if config["symmetry"] else None
         self.pruned = 0
         self.bound_evaluations = 0
@@ -122,13 +139,44 @@ class SearchSpace:
 
     def node_vectors(self, state: State) -> list[Vector]:
         count = self.oracle.bounds.count
+        rows = self._node_vectors
+        filled = self._filled
         vectors = []
         for node in state:
-            vec = self._vectors.get(node)
-            if vec is None or len(vec) != count:  # new, or directions were learned since
-                vec = self.vector(node, self.tree.members[node])
-            vectors.append(vec)
+            if node >= len(filled) or filled[node] != count:  # new, or directions were learned since
+                self._fill(node)
+                rows, filled = self._node_vectors, self._filled
+            vectors.append(rows[node, :count])
         return vectors
+
+    def _fill(self, node: int) -> None:
+        """Bring a tree node's support vector up to the current directions (rows grow with the tree)."""
+        if node >= len(self._filled):
+            self._grow(len(self.tree.members))
+        bounds = self.oracle.bounds
+        done = int(self._filled[node])
+        members = self.tree.members[node]
+        if done == 0:
+            self._sizes[node] = len(members)
+        cached = self._node_vectors[node, :done] if done else None
+        self._node_vectors[node, done : bounds.count] = bounds.vector(members, cached)[done:]
+        self._filled[node] = bounds.count
+
+    def _grow(self, nodes: int) -> None:
+        """Room for at least ``nodes`` tree nodes in the per-node arrays (doubling)."""
+        old = len(self._filled)
+        size = max(nodes, 2 * old, 64)
+
+        def grown(array: np.ndarray, fill: int) -> np.ndarray:
+            new = np.full((size, *array.shape[1:]), fill, dtype=array.dtype)
+            new[:old] = array
+            return new
+
+        self._node_vectors = grown(self._node_vectors, 0)
+        self._filled = grown(self._filled, 0)
+        self._sizes = grown(self._sizes, 0)
+        self._table = grown(self._table, -1)
+        self._widths = grown(self._widths, 0)
 
     def upper(self, vectors: Sequence[Vector]) -> float:
         self.bound_evaluations += 1
@@ -149,8 +197,9 @@ class SearchSpace:
         if self.heuristic_kind == "none" or self.is_terminal(state):
             return self.exact(state)
         vectors = self.node_vectors(state)
-        bound = self.upper(vectors)
-        q = self.oracle.tighten([self.tree.masks[node] for node in state], vectors, 0, bound)[0]
+        self.bound_evaluations += 1
+        bound, start = self.oracle.bounds.lowest(vectors)
+        q = self.oracle.tighten([self.tree.masks[node] for node in state], vectors, 0, bound, start)[0]
         return min(q, bound)
 
     def heuristic_children(self, state: State) -> list[tuple[ChildKey, list[Vector]]]:
@@ -184,6 +233,41 @@ class SearchSpace:
             if self.valid(members, all(len(p) == 1 for p in members), combo):
                 children.append((combo, self.child_vectors(combo)))
         return children
+
+    def heuristic_bounds(
+        self, state: State
+    ) -> tuple[NDArray[np.int32], NDArray[np.float64], NDArray[np.int32], NDArray[np.bool_]]:
+        """Γh children as arrays: keys (shape (k, m)), support bounds U [-], the direction of D
+        that gives each bound (-1: not known) and whether each is a grasp state.
+
+        The same children in the same order as :meth:`heuristic_children`; listed by
+        :func:`planner.search.children_kernel.shared_tree_children` where it applies.
+        """
+        if not self._compiled_children:
+            found = self.heuristic_children(state)
+            keys = np.array([key for key, _ in found], dtype=np.int32).reshape(len(found), self.m)
+            bounds = np.array([self.upper(vectors) for _, vectors in found], dtype=np.float64)
+            shared = self.heuristic_shares_tree
+            terminal = np.array([shared and self.is_terminal(key) for key, _ in found], dtype=np.bool_)
+            return keys, bounds, np.full(len(bounds), -1, dtype=np.int32), terminal
+        from planner.search.children_kernel import shared_tree_children
+
+        count = self.oracle.bounds.count
+        for node in state:
+            children = self.tree.children(node)
+            if len(self._widths) < len(self.tree.members):
+                self._grow(len(self.tree.members))
+            if self._widths[node] == 0:
+                self._table[node, : len(children)] = children
+                self._widths[node] = len(children)
+            for child in children:
+                if self._filled[child] != count:
+                    self._fill(child)
+        keys, bounds, starts, terminal = shared_tree_children(
+            np.array(state, dtype=np.int64), self._table, self._widths, self._sizes, self._node_vectors, count
+        )
+        self.bound_evaluations += len(bounds)
+        return keys, bounds, starts, terminal
 
     def child_state(self, key: ChildKey) -> State | None:
         """The state of a Γh child, or None when Γh is not the expansion tree."""

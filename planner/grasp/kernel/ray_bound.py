@@ -205,6 +205,44 @@ def facet_bound(P: np.ndarray, c: np.ndarray) -> tuple[float, np.ndarray]:
 
 
 @cached_njit()
+def _union_points(wrenches: np.ndarray, union: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The members of a packed union (big-endian bits) and their wrenches, shapes (s,) and (s k, 6)."""
+    members = np.empty(wrenches.shape[0], dtype=np.int64)
+    size = 0
+    for byte in range(union.shape[0]):
+        bits = union[byte]
+        if bits == 0:
+            continue
+        for bit in range(8):
+            if bits & (128 >> bit):
+                members[size] = 8 * byte + bit
+                size += 1
+    members = members[:size]
+    k = wrenches.shape[1]
+    P = np.empty((size * k, DIM))
+    for a in range(size):
+        for e in range(k):
+            for j in range(DIM):
+                P[a * k + e, j] = wrenches[members[a], e, j]
+    return members, P
+
+
+@cached_njit()
+def union_facet_bound_along(wrenches: np.ndarray, union: np.ndarray, direction: np.ndarray) -> float:
+    """:func:`facet_bound` of a union of contacts from one start direction [-].
+
+    :func:`union_facet_bound` with ``first, last = 0, 1`` when ``direction`` is the one of
+    lowest support, for callers that know it already (members x |D| work saved).
+
+    Args:
+        wrenches: Cone-edge wrenches of every contact, shape (n, k, 6).
+        union: The union's membership flags, packed (``numpy.packbits``), shape (ceil(n / 8),).
+        direction: Unit start direction, shape (6,).
+    """
+    return facet_bound(_union_points(wrenches, union)[1], direction)[0]
+
+
+@cached_njit()
 def union_facet_bound(
     wrenches: np.ndarray,
     union: np.ndarray,
@@ -232,26 +270,11 @@ def union_facet_bound(
     Returns:
         The smallest bound found (inf when no direction is ranked there).
     """
-    n = wrenches.shape[0]
-    members = np.empty(n, dtype=np.int64)
-    size = 0
-    for byte in range(union.shape[0]):
-        bits = union[byte]
-        for bit in range(8):
-            if bits & (128 >> bit):
-                members[size] = 8 * byte + bit
-                size += 1
-    members = members[:size]
+    members, P = _union_points(wrenches, union)
     joint = np.full(count, -np.inf)
     for c in members:
         for j in range(count):
             joint[j] = max(joint[j], support[c, j])
-    k = wrenches.shape[1]
-    P = np.empty((len(members) * k, DIM))
-    for a in range(len(members)):
-        for e in range(k):
-            for j in range(DIM):
-                P[a * k + e, j] = wrenches[members[a], e, j]
     taken = np.zeros(count, dtype=np.bool_)
     best = np.inf
     for rank in range(min(last, count)):

@@ -142,3 +142,16 @@ def test_the_facet_bound_store_is_capped(object_contacts, monkeypatch):
         value, level = oracle.tighten(masks, vectors, 0, oracle.bounds.bound(vectors))
         assert level == EXACT or value >= GraspQuality(contacts, seed=0).of_masks(masks)
         assert len(oracle._upper) <= 5
+
+
+def test_facet_bound_along_the_lowest_direction_is_the_first_facet_bound(object_contacts):
+    contacts = object_contacts("donut", 80, 1)
+    oracle = GraspQuality(contacts, 0)
+    rng = np.random.default_rng(9)
+    for _ in range(30):
+        members = [rng.choice(80, size=int(rng.integers(1, 9)), replace=False) for _ in range(3)]
+        vectors = [oracle.bounds.vector(m) for m in members]
+        union = oracle.mask_of(np.concatenate(members))
+        bound, start = oracle.bounds.lowest(vectors)
+        assert bound == oracle.bounds.bound(vectors)
+        assert oracle.bounds.facet_bound_along(union, start) == oracle.bounds.facet_bound(union, 0, 1)

@@ -83,7 +83,8 @@ def test_waiting_children_are_compact_and_their_bounds_hold(object_contacts, heu
     result = search.run()
     assert result.status == "optimal" and search._pending
     checked = 0
-    for children, bounds, levels in search._pending.values():
+    for children, bounds, levels, starts, _ in search._pending.values():
+        assert starts.dtype == np.int32 and len(starts) == len(bounds)
         assert children.dtype == np.int32 and children.shape == (len(bounds), 4)
         assert bounds.dtype == np.float64 and levels.dtype == np.int8 and len(levels) == len(bounds)
         for row, bound, level in zip(children[:4], bounds, levels, strict=False):
@@ -92,3 +93,31 @@ def test_waiting_children_are_compact_and_their_bounds_hold(object_contacts, heu
             assert exact <= bound + 1e-12, (key, int(level))
             checked += 1
     assert checked > 0
+
+
+@pytest.mark.parametrize("m", [3, 4, 5])
+def test_compiled_children_are_the_python_listing(object_contacts, m):
+    """The compiled Γh listing gives the Python listing's children in its order, with the
+    bit-identical support bounds, the direction of each bound and the grasp flags."""
+    contacts = object_contacts("amphora", 60, 2)
+    planner = GraspPlanner(method="astar")
+    config = planner.resolved_config()
+    config["m"] = m
+    space = SearchSpace(contacts, m, config, [DistinctContacts()])
+    assert space._compiled_children
+    rng = np.random.default_rng(m)
+    states = [(0,) * m]
+    checked = repeated = 0
+    while states and checked < 400:
+        state = states.pop(int(rng.integers(len(states))))
+        keys, bounds, starts, terminal = space.heuristic_bounds(state)
+        found = space.heuristic_children(state)
+        assert [tuple(row) for row in keys.tolist()] == [key for key, _ in found]
+        for key, bound, start, grasp, (_, vectors) in zip(keys.tolist(), bounds, starts, terminal, found, strict=True):
+            assert bound == space.oracle.bounds.bound(vectors)
+            assert (bound, int(start)) == space.oracle.bounds.lowest(vectors)
+            assert grasp == space.is_terminal(tuple(key))
+            repeated += len(set(key)) < m
+        checked += len(found)
+        states.extend(tuple(key) for key in keys.tolist() if not space.is_terminal(tuple(key)))
+    assert checked >= 100 and repeated > 0
