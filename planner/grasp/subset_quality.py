@@ -42,6 +42,21 @@ HINT_DIRECTIONS = 12
 FACET_STARTS = 4
 #: The level of :meth:`GraspQuality.tighten` that is Q1 itself.
 EXACT = 3
+#: Budget of the support table and the search's node vectors: |C| x |D| entries. Up to
+#: 1000 contacts D may hold 2000 directions (a search at m = 5 on 1000 contacts then
+#: expands a third more states a minute than with 640: a tighter support bound settles
+#: more children without facet bounds); beyond, |D| shrinks to keep the table at 16 MB,
+#: down to the 640 every size gets.
+DIRECTION_BUDGET = 2_000_000
+MIN_DIRECTIONS = 640
+MAX_DIRECTIONS = 2000
+
+
+def direction_capacity(n: int) -> int:
+    """Directions the support bound of ``n`` contacts may learn (:data:`DIRECTION_BUDGET`)."""
+    return min(MAX_DIRECTIONS, max(MIN_DIRECTIONS, DIRECTION_BUDGET // max(n, 1)))
+
+
 #: Facet bounds kept at most (about 300 bytes each); beyond, the store starts afresh, which
 #: costs recomputation only (a search at m >= 5 asks for millions).
 UPPER_CAPACITY = 1_000_000
@@ -92,7 +107,7 @@ class GraspQuality:
 
     def __init__(self, contacts: ContactSet, seed: int = 0) -> None:
         self.contacts = contacts
-        self.bounds = SupportBound(contacts.wrenches, seed)
+        self.bounds = SupportBound(contacts.wrenches, seed, max_directions=direction_capacity(len(contacts)))
         self.bound_rejections = 0
         self.n = len(contacts)
         self._cache: dict[bytes, float] = {}
@@ -169,9 +184,9 @@ class GraspQuality:
 
         Args:
             masks: Packed membership masks of the super-contacts.
-            vectors: Their support vectors, or None (then a union about to be evaluated,
-                at level 2 or with a bound below the force-closure tolerance, is evaluated
-                without the support-bound rejection: give them there).
+            vectors: Their support vectors; None serves at level 0 only, where they rank
+                nothing when ``start`` is given, and a bound below the force-closure
+                tolerance then skips the support-bound rejection.
             level: The level of the bound the caller holds (0-2).
             bound: That bound [-].
             start: At level 0, the direction of D of lowest support, if the caller knows
@@ -192,7 +207,9 @@ class GraspQuality:
         if level == 0 and start is not None:
             raw = self.bounds.facet_bound_along(union, start)
         else:
-            raw = self.bounds.facet_bound(union, first, last)
+            if vectors is None:
+                raise ValueError("tighten needs the support vectors from level 1 on")
+            raw = self.bounds.facet_bound(union, vectors, first, last)
         if known is not None:
             raw = min(raw, known[0] - CUT_MARGIN)
         self.facet_bounds += last - first

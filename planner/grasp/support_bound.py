@@ -71,17 +71,21 @@ class SupportBound:
         fresh = self._support[members, done : self.count].max(axis=0)
         return fresh if cached is None else np.concatenate([cached, fresh])
 
-    def facet_bound(self, union: NDArray[np.uint8], first: int, last: int) -> float:
+    def facet_bound(self, union: NDArray[np.uint8], vectors: Sequence[Vector], first: int, last: int) -> float:
         """The best facet bound of Q1 of a union of contacts (:func:`~planner.grasp.kernel.ray_bound.union_facet_bound`) [-].
 
         Args:
             union: The union's membership flags, packed (``numpy.packbits``).
+            vectors: Support vectors of the super-contacts whose union it is (their common
+                directions rank the starts).
             first: Rank (lowest support first) of the first direction that starts a facet bound.
             last: One past the rank of the last.
         """
         from planner.grasp.kernel.ray_bound import union_facet_bound
 
-        return float(union_facet_bound(self._wrenches, union, self._support, self.directions, self.count, first, last))
+        length = min(len(v) for v in vectors)
+        rows = np.stack([v[:length] for v in vectors])
+        return float(union_facet_bound(self._wrenches, union, rows, self.directions, length, first, last))
 
     def facet_bound_along(self, union: NDArray[np.uint8], start: int) -> float:
         """The facet bound of Q1 of a union of contacts from direction ``start`` of D [-]

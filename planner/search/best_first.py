@@ -341,12 +341,11 @@ class Search(SearchSpace):
                 return
             child_key = tuple(children[i].tolist())
             child = self.child_state(child_key)
-            # Vectors serve only an exact evaluation (its cheap rejection): skip the lookup below.
-            exact_next = level == EXACT_Q1 - 1 or bound <= TOL.force_closure
-            vectors = self.child_vectors(child_key) if exact_next else None
-            # The direction of the listing's bound starts the first facet bound, unless
-            # directions were learned since (then the union's lowest is looked up again).
+            # The first facet bound starts from the listing's direction: vectors serve only the
+            # later levels (ranking more starts, the exact value's cheap rejection).
             start = int(starts[i]) if level == 0 and starts[i] >= 0 and listed == self.oracle.bounds.count else None
+            needed = start is None or bound <= TOL.force_closure
+            vectors = self.child_vectors(child_key) if needed else None
             value, level = self.oracle.tighten(self.child_masks(child_key), vectors, level, bound, start)
             if level == EXACT_Q1:
                 if self.wins(child):

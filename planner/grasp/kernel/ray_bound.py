@@ -246,7 +246,7 @@ def union_facet_bound_along(wrenches: np.ndarray, union: np.ndarray, direction: 
 def union_facet_bound(
     wrenches: np.ndarray,
     union: np.ndarray,
-    support: np.ndarray,
+    rows: np.ndarray,
     directions: np.ndarray,
     count: int,
     first: int,
@@ -254,14 +254,16 @@ def union_facet_bound(
 ) -> float:
     """The best :func:`facet_bound` of a union of contacts from its directions of lowest support [-].
 
-    The directions of D are ranked by the union's support along them (lowest first) and
-    those of rank ``first`` to ``last - 1`` start one facet bound each.
+    The directions of D are ranked by the union's support along them (lowest first; ties
+    by index) and those of rank ``first`` to ``last - 1`` start one facet bound each.
 
     Args:
         wrenches: Cone-edge wrenches of every contact, shape (n, k, 6).
         union: The union's membership flags packed as ``numpy.packbits`` packs them
             (big-endian bits), shape (ceil(n / 8),).
-        support: Support of every contact along each direction, shape (n, >= count).
+        rows: Support vectors of sets whose union it is (the super-contacts, or the
+            contacts themselves), shape (r, >= count): the union's support is their
+            maximum, m x |D| work where the contacts' would be members x |D|.
         directions: Unit directions, shape (>= count, 6); D is the first ``count``.
         count: |D|.
         first: Rank of the first start direction (0: the lowest support).
@@ -270,11 +272,11 @@ def union_facet_bound(
     Returns:
         The smallest bound found (inf when no direction is ranked there).
     """
-    members, P = _union_points(wrenches, union)
+    P = _union_points(wrenches, union)[1]
     joint = np.full(count, -np.inf)
-    for c in members:
+    for r in range(rows.shape[0]):
         for j in range(count):
-            joint[j] = max(joint[j], support[c, j])
+            joint[j] = max(joint[j], rows[r, j])
     taken = np.zeros(count, dtype=np.bool_)
     best = np.inf
     for rank in range(min(last, count)):

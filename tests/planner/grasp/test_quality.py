@@ -324,3 +324,16 @@ def test_fallback_seeded_by_the_kernel_hull_gives_the_same_bits(object_contacts,
     seeded = [q1_certificate(w) for w in sets]
     assert [c.q1 for c in seeded] == expected and any(v > 0 for v in expected)
     assert all(c.hull_calls >= 1 for c in seeded if c.q1 > 0)
+
+
+def test_direction_capacity_keeps_the_support_table_in_budget(object_contacts):
+    from planner.grasp.subset_quality import DIRECTION_BUDGET, MAX_DIRECTIONS, MIN_DIRECTIONS, direction_capacity
+
+    assert direction_capacity(1) == direction_capacity(1000) == MAX_DIRECTIONS
+    assert direction_capacity(10**6) == MIN_DIRECTIONS
+    sizes = [1, 500, 1000, 1500, 2500, 3125, 5000, 10**5]
+    capacities = [direction_capacity(n) for n in sizes]
+    assert capacities == sorted(capacities, reverse=True)  # never more directions for more contacts
+    assert all(n * c <= DIRECTION_BUDGET or c == MIN_DIRECTIONS for n, c in zip(sizes, capacities, strict=True))
+    oracle = GraspQuality(object_contacts("box", 30, 0), 0)
+    assert oracle.bounds.capacity == MAX_DIRECTIONS and oracle.bounds.directions.shape == (MAX_DIRECTIONS, 6)

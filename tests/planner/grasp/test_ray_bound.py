@@ -90,8 +90,13 @@ def test_union_facet_bound_starts_from_the_lowest_support_directions():
     order = np.argsort(np.max(support[members], axis=0), kind="stable")
     for first, last in ((0, 1), (1, 4), (0, 8)):
         expected = min(facet_bound(points, directions[j])[0] for j in order[first:last])
-        assert union_facet_bound(wrenches, union, support, directions, 50, first, last) == pytest.approx(expected)
-    assert union_facet_bound(wrenches, union, support, directions, 50, 60, 70) == np.inf
+        assert union_facet_bound(wrenches, union, support[members], directions, 50, first, last) == pytest.approx(
+            expected
+        )
+        # Super-contacts' vectors (maxima over their members) rank the same directions.
+        rows = np.stack([support[members[:2]].max(axis=0), support[members[2:]].max(axis=0)])
+        assert union_facet_bound(wrenches, union, rows, directions, 50, first, last) == pytest.approx(expected)
+    assert union_facet_bound(wrenches, union, support[members], directions, 50, 60, 70) == np.inf
 
 
 def test_tighten_climbs_to_the_exact_value(object_contacts):
@@ -154,4 +159,4 @@ def test_facet_bound_along_the_lowest_direction_is_the_first_facet_bound(object_
         union = oracle.mask_of(np.concatenate(members))
         bound, start = oracle.bounds.lowest(vectors)
         assert bound == oracle.bounds.bound(vectors)
-        assert oracle.bounds.facet_bound_along(union, start) == oracle.bounds.facet_bound(union, 0, 1)
+        assert oracle.bounds.facet_bound_along(union, start) == oracle.bounds.facet_bound(union, vectors, 0, 1)
