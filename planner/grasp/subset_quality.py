@@ -42,11 +42,11 @@ HINT_DIRECTIONS = 12
 FACET_STARTS = 4
 #: The level of :meth:`GraspQuality.tighten` that is Q1 itself.
 EXACT = 3
-#: Budget of the support table and the search's node vectors: |C| x |D| entries. Up to
-#: 1000 contacts D may hold 2000 directions (a search at m = 5 on 1000 contacts then
-#: expands a third more states a minute than with 640: a tighter support bound settles
-#: more children without facet bounds); beyond, |D| shrinks to keep the table at 16 MB,
-#: down to the 640 every size gets.
+#: Budget of the support table: |C| x |D| entries (16 MB; the search's node vectors take
+#: about twice that). Up to 1000 contacts D may hold 2000 directions (a search at m = 5 on
+#: 1000 contacts then expands a third more states a minute than with 640: a tighter support
+#: bound settles more children without facet bounds); beyond, |D| shrinks to stay in
+#: budget, down to the 640 every size gets.
 DIRECTION_BUDGET = 2_000_000
 MIN_DIRECTIONS = 640
 MAX_DIRECTIONS = 2000
