@@ -189,8 +189,10 @@ class GraspQuality:
                 tolerance then skips the support-bound rejection.
             level: The level of the bound the caller holds (0-2).
             bound: That bound [-].
-            start: At level 0, the direction of D of lowest support, if the caller knows
-                it (the first of equal ones: where the first facet bound starts anyway).
+            start: At level 0, a direction of D to start the first facet bound from: the
+                one of lowest support when the caller computed its bound (directions
+                learned since may rank lower; any direction gives a valid bound). None:
+                rank D now.
         """
         union = functools.reduce(np.bitwise_or, masks)
         key = union.tobytes()

@@ -71,6 +71,11 @@ class SupportBound:
         fresh = self._support[members, done : self.count].max(axis=0)
         return fresh if cached is None else np.concatenate([cached, fresh])
 
+    def extend(self, members: NDArray[np.intp], row: Vector, done: int) -> None:
+        """Write the support of a set of contacts along directions ``done`` to ``count - 1``
+        into ``row[done:count]`` (the directions before are the caller's, already there)."""
+        row[done : self.count] = self._support[members, done : self.count].max(axis=0)
+
     def facet_bound(self, union: NDArray[np.uint8], vectors: Sequence[Vector], first: int, last: int) -> float:
         """The best facet bound of Q1 of a union of contacts (:func:`~planner.grasp.kernel.ray_bound.union_facet_bound`) [-].
 

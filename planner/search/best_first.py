@@ -61,10 +61,10 @@ Entry = tuple[float, int, int, State, float, int, float, int]
 #: never touched, and 4 bytes per node keep them small.
 Children = NDArray[np.int32]
 #: A state's branch and bound under way: its children, their upper bounds of Q1 [-], the
-#: level of each bound, the direction of D of each support bound (-1: not known; arrays of
-#: shape (children,): 13 bytes a child, where a heap of tuples took 90, and the largest is
-#: found by argmax) and |D| when they were listed.
-Pending = tuple[Children, NDArray[np.float64], NDArray[np.int8], NDArray[np.int32], int]
+#: level of each bound and the direction of D of each support bound (-1: not known; arrays
+#: of shape (children,): 13 bytes a child, where a heap of tuples took 90, and the largest
+#: is found by argmax).
+Pending = tuple[Children, NDArray[np.float64], NDArray[np.int8], NDArray[np.int32]]
 #: Iterations between two looks at the clock for progress reports (a report costs nothing
 #: but a clock reading; the clock is read every iteration for the deadline anyway).
 PROGRESS_SECONDS = 0.5
@@ -317,7 +317,6 @@ class Search(SearchSpace):
         pending = self._pending.pop(state, None)
         if pending is None:
             children, bounds, starts, terminal = self.heuristic_bounds(state)
-            listed = self.oracle.bounds.count
             if not len(bounds):
                 return  # no valid grasp below this state
             levels = np.zeros(len(bounds), dtype=np.int8)
@@ -327,7 +326,7 @@ class Search(SearchSpace):
                 # so every one the branch and bound reaches becomes a candidate.
                 levels[terminal] = EXACT_Q1 - 1
         else:
-            children, bounds, levels, starts, listed = pending
+            children, bounds, levels, starts = pending
         while True:
             i = int(bounds.argmax())  # the first of equal bounds: the lowest index
             bound, level = float(bounds[i]), int(levels[i])
@@ -336,14 +335,15 @@ class Search(SearchSpace):
             if level == EXACT_Q1:
                 break
             if open_list and (1.0 + self.eps) * lower > open_list[0][0]:
-                self._pending[state] = (children, bounds, levels, starts, listed)
+                self._pending[state] = (children, bounds, levels, starts)
                 self.push(open_list, lower, depth, state, PARTIAL, g, ident)
                 return
             child_key = tuple(children[i].tolist())
             child = self.child_state(child_key)
-            # The first facet bound starts from the listing's direction: vectors serve only the
-            # later levels (ranking more starts, the exact value's cheap rejection).
-            start = int(starts[i]) if level == 0 and starts[i] >= 0 and listed == self.oracle.bounds.count else None
+            # The first facet bound starts from the listing's direction (directions learned
+            # since may rank lower, but any direction bounds Q1): vectors serve only the later
+            # levels (ranking more starts, the exact value's cheap rejection).
+            start = int(starts[i]) if level == 0 and starts[i] >= 0 else None
             needed = start is None or bound <= TOL.force_closure
             vectors = self.child_vectors(child_key) if needed else None
             value, level = self.oracle.tighten(self.child_masks(child_key), vectors, level, bound, start)

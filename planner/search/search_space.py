@@ -158,8 +158,7 @@ class SearchSpace:
         members = self.tree.members[node]
         if done == 0:
             self._sizes[node] = len(members)
-        cached = self._node_vectors[node, :done] if done else None
-        self._node_vectors[node, done : bounds.count] = bounds.vector(members, cached)[done:]
+        bounds.extend(members, self._node_vectors[node], done)
         self._filled[node] = bounds.count
 
     def _grow(self, nodes: int) -> None:

@@ -83,7 +83,7 @@ def test_waiting_children_are_compact_and_their_bounds_hold(object_contacts, heu
     result = search.run()
     assert result.status == "optimal" and search._pending
     checked = 0
-    for children, bounds, levels, starts, _ in search._pending.values():
+    for children, bounds, levels, starts in search._pending.values():
         assert starts.dtype == np.int32 and len(starts) == len(bounds)
         assert children.dtype == np.int32 and children.shape == (len(bounds), 4)
         assert bounds.dtype == np.float64 and levels.dtype == np.int8 and len(levels) == len(bounds)
