@@ -117,7 +117,11 @@ def test_compiled_children_are_the_python_listing(object_contacts, m):
             assert bound == space.oracle.bounds.bound(vectors)
             assert (bound, int(start)) == space.oracle.bounds.lowest(vectors)
             assert grasp == space.is_terminal(tuple(key))
+            for node, vector in zip(key, vectors, strict=True):  # rows extended in place = fresh maxima
+                assert np.array_equal(vector, space.oracle.bounds.vector(space.tree.members[node])[: len(vector)])
             repeated += len(set(key)) < m
         checked += len(found)
+        learned = rng.normal(size=(3, 6))
+        space.oracle.bounds.add(learned / np.linalg.norm(learned, axis=1, keepdims=True))  # rows now extend
         states.extend(tuple(key) for key in keys.tolist() if not space.is_terminal(tuple(key)))
     assert checked >= 100 and repeated > 0
