@@ -101,18 +101,14 @@ class SupportBound:
 
     def lowest_directions(self, vectors: Sequence[Vector], count: int) -> NDArray[np.float64]:
         """The ``count`` directions along which the union's support is smallest, shape (count, 6)."""
-        length = min(len(v) for v in vectors)
-        joint = np.max([v[:length] for v in vectors], axis=0)
-        take = min(count, length)
+        joint = SupportBound.joint(vectors)
+        take = min(count, len(joint))
         return self.directions[np.argpartition(joint, take - 1)[:take]]
 
     @staticmethod
     def lowest(vectors: Sequence[Vector]) -> tuple[float, int]:
         """:meth:`bound` and the direction of D that gives it (the first of equal ones): ([-], index)."""
-        length = min(len(v) for v in vectors)
-        joint = vectors[0][:length]
-        for v in vectors[1:]:
-            joint = np.maximum(joint, v[:length])
+        joint = SupportBound.joint(vectors)
         index = int(joint.argmin())
         return float(joint[index]), index
 
@@ -123,8 +119,13 @@ class SupportBound:
         Vectors may differ in length (computed at different times); the common prefix of
         directions is used, which is still a valid bound.
         """
+        return float(SupportBound.joint(vectors).min())
+
+    @staticmethod
+    def joint(vectors: Sequence[Vector]) -> Vector:
+        """Support vector of the union of sets with the given vectors, on their common directions."""
         length = min(len(v) for v in vectors)
         joint = vectors[0][:length]
         for v in vectors[1:]:  # pairwise maxima: no stacked copy (this is the search's inner loop)
             joint = np.maximum(joint, v[:length])
-        return float(joint.min())
+        return joint

@@ -205,8 +205,8 @@ def facet_bound(P: np.ndarray, c: np.ndarray) -> tuple[float, np.ndarray]:
 
 
 @cached_njit()
-def _union_points(wrenches: np.ndarray, union: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The members of a packed union (big-endian bits) and their wrenches, shapes (s,) and (s k, 6)."""
+def _union_points(wrenches: np.ndarray, union: np.ndarray) -> np.ndarray:
+    """The wrenches of the members of a packed union (big-endian bits), shape (s k, 6)."""
     members = np.empty(wrenches.shape[0], dtype=np.int64)
     size = 0
     for byte in range(union.shape[0]):
@@ -217,14 +217,13 @@ def _union_points(wrenches: np.ndarray, union: np.ndarray) -> tuple[np.ndarray, 
             if bits & (128 >> bit):
                 members[size] = 8 * byte + bit
                 size += 1
-    members = members[:size]
     k = wrenches.shape[1]
     P = np.empty((size * k, DIM))
     for a in range(size):
         for e in range(k):
             for j in range(DIM):
                 P[a * k + e, j] = wrenches[members[a], e, j]
-    return members, P
+    return P
 
 
 @cached_njit()
@@ -239,7 +238,7 @@ def union_facet_bound_along(wrenches: np.ndarray, union: np.ndarray, direction: 
         union: The union's membership flags, packed (``numpy.packbits``), shape (ceil(n / 8),).
         direction: Unit start direction, shape (6,).
     """
-    return facet_bound(_union_points(wrenches, union)[1], direction)[0]
+    return facet_bound(_union_points(wrenches, union), direction)[0]
 
 
 @cached_njit()
@@ -272,7 +271,7 @@ def union_facet_bound(
     Returns:
         The smallest bound found (inf when no direction is ranked there).
     """
-    P = _union_points(wrenches, union)[1]
+    P = _union_points(wrenches, union)
     joint = np.full(count, -np.inf)
     for r in range(rows.shape[0]):
         for j in range(count):
