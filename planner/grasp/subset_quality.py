@@ -8,30 +8,19 @@ The search mostly needs to know that a union is no better than a value it alread
 which an upper bound proves: :meth:`GraspQuality.tighten` climbs from the support bound to
 facet bounds (:mod:`planner.grasp.kernel.ray_bound`, about 10 µs each) and only then to the
 exact value (100-300 µs).
-
-With ``OGCP_Q1_THREADS`` = 2 or more in the environment (opt-in), a union whose facet bounds
-did not settle it has its exact evaluation started in a worker thread at once (the compiled
-kernel releases the GIL), and :meth:`GraspQuality.of_masks` takes the started certificate
-instead of computing it. Everything else happens in the order of the requests, so the
-results, the learned directions and the statistics are those of a sequential run, bit for
-bit. It trades CPU time (unions never asked for after all, thread overhead) for wall time,
-and wins only where a core is idle.
 """
 
 from __future__ import annotations
 
 import functools
-import os
-import warnings
 from collections.abc import Sequence
-from concurrent.futures import Future, ThreadPoolExecutor
 
 import numpy as np
 from numpy.typing import NDArray
 
 from planner.grasp.contact_set import ContactSet
 from planner.grasp.kernel.geometry import CUT_MARGIN
-from planner.grasp.quality import KERNEL_MAX, Q1Certificate, q1_certificate
+from planner.grasp.quality import KERNEL_MAX, q1_certificate
 from planner.grasp.support_bound import SupportBound, Vector
 from planner.infra.tolerance import TOL
 
@@ -62,33 +51,6 @@ def direction_capacity(n: int) -> int:
 UPPER_CAPACITY = 1_000_000
 
 
-def _prefetch_threads() -> int:
-    """Worker threads of :meth:`GraspQuality.prefetch` from ``OGCP_Q1_THREADS`` (default 1: off).
-
-    At most the number of cores; a value that is not a whole number >= 1 is reported in one
-    warning and ignored (an environment variable has no command line to refuse it).
-    """
-    text = os.environ.get("OGCP_Q1_THREADS", "1").strip()
-    if not text.isdigit() or int(text) < 1:
-        warnings.warn(f"OGCP_Q1_THREADS={text!r}: expected a whole number >= 1; searching in one thread", stacklevel=2)
-        return 1
-    return min(int(text), os.cpu_count() or 1)
-
-
-PREFETCH_THREADS = _prefetch_threads()
-#: The prefetch threads by process id: a forked child inherits the executor but not its threads.
-_POOL: dict[int, ThreadPoolExecutor] = {}
-
-
-def _pool() -> ThreadPoolExecutor:
-    """This process's prefetch threads, started at its first prefetch."""
-    pool = _POOL.get(os.getpid())
-    if pool is None:
-        _POOL.clear()
-        pool = _POOL[os.getpid()] = ThreadPoolExecutor(PREFETCH_THREADS, thread_name_prefix="ogcp-q1")
-    return pool
-
-
 class GraspQuality:
     """Memoised Q1 over subsets of a :class:`ContactSet`.
 
@@ -117,8 +79,6 @@ class GraspQuality:
         self.facet_bounds = 0
         #: (facet bound, level) per union key of the unions not evaluated exactly (:meth:`tighten`).
         self._upper: dict[bytes, tuple[float, int]] = {}
-        #: Evaluations started by :meth:`_prefetch`, by union key, not yet asked for.
-        self._started: dict[bytes, Future[Q1Certificate]] = {}
 
     def mask_of(self, indices: NDArray[np.intp]) -> PackedMask:
         """Packed membership mask of contact indices."""
@@ -147,16 +107,12 @@ class GraspQuality:
             self.bound_rejections += 1
             self._cache[key] = 0.0
             return 0.0
-        started = self._started.pop(key, None)
-        if started is not None:
-            cert = started.result()  # the same certificate as computed here: the same function
-        else:
-            indices = np.flatnonzero(np.unpackbits(union, count=self.n))
-            hints = None
-            if vectors is not None and len(indices) * self.contacts.wrenches.shape[1] > KERNEL_MAX:
-                # Hints only steer the qhull loop, which sets the kernel takes never reach.
-                hints = self.bounds.lowest_directions(vectors, HINT_DIRECTIONS)
-            cert = q1_certificate(self.contacts.subset_wrenches(indices), hints)
+        indices = np.flatnonzero(np.unpackbits(union, count=self.n))
+        hints = None
+        if vectors is not None and len(indices) * self.contacts.wrenches.shape[1] > KERNEL_MAX:
+            # Hints only steer the qhull loop, which sets the kernel takes never reach.
+            hints = self.bounds.lowest_directions(vectors, HINT_DIRECTIONS)
+        cert = q1_certificate(self.contacts.subset_wrenches(indices), hints)
         self.evaluations += 1
         self.hull_calls += cert.hull_calls
         self.bounds.add(cert.direction)
@@ -223,23 +179,7 @@ class GraspQuality:
         if len(self._upper) >= UPPER_CAPACITY:
             self._upper.clear()
         tightened = self._upper[key] = (raw + CUT_MARGIN, level + 1)
-        if level == 1:
-            # Its facet bounds did not settle it: it is likely to be evaluated next.
-            self._prefetch(union, key)
         return tightened
-
-    def _prefetch(self, union: PackedMask, key: bytes) -> None:
-        """Start the exact evaluation of a union in a thread (:data:`PREFETCH_THREADS` >= 2 only).
-
-        Only unions the kernel takes (no hints, so the certificate is the one
-        :meth:`of_masks` would compute) that are not started yet.
-        """
-        if PREFETCH_THREADS < 2 or key in self._started:
-            return
-        members = np.flatnonzero(np.unpackbits(union, count=self.n))
-        if len(members) * self.contacts.wrenches.shape[1] > KERNEL_MAX:
-            return
-        self._started[key] = _pool().submit(q1_certificate, self.contacts.subset_wrenches(members))
 
     def of_indices(self, indices: NDArray[np.intp]) -> float:
         """Q1 of a set of contacts [-]."""

@@ -43,6 +43,7 @@ from planner.grasp.contact_set import ContactSet
 from planner.grasp.subset_quality import EXACT as EXACT_Q1
 from planner.infra.errors import OgcpError, SearchTimeout
 from planner.infra.tolerance import TOL
+from planner.search.refine_kernel import NEEDS_EXACT, NEEDS_ROWS, SETTLED, YIELD
 from planner.search.result import (
     SearchResult,
     SearchStats,
@@ -327,6 +328,9 @@ class Search(SearchSpace):
                 levels[terminal] = EXACT_Q1 - 1
         else:
             children, bounds, levels, starts = pending
+        if self.child_bounds is not None:
+            self.compiled_refine(open_list, state, depth, lower, g, ident, (children, bounds, levels, starts))
+            return
         while True:
             i = int(bounds.argmax())  # the first of equal bounds: the lowest index
             bound, level = float(bounds[i]), int(levels[i])
@@ -340,6 +344,8 @@ class Search(SearchSpace):
                 return
             child_key = tuple(children[i].tolist())
             child = self.child_state(child_key)
+            if level == EXACT_Q1 - 1 and self.settles_on_bounds(child):
+                break
             # The first facet bound starts from the listing's direction (directions learned
             # since may rank lower, but any direction bounds Q1): vectors serve only the later
             # levels (ranking more starts, the exact value's cheap rejection).
@@ -353,10 +359,57 @@ class Search(SearchSpace):
             else:
                 value = min(value, bound)  # both bound Q1
             bounds[i], levels[i] = value, level
-        f = q0 - bound
+        f = max(lower, q0 - bound)  # settled on a facet bound, f may lie below the lower bound held
         # With eps = 0 the key is f itself, not g + (f - g), which can round below f.
         key = f if self.eps == 0 else g + (1.0 + self.eps) * (f - g)
         self.push(open_list, f, depth, state, EXACT, g, ident, key=key)
+
+    def compiled_refine(
+        self, open_list: list[Entry], state: State, depth: int, lower: float, g: float, ident: int, pending: Pending
+    ) -> None:
+        """:meth:`refine`'s loop, compiled between exact values (:meth:`SearchSpace.branch_and_bound`)."""
+        children, bounds, levels, _ = pending
+        q0 = self.q0
+        while True:
+            first_key = open_list[0][0] if open_list else math.inf
+            outcome, i, lower = self.branch_and_bound(
+                state, pending, lower, q0, first_key, self.eps, self.children_can_win
+            )
+            if outcome == SETTLED:
+                break
+            if outcome == YIELD:
+                self._pending[state] = pending
+                self.push(open_list, lower, depth, state, PARTIAL, g, ident)
+                return
+            if outcome == NEEDS_ROWS:
+                self.node_vectors(tuple(children[i].tolist()))  # directions learned since the listing
+                continue
+            child_key = tuple(children[i].tolist())
+            child = self.child_state(child_key)
+            if outcome == NEEDS_EXACT and levels[i] == EXACT_Q1 - 1 and self.settles_on_bounds(child):
+                break
+            if outcome == NEEDS_EXACT:
+                masks, vectors = self.child_masks(child_key), self.child_vectors(child_key)
+                value, _ = self.oracle.tighten(masks, vectors, EXACT_Q1 - 1, float(bounds[i]))
+                bounds[i], levels[i] = value, EXACT_Q1
+                self.store_child_bound(children[i], value)
+            if self.wins(child):
+                self.offer(float(bounds[i]), child, state, ident)
+        f = max(lower, q0 - float(bounds[i]))
+        key = f if self.eps == 0 else g + (1.0 + self.eps) * (f - g)
+        self.push(open_list, f, depth, state, EXACT, g, ident, key=key)
+
+    def settles_on_bounds(self, child: State | None) -> bool:
+        """Whether the largest bound, a facet bound, may stand for the child's exact Q1 in f.
+
+        Once the directions of D are all learned, exact values stop tightening the support
+        bounds, and f = q0 - (the largest facet bound) is a lower bound that costs no hull:
+        the state is expanded a little earlier than its exact f would allow, which costs
+        less than the exact values (sphere, m = 3: twice the expansions, a quarter of the
+        exact values, 25 % less time). Grasps that may become the incumbent stay exact.
+        """
+        bounds = self.oracle.bounds
+        return bounds.count >= bounds.capacity and not self.wins(child)
 
     def wins(self, child: State | None) -> TypeGuard[State]:
         """Whether a heuristic child is a grasp that may become the incumbent."""
@@ -396,6 +449,8 @@ class Search(SearchSpace):
         created, visited = self.created, self.visited
         levels = max(max(created), max(visited, default=0)) + 1
         solution_depth = self.depth(state)
+        table = self.child_bounds
+        table_facet_bounds, table_rejections = (0, 0) if table is None else (table.facet_bounds, table.rejections)
         stats = SearchStats(
             created=sum(created.values()),
             visited=sum(visited.values()),
@@ -404,7 +459,7 @@ class Search(SearchSpace):
             q1_evaluations=self.oracle.evaluations,
             q1_cache_hits=self.oracle.cache_hits,
             bound_evaluations=self.bound_evaluations,
-            bound_rejections=self.oracle.bound_rejections,
+            bound_rejections=self.oracle.bound_rejections + table_rejections,
             hull_calls=self.oracle.hull_calls,
             pruned=self.pruned,
             symmetric_removed=self.symmetry.removed if self.symmetry else 0,
@@ -414,7 +469,7 @@ class Search(SearchSpace):
             wall_seconds=time.perf_counter() - wall0,
             cpu_seconds=time.process_time() - cpu0,
             peak_rss_bytes=peak_rss_bytes(),
-            facet_bounds=self.oracle.facet_bounds,
+            facet_bounds=self.oracle.facet_bounds + table_facet_bounds,
         )
         idx = np.array(grasp, dtype=np.intp)
         return SearchResult(

@@ -14,9 +14,10 @@ from numpy.typing import NDArray
 
 from planner.grasp.constraints import Constraint, DistinctContacts
 from planner.grasp.contact_set import ContactSet
-from planner.grasp.subset_quality import GraspQuality, PackedMask
+from planner.grasp.subset_quality import EXACT, GraspQuality, PackedMask
 from planner.grasp.support_bound import Vector
 from planner.search.partitions import Indices, PartitionTree, make_partitioner
+from planner.search.refine_kernel import ChildBounds, branch_and_bound, state_bound
 from planner.search.symmetry import SymmetryFilter
 
 State = tuple[int, ...]
@@ -70,11 +71,14 @@ class SearchSpace:
         self._sizes = np.zeros(0, dtype=np.int64)
         self._table = np.zeros((0, branching), dtype=np.int64)
         self._widths = np.zeros(0, dtype=np.int64)
+        self._masks = np.zeros((0, (len(contacts) + 7) // 8), dtype=np.uint8)
         # One call per state lists Γh's children where they are combinations of tree nodes
         # and distinct contacts is the only constraint (other constraints judge in Python).
         self._compiled_children = (
             self.heuristic_shares_tree and self._distinct and not self._other_constraints and branching**m <= 256
         )
+        # The branch and bound over those children then runs compiled between exact values.
+        self.child_bounds = ChildBounds(m) if self._compiled_children else None
         self.symmetry = SymmetryFilter(contacts) if config["symmetry"] else None
         self.pruned = 0
         self.bound_evaluations = 0
@@ -158,6 +162,7 @@ class SearchSpace:
         members = self.tree.members[node]
         if done == 0:
             self._sizes[node] = len(members)
+            self._masks[node] = self.tree.masks[node]
         bounds.extend(members, self._node_vectors[node], done)
         self._filled[node] = bounds.count
 
@@ -176,6 +181,7 @@ class SearchSpace:
         self._sizes = grown(self._sizes, 0)
         self._table = grown(self._table, -1)
         self._widths = grown(self._widths, 0)
+        self._masks = grown(self._masks, 0)
 
     def upper(self, vectors: Sequence[Vector]) -> float:
         self.bound_evaluations += 1
@@ -197,6 +203,23 @@ class SearchSpace:
             return self.exact(state)
         vectors = self.node_vectors(state)
         self.bound_evaluations += 1
+        table = self.child_bounds
+        if table is not None:
+            bounds = self.oracle.bounds
+            value, level = state_bound(
+                np.array(sorted(state), dtype=np.int32),
+                bounds._wrenches,
+                bounds.directions,
+                bounds.count,
+                self._masks,
+                self._node_vectors,
+                table.keys,
+                table.values,
+                table.levels,
+                table.counters,
+            )
+            if level > 0:
+                return float(value)
         bound, start = self.oracle.bounds.lowest(vectors)
         q = self.oracle.tighten([self.tree.masks[node] for node in state], vectors, 0, bound, start)[0]
         return min(q, bound)
@@ -251,22 +274,89 @@ class SearchSpace:
             return keys, bounds, np.full(len(bounds), -1, dtype=np.int32), terminal
         from planner.search.children_kernel import shared_tree_children
 
-        count = self.oracle.bounds.count
-        for node in state:
-            children = self.tree.children(node)
-            if len(self._widths) < len(self.tree.members):
-                self._grow(len(self.tree.members))
-            if self._widths[node] == 0:
-                self._table[node, : len(children)] = children
-                self._widths[node] = len(children)
-            for child in children:
-                if self._filled[child] != count:
-                    self._fill(child)
+        self.fill_child_nodes(state)
         keys, bounds, starts, terminal = shared_tree_children(
-            np.array(state, dtype=np.int64), self._table, self._widths, self._sizes, self._node_vectors, count
+            np.array(state, dtype=np.int64),
+            self._table,
+            self._widths,
+            self._sizes,
+            self._node_vectors,
+            self.oracle.bounds.count,
         )
         self.bound_evaluations += len(bounds)
         return keys, bounds, starts, terminal
+
+    def fill_child_nodes(self, state: State) -> None:
+        """Bring the per-node rows of every child node of the state up to the current directions."""
+        count = self.oracle.bounds.count
+        for node in state:
+            if node >= len(self._widths) or self._widths[node] == 0:
+                children = self.tree.children(node)
+                if len(self._widths) < len(self.tree.members):
+                    self._grow(len(self.tree.members))
+                self._table[node, : len(children)] = children
+                self._widths[node] = len(children)
+        nodes = self._table[list(state)].ravel()
+        nodes = nodes[nodes >= 0]
+        for child in nodes[self._filled[nodes] != count].tolist():
+            self._fill(child)
+
+    def branch_and_bound(
+        self,
+        state: State,
+        pending: tuple[NDArray[np.int32], NDArray[np.float64], NDArray[np.int8], NDArray[np.int32]],
+        lower: float,
+        q0: float,
+        first_key: float,
+        eps: float,
+        report_grasps: bool,
+    ) -> tuple[int, int, float]:
+        """One compiled run of a state's branch and bound (:func:`planner.search.refine_kernel.branch_and_bound`).
+
+        Args:
+            state: The state whose Γh children wait.
+            pending: Their keys, upper bounds [-], levels and start directions; updated in place.
+            lower: The state's lower bound of f so far [-].
+            q0: Q1 of all contacts [-].
+            first_key: The open list's first key (inf when empty).
+            eps: WA*'s eps.
+            report_grasps: Return when a grasp child becomes exact.
+
+        Returns:
+            (outcome, child index, lower bound of f [-]).
+        """
+        table = self.child_bounds
+        assert table is not None
+        bounds = self.oracle.bounds
+        children, values, levels, starts = pending
+        outcome, index, lower = branch_and_bound(
+            children,
+            values,
+            levels,
+            starts,
+            lower,
+            q0,
+            first_key,
+            eps,
+            report_grasps,
+            bounds._wrenches,
+            bounds.directions,
+            bounds.count,
+            self._masks,
+            self._node_vectors,
+            self._filled,
+            self._sizes,
+            table.keys,
+            table.values,
+            table.levels,
+            table.counters,
+        )
+        return int(outcome), int(index), float(lower)
+
+    def store_child_bound(self, key: NDArray[np.int32], value: float) -> None:
+        """Remember a Γh child's exact Q1 [-] for the compiled branch and bound."""
+        assert self.child_bounds is not None
+        self.child_bounds.store(key, value, EXACT)
 
     def child_state(self, key: ChildKey) -> State | None:
         """The state of a Γh child, or None when Γh is not the expansion tree."""

@@ -1,0 +1,308 @@
+"""A state's branch and bound over its Γh children, in numba, up to the next exact value.
+
+:meth:`planner.search.best_first.Search.refine` tightens the child of the largest upper
+bound, one level at a time (support bound, first facet bound, more facet bounds, exact
+Q1: :meth:`planner.grasp.subset_quality.GraspQuality.tighten`), until the largest is
+exact or the state must go back to the open list. Most steps are facet bounds of 5-10 µs,
+which Python wrapped in 20 µs of dictionaries, tuples and small numpy calls, hundreds of
+thousands of times a minute. Here one call runs the loop until it needs an exact value,
+which stays with the Python oracle (its cache, its learned directions).
+
+Facet bounds are remembered per child (its sorted node tuple) in :class:`ChildBounds`, an
+open-addressing table, the compiled counterpart of the oracle's store of facet bounds:
+a child of one state is often a child of the next.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from planner.grasp.kernel.geometry import CUT_MARGIN, FC_TOL
+from planner.grasp.kernel.jit import cached_njit
+from planner.grasp.kernel.ray_bound import union_facet_bound, union_facet_bound_along
+from planner.grasp.subset_quality import EXACT, FACET_STARTS
+
+#: Outcomes of :func:`branch_and_bound`: the largest bound is exact (the state's f is
+#: known); the state's lower bound of f passed the open list's first key (it goes back);
+#: the largest bound's next level is the exact value (the caller computes it); a grasp
+#: child became exact from the table or a zero proof (the caller may take it as incumbent);
+#: the support vectors of the largest bound's nodes lack directions learned since (the
+#: caller fills them; only the ranked facet bounds read them).
+SETTLED, YIELD, NEEDS_EXACT, GRASP_EXACT, NEEDS_ROWS = 0, 1, 2, 3, 4
+#: Slots of the table (a power of two); it starts afresh when half full, which costs
+#: recomputation only. 13 bytes a slot plus 4 per finger.
+TABLE_SLOTS = 1 << 20
+
+
+class ChildBounds:
+    """Remembered upper bounds of Γh children's Q1, by their sorted node tuple.
+
+    Args:
+        m: Nodes per key (the number of fingers).
+        slots: Table size, a power of two.
+
+    Attributes:
+        facet_bounds: Facet bounds computed by :func:`branch_and_bound` so far.
+        rejections: Children it settled as Q1 = 0 by a facet bound.
+    """
+
+    def __init__(self, m: int, slots: int = TABLE_SLOTS) -> None:
+        if slots & (slots - 1):
+            raise ValueError(f"slots must be a power of two, got {slots}")
+        self.keys = np.empty((slots, m), dtype=np.int32)
+        self.values = np.empty(slots)
+        self.levels = np.full(slots, -1, dtype=np.int8)  # -1: empty
+        #: (entries in use, facet bounds computed, children settled as zero)
+        self.counters = np.zeros(3, dtype=np.int64)
+
+    @property
+    def facet_bounds(self) -> int:
+        return int(self.counters[1])
+
+    @property
+    def rejections(self) -> int:
+        return int(self.counters[2])
+
+    def get(self, key: NDArray[np.int32]) -> tuple[float, int] | None:
+        """A child's remembered (bound [-], level), or None."""
+        slot = _slot(self.keys, self.levels, np.asarray(key, dtype=np.int32))
+        level = int(self.levels[slot])
+        return None if level < 0 else (float(self.values[slot]), level)
+
+    def store(self, key: NDArray[np.int32], value: float, level: int) -> None:
+        """Remember a child's bound [-] at a level (:data:`EXACT` for its Q1)."""
+        _store(self.keys, self.values, self.levels, self.counters, key, value, level)
+
+
+@cached_njit(inline="always")
+def _slot(keys: np.ndarray, levels: np.ndarray, key: np.ndarray) -> int:
+    """The slot holding ``key``, or the empty slot where it would go."""
+    h = np.uint64(0)
+    for j in range(key.shape[0]):
+        h = (h ^ np.uint64(key[j])) * np.uint64(0x9E3779B97F4A7C15)
+        h ^= h >> np.uint64(29)  # murmur-style mixing: node ids are small, neighbours close
+    h = (h ^ (h >> np.uint64(32))) * np.uint64(0xFF51AFD7ED558CCD)
+    h ^= h >> np.uint64(29)
+    mask = levels.shape[0] - 1
+    s = np.int64(h >> np.uint64(1)) & mask
+    while levels[s] >= 0:
+        same = True
+        for j in range(key.shape[0]):
+            if keys[s, j] != key[j]:
+                same = False
+                break
+        if same:
+            return s
+        s = (s + 1) & mask
+    return s
+
+
+@cached_njit()
+def _store(
+    keys: np.ndarray,
+    values: np.ndarray,
+    levels: np.ndarray,
+    counters: np.ndarray,
+    key: np.ndarray,
+    value: float,
+    level: int,
+) -> None:
+    if 2 * counters[0] >= levels.shape[0]:
+        levels[:] = -1
+        counters[0] = 0
+    s = _slot(keys, levels, key)
+    if levels[s] < 0:
+        counters[0] += 1
+        keys[s] = key
+    values[s] = value
+    levels[s] = level
+
+
+@cached_njit()
+def branch_and_bound(
+    children: np.ndarray,
+    bounds: np.ndarray,
+    levels: np.ndarray,
+    starts: np.ndarray,
+    lower: float,
+    q0: float,
+    first_key: float,
+    eps: float,
+    report_grasps: bool,
+    wrenches: np.ndarray,
+    directions: np.ndarray,
+    count: int,
+    node_masks: np.ndarray,
+    node_vectors: np.ndarray,
+    filled: np.ndarray,
+    sizes: np.ndarray,
+    table_keys: np.ndarray,
+    table_values: np.ndarray,
+    table_levels: np.ndarray,
+    counters: np.ndarray,
+) -> tuple[int, int, float]:
+    """Tighten the largest of the children's upper bounds until the caller must act.
+
+    The loop of :meth:`planner.search.best_first.Search.refine`, step for step: the child
+    of the largest bound (the first of equal ones) is tightened by one level, as
+    :meth:`planner.grasp.subset_quality.GraspQuality.tighten` would, with the table in
+    place of the oracle's store of facet bounds.
+
+    Args:
+        children: Sorted node tuples of the children, shape (k, m).
+        bounds: Their upper bounds of Q1 [-], shape (k,); updated in place.
+        levels: The level of each bound (0 to :data:`EXACT`), shape (k,); updated in place.
+        starts: Direction of D of each support bound, where the first facet bound starts,
+            shape (k,).
+        lower: The state's lower bound of f so far [-].
+        q0: Q1 of all contacts [-].
+        first_key: The open list's first key (inf when empty).
+        eps: WA*'s eps (0 for A*).
+        report_grasps: Return when a grasp child becomes exact here.
+        wrenches: Cone-edge wrenches of every contact, shape (n, k_edges, 6).
+        directions: Unit directions of D, shape (>= count, 6).
+        count: |D|; every child node's support vector holds that many entries.
+        node_masks: Packed membership mask of each tree node, shape (nodes, ceil(n / 8)).
+        node_vectors: Support vector of each tree node, shape (nodes, >= count).
+        filled: Directions each node's support vector holds, shape (nodes,).
+        sizes: Contacts in each tree node, shape (nodes,).
+        table_keys: :class:`ChildBounds` arrays, updated in place.
+        table_values: See ``table_keys``.
+        table_levels: See ``table_keys``.
+        counters: See ``table_keys``.
+
+    Returns:
+        (outcome, child, lower): one of :data:`SETTLED`, :data:`YIELD`,
+        :data:`NEEDS_EXACT`, :data:`GRASP_EXACT`, :data:`NEEDS_ROWS`; the child of the largest bound (or the
+        grasp that became exact); the state's lower bound of f [-].
+    """
+    m = children.shape[1]
+    union = np.empty(node_masks.shape[1], dtype=np.uint8)
+    rows = np.empty((m, count))
+    while True:
+        i = 0
+        for r in range(1, bounds.shape[0]):
+            if bounds[r] > bounds[i]:
+                i = r
+        bound = bounds[i]
+        level = levels[i]
+        lower = max(lower, q0 - min(q0, max(0.0, bound)))
+        if level == EXACT:
+            return SETTLED, i, lower
+        if (1.0 + eps) * lower > first_key:
+            return YIELD, i, lower
+        if level >= EXACT - 1 or bound <= FC_TOL:
+            return NEEDS_EXACT, i, lower
+        key = children[i]
+        s = _slot(table_keys, table_levels, key)
+        known_level = table_levels[s]
+        if known_level > level:
+            known = table_values[s]
+            if known_level == EXACT:
+                bounds[i] = known
+            else:
+                bounds[i] = min(known, bound)
+            levels[i] = known_level
+            if known_level == EXACT and report_grasps and _is_grasp(sizes, key):
+                return GRASP_EXACT, i, lower
+            continue
+        union[:] = 0
+        for j in range(m):
+            for b in range(union.shape[0]):
+                union[b] |= node_masks[key[j], b]
+        if level == 0 and starts[i] >= 0:
+            raw = union_facet_bound_along(wrenches, union, directions[starts[i]])
+            counters[1] += 1
+        else:
+            for j in range(m):
+                if filled[key[j]] < count:
+                    return NEEDS_ROWS, i, lower
+            for j in range(m):
+                rows[j] = node_vectors[key[j], :count]
+            first, last = (0, 1) if level == 0 else (1, FACET_STARTS)
+            raw = union_facet_bound(wrenches, union, rows, directions, count, first, last)
+            counters[1] += last - first
+        if known_level >= 0:
+            raw = min(raw, table_values[s] - CUT_MARGIN)
+        if raw <= FC_TOL:
+            counters[2] += 1
+            _store(table_keys, table_values, table_levels, counters, key, 0.0, EXACT)
+            bounds[i] = 0.0
+            levels[i] = EXACT
+            if report_grasps and _is_grasp(sizes, key):
+                return GRASP_EXACT, i, lower
+            continue
+        value = raw + CUT_MARGIN
+        _store(table_keys, table_values, table_levels, counters, key, value, level + 1)
+        bounds[i] = min(value, bound)
+        levels[i] = level + 1
+
+
+@cached_njit(inline="always")
+def _is_grasp(sizes: np.ndarray, key: np.ndarray) -> bool:
+    for j in range(key.shape[0]):
+        if sizes[key[j]] != 1:
+            return False
+    return True
+
+
+@cached_njit()
+def state_bound(
+    state: np.ndarray,
+    wrenches: np.ndarray,
+    directions: np.ndarray,
+    count: int,
+    node_masks: np.ndarray,
+    node_vectors: np.ndarray,
+    table_keys: np.ndarray,
+    table_values: np.ndarray,
+    table_levels: np.ndarray,
+    counters: np.ndarray,
+) -> tuple[float, int]:
+    """An upper bound of Q1 of a state's union: the best of its support bound and its table
+    entry, else its first facet bound, which is then remembered ([-], level).
+
+    What :meth:`planner.search.search_space.SearchSpace.g_quality` asks of
+    :meth:`planner.grasp.subset_quality.GraspQuality.tighten` at level 0: a child's bounds
+    from its parent's branch and bound serve its g at no cost.
+
+    Args:
+        state: The state's nodes, sorted, shape (m,), int32; their support vectors hold
+            ``count`` directions.
+        wrenches: See :func:`branch_and_bound`; so are the other arguments.
+
+    Returns:
+        (bound, level): the level is :data:`EXACT` when the bound is the exact value.
+    """
+    m = state.shape[0]
+    support = np.inf
+    start = 0
+    for d in range(count):
+        joint = node_vectors[state[0], d]
+        for j in range(1, m):
+            joint = max(joint, node_vectors[state[j], d])
+        if joint < support:
+            support = joint
+            start = d
+    s = _slot(table_keys, table_levels, state)
+    known_level = table_levels[s]
+    if known_level == EXACT:
+        return table_values[s], EXACT
+    if known_level > 0:
+        return min(table_values[s], support), known_level
+    if support <= FC_TOL:
+        return support, 0  # the caller settles it exactly (a cheap rejection there)
+    union = np.zeros(node_masks.shape[1], dtype=np.uint8)
+    for j in range(m):
+        for b in range(union.shape[0]):
+            union[b] |= node_masks[state[j], b]
+    raw = union_facet_bound_along(wrenches, union, directions[start])
+    counters[1] += 1
+    if raw <= FC_TOL:
+        counters[2] += 1
+        _store(table_keys, table_values, table_levels, counters, state, 0.0, EXACT)
+        return 0.0, EXACT
+    value = raw + CUT_MARGIN
+    _store(table_keys, table_values, table_levels, counters, state, value, 1)
+    return min(value, support), 1
