@@ -277,7 +277,8 @@ class Search(SearchSpace):
         # f when the heuristic uses the expansion tree (consistency, Thm. III.2b).
         inherited = lower if self.heuristic_shares_tree else g
         q0 = self.q0
-        for child in self.successors(state):
+        children = self.successors(state)
+        for child, upper in zip(children, self.successor_bounds(state, children), strict=True):
             child_depth = self.depth(child)
             self.created[child_depth] = self.created.get(child_depth, 0) + 1
             child_id = ids[child] = next(self._ids)
@@ -287,7 +288,7 @@ class Search(SearchSpace):
                 self._visited.append(False)
                 self._f.append(0.0)
             # U may be negative (then q = 0): clip so the bound never exceeds the true f.
-            bound = q0 - min(q0, max(0.0, self.upper(self.node_vectors(child))))
+            bound = q0 - min(q0, max(0.0, upper))
             self.push(open_list, max(bound, inherited), child_depth, child, BOUND, math.nan, child_id)
         inc = self.incumbent
         if inc is not None and inc.parent == state:

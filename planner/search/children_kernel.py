@@ -104,3 +104,58 @@ def shared_tree_children(
             index[j] = 0
             j -= 1
     return keys[:k], bounds[:k], starts[:k], terminal[:k]
+
+
+@cached_njit()
+def stale_children(
+    state: np.ndarray, table: np.ndarray, widths: np.ndarray, filled: np.ndarray, count: int
+) -> np.ndarray:
+    """Child nodes of a state whose support vectors lack some of the ``count`` directions.
+
+    Args:
+        state: Node of each super-contact, shape (m,); every one has its row of ``table``.
+        table: Child nodes of each node, padded, shape (nodes, b).
+        widths: Number of children of each node, shape (nodes,).
+        filled: Directions each node's support vector holds, shape (nodes,).
+        count: |D|.
+
+    Returns:
+        The stale nodes, each once, shape (s,).
+    """
+    stale = np.empty(state.shape[0] * table.shape[1], dtype=np.int64)
+    s = 0
+    for j in range(state.shape[0]):
+        for c in range(widths[state[j]]):
+            node = table[state[j], c]
+            if filled[node] != count:
+                seen = False
+                for r in range(s):
+                    if stale[r] == node:
+                        seen = True
+                        break
+                if not seen:
+                    stale[s] = node
+                    s += 1
+    return stale[:s]
+
+
+@cached_njit()
+def support_bounds(children: np.ndarray, vectors: np.ndarray, count: int) -> np.ndarray:
+    """Support bound U [-] of each of the given states, shape (k,).
+
+    Args:
+        children: Nodes of each state, shape (k, m).
+        vectors: Support vector of each node over the directions D, shape (nodes, >= count),
+            filled up to ``count`` for every node named.
+        count: |D|.
+    """
+    bounds = np.empty(children.shape[0])
+    for k in range(children.shape[0]):
+        bound = np.inf
+        for d in range(count):
+            joint = vectors[children[k, 0], d]
+            for j in range(1, children.shape[1]):
+                joint = max(joint, vectors[children[k, j], d])
+            bound = min(bound, joint)
+        bounds[k] = bound
+    return bounds

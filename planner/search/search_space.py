@@ -16,6 +16,7 @@ from planner.grasp.constraints import Constraint, DistinctContacts
 from planner.grasp.contact_set import ContactSet
 from planner.grasp.subset_quality import EXACT, GraspQuality, PackedMask
 from planner.grasp.support_bound import Vector
+from planner.search.children_kernel import shared_tree_children, stale_children, support_bounds
 from planner.search.partitions import Indices, PartitionTree, make_partitioner
 from planner.search.refine_kernel import ChildBounds, branch_and_bound, state_bound
 from planner.search.symmetry import SymmetryFilter
@@ -183,6 +184,16 @@ class SearchSpace:
         self._widths = grown(self._widths, 0)
         self._masks = grown(self._masks, 0)
 
+    def successor_bounds(self, state: State, children: list[State]) -> list[float]:
+        """Support bound U [-] of each successor of a state (:meth:`upper` of each, in one call where the
+        listing is compiled)."""
+        if not self._compiled_children or not children:
+            return [self.upper(self.node_vectors(child)) for child in children]
+        self.fill_child_nodes(state)
+        self.bound_evaluations += len(children)
+        keys = np.array(children, dtype=np.int64)
+        return support_bounds(keys, self._node_vectors, self.oracle.bounds.count).tolist()
+
     def upper(self, vectors: Sequence[Vector]) -> float:
         self.bound_evaluations += 1
         return self.oracle.bounds.bound(vectors)
@@ -272,8 +283,6 @@ class SearchSpace:
             shared = self.heuristic_shares_tree
             terminal = np.array([shared and self.is_terminal(key) for key, _ in found], dtype=np.bool_)
             return keys, bounds, np.full(len(bounds), -1, dtype=np.int32), terminal
-        from planner.search.children_kernel import shared_tree_children
-
         self.fill_child_nodes(state)
         keys, bounds, starts, terminal = shared_tree_children(
             np.array(state, dtype=np.int64),
@@ -296,9 +305,7 @@ class SearchSpace:
                     self._grow(len(self.tree.members))
                 self._table[node, : len(children)] = children
                 self._widths[node] = len(children)
-        nodes = self._table[list(state)].ravel()
-        nodes = nodes[nodes >= 0]
-        for child in nodes[self._filled[nodes] != count].tolist():
+        for child in stale_children(np.array(state), self._table, self._widths, self._filled, count).tolist():
             self._fill(child)
 
     def branch_and_bound(
