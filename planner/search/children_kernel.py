@@ -52,6 +52,12 @@ def shared_tree_children(
     starts = np.empty(total, dtype=np.int32)
     index = np.zeros(m, dtype=np.int64)
     combo = np.empty(m, dtype=np.int64)
+    # prefix[j] = the support vector of the first j + 1 nodes of the current combination (in
+    # product order, whose maximum is the sorted one's); rows from ``fresh_from`` on are
+    # stale. Neighbours in product order share all but the last few nodes, so a child costs
+    # about 2 |D| maxima instead of m |D| (b = 2).
+    prefix = np.empty((m, count))
+    fresh_from = 0
     k = 0
     for _ in range(total):
         for j in range(m):
@@ -78,14 +84,21 @@ def shared_tree_children(
             if run > sizes[combo[j]]:
                 valid = False
         if valid:
+            for j in range(fresh_from, m):
+                row = vectors[table[state[j], index[j]]]
+                if j == 0:
+                    for d in range(count):
+                        prefix[0, d] = row[d]
+                else:
+                    for d in range(count):
+                        prefix[j, d] = max(prefix[j - 1, d], row[d])
+            fresh_from = m
             bound = np.inf
             lowest = 0
+            joint = prefix[m - 1]
             for d in range(count):
-                joint = vectors[combo[0], d]
-                for j in range(1, m):
-                    joint = max(joint, vectors[combo[j], d])
-                if joint < bound:
-                    bound = joint
+                if joint[d] < bound:
+                    bound = joint[d]
                     lowest = d
             leaf = True
             for j in range(m):
@@ -103,6 +116,7 @@ def shared_tree_children(
                 break
             index[j] = 0
             j -= 1
+        fresh_from = min(fresh_from, max(j, 0))
     return keys[:k], bounds[:k], starts[:k], terminal[:k]
 
 
