@@ -262,8 +262,7 @@ class Search(ChildRefinement):
         # f when the heuristic uses the expansion tree (consistency, Thm. III.2b).
         inherited = lower if self.heuristic_shares_tree else g
         q0 = self.q0
-        children = self.successors(state)
-        for child, upper in zip(children, self.successor_bounds(state, children), strict=True):
+        for child, upper in zip(*self.successors_with_bounds(state), strict=True):
             child_depth = self.depth(child)
             self.created[child_depth] = self.created.get(child_depth, 0) + 1
             child_id = ids[child] = next(self._ids)

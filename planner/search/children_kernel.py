@@ -24,7 +24,7 @@ def shared_tree_children(
     sizes: np.ndarray,
     vectors: np.ndarray,
     count: int,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, int]:
     """Valid Γh children of a state and their support bounds.
 
     Args:
@@ -37,10 +37,11 @@ def shared_tree_children(
         count: |D|.
 
     Returns:
-        (keys, bounds, starts, terminal): the children's sorted nodes, shape (k, m), int32;
-        their support bounds U [-], shape (k,); the direction of D that gives each bound
-        (the first of equal ones), where its first facet bound starts; whether each is a
-        grasp (every node one contact).
+        (keys, bounds, starts, terminal, rejected): the children's sorted nodes, shape (k, m),
+        int32; their support bounds U [-], shape (k,); the direction of D that gives each
+        bound (the first of equal ones), where its first facet bound starts; whether each is
+        a grasp (every node one contact); how many distinct combinations distinct contacts
+        ruled out.
     """
     m = state.shape[0]
     total = 1
@@ -59,6 +60,8 @@ def shared_tree_children(
     prefix = np.empty((m, count))
     fresh_from = 0
     k = 0
+    rejected = np.empty((total, m), dtype=np.int64)
+    nrejected = 0
     for _ in range(total):
         for j in range(m):
             combo[j] = table[state[j], index[j]]
@@ -83,6 +86,20 @@ def shared_tree_children(
             run = run + 1 if combo[j] == combo[j - 1] else 1
             if run > sizes[combo[j]]:
                 valid = False
+        if fresh and not valid:
+            seen = False
+            for r in range(nrejected):
+                same = True
+                for j in range(m):
+                    if rejected[r, j] != combo[j]:
+                        same = False
+                        break
+                if same:
+                    seen = True
+                    break
+            if not seen:
+                rejected[nrejected] = combo
+                nrejected += 1
         if valid:
             for j in range(fresh_from, m):
                 row = vectors[table[state[j], index[j]]]
@@ -117,7 +134,7 @@ def shared_tree_children(
             index[j] = 0
             j -= 1
         fresh_from = min(fresh_from, max(j, 0))
-    return keys[:k], bounds[:k], starts[:k], terminal[:k]
+    return keys[:k], bounds[:k], starts[:k], terminal[:k], nrejected
 
 
 @cached_njit()
@@ -164,12 +181,17 @@ def support_bounds(children: np.ndarray, vectors: np.ndarray, count: int) -> np.
         count: |D|.
     """
     bounds = np.empty(children.shape[0])
+    joint = np.empty(count)
     for k in range(children.shape[0]):
+        first = vectors[children[k, 0]]
+        for d in range(count):
+            joint[d] = first[d]
+        for j in range(1, children.shape[1]):  # row by row: the loops vectorise
+            row = vectors[children[k, j]]
+            for d in range(count):
+                joint[d] = max(joint[d], row[d])
         bound = np.inf
         for d in range(count):
-            joint = vectors[children[k, 0], d]
-            for j in range(1, children.shape[1]):
-                joint = max(joint, vectors[children[k, j], d])
-            bound = min(bound, joint)
+            bound = min(bound, joint[d])
         bounds[k] = bound
     return bounds

@@ -276,14 +276,16 @@ def state_bound(
         (bound, level): the level is :data:`EXACT` when the bound is the exact value.
     """
     m = state.shape[0]
+    joint = node_vectors[state[0], :count].copy()
+    for j in range(1, m):  # row by row: the loops vectorise
+        row = node_vectors[state[j]]
+        for d in range(count):
+            joint[d] = max(joint[d], row[d])
     support = np.inf
     start = 0
     for d in range(count):
-        joint = node_vectors[state[0], d]
-        for j in range(1, m):
-            joint = max(joint, node_vectors[state[j], d])
-        if joint < support:
-            support = joint
+        if joint[d] < support:
+            support = joint[d]
             start = d
     s = _slot(table_keys, table_levels, state)
     known_level = table_levels[s]

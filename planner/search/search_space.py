@@ -184,15 +184,24 @@ class SearchSpace:
         self._widths = grown(self._widths, 0)
         self._masks = grown(self._masks, 0)
 
-    def successor_bounds(self, state: State, children: list[State]) -> list[float]:
-        """Support bound U [-] of each successor of a state (:meth:`upper` of each, in one call where the
-        listing is compiled)."""
+    def successors_with_bounds(self, state: State) -> tuple[list[State], list[float]]:
+        """:meth:`successors` and the support bound U [-] of each.
+
+        Where Γh's compiled listing applies and successors are neither symmetry-filtered nor
+        ordered, they are its children (the same states in the same order): one compiled
+        call. Otherwise U of the Python successors in one compiled call where it applies.
+        """
+        if self._compiled_children and self.symmetry is None and not self.config["ordered"]:
+            keys, bounds, _, _, rejected = self._listing(state)
+            self.pruned += rejected
+            return [tuple(key) for key in keys.tolist()], bounds.tolist()
+        children = self.successors(state)
         if not self._compiled_children or not children:
-            return [self.upper(self.node_vectors(child)) for child in children]
+            return children, [self.upper(self.node_vectors(child)) for child in children]
         self.fill_child_nodes(state)
         self.bound_evaluations += len(children)
         keys = np.array(children, dtype=np.int64)
-        return support_bounds(keys, self._node_vectors, self.oracle.bounds.count).tolist()
+        return children, support_bounds(keys, self._node_vectors, self.oracle.bounds.count).tolist()
 
     def upper(self, vectors: Sequence[Vector]) -> float:
         self.bound_evaluations += 1
@@ -283,8 +292,15 @@ class SearchSpace:
             shared = self.heuristic_shares_tree
             terminal = np.array([shared and self.is_terminal(key) for key, _ in found], dtype=np.bool_)
             return keys, bounds, np.full(len(bounds), -1, dtype=np.int32), terminal
+        keys, bounds, starts, terminal, _ = self._listing(state)
+        return keys, bounds, starts, terminal
+
+    def _listing(
+        self, state: State
+    ) -> tuple[NDArray[np.int32], NDArray[np.float64], NDArray[np.int32], NDArray[np.bool_], int]:
+        """:func:`planner.search.children_kernel.shared_tree_children` of a state."""
         self.fill_child_nodes(state)
-        keys, bounds, starts, terminal = shared_tree_children(
+        listing = shared_tree_children(
             np.array(state, dtype=np.int64),
             self._table,
             self._widths,
@@ -292,8 +308,8 @@ class SearchSpace:
             self._node_vectors,
             self.oracle.bounds.count,
         )
-        self.bound_evaluations += len(bounds)
-        return keys, bounds, starts, terminal
+        self.bound_evaluations += len(listing[1])
+        return listing
 
     def fill_child_nodes(self, state: State) -> None:
         """Bring the per-node rows of every child node of the state up to the current directions."""

@@ -125,3 +125,28 @@ def test_compiled_children_are_the_python_listing(object_contacts, m):
         space.oracle.bounds.add(learned / np.linalg.norm(learned, axis=1, keepdims=True))  # rows now extend
         states.extend(tuple(key) for key in keys.tolist() if not space.is_terminal(tuple(key)))
     assert checked >= 100 and repeated > 0
+
+
+@pytest.mark.parametrize("m", [3, 5])
+def test_successors_from_the_compiled_listing_are_the_python_successors(object_contacts, m):
+    """Expansion takes its successors and their support bounds from the compiled listing:
+    the same states in the same order as :meth:`SearchSpace.successors`, U as :meth:`upper`,
+    and the same count of combinations pruned by distinct contacts."""
+    contacts = object_contacts("box", 40, 1)
+    config = GraspPlanner(method="astar").resolved_config()
+    config["m"] = m
+    compiled = SearchSpace(contacts, m, config, [DistinctContacts()])
+    python = SearchSpace(contacts, m, config, [DistinctContacts()])
+    python._compiled_children = False
+    rng = np.random.default_rng(m)
+    states = [(0,) * m]
+    checked = 0
+    while states and checked < 300:
+        state = states.pop(int(rng.integers(len(states))))
+        children, bounds = compiled.successors_with_bounds(state)
+        expected, uppers = python.successors_with_bounds(state)
+        assert children == expected and bounds == uppers
+        assert compiled.pruned == python.pruned
+        checked += len(children)
+        states.extend(child for child in children if not compiled.is_terminal(child))
+    assert checked >= 100 and compiled.pruned > 0
