@@ -120,6 +120,9 @@ class Search(ChildRefinement):
         self._visited: list[bool] = [False]
         self._f: list[float] = [0.0]
         self._ids = itertools.count(1)
+        #: The state of each id, one row each: open-list entries hold the id only (at m >= 5
+        #: millions are open, and a tuple of node ids took half of each entry's 500 bytes).
+        self._states = np.zeros((1024, m), dtype=np.int32)
         self._tie = itertools.count()
         self.q0 = math.nan
         self.created: dict[int, int] = {0: 1}
@@ -131,17 +134,29 @@ class Search(ChildRefinement):
         open_list: list[Entry],
         lower: float,
         depth: int,
-        state: State,
         stage: int,
         g: float,
         ident: int,
         key: float | None = None,
     ) -> None:
-        """Enter a state; the key defaults to (1 + eps) times its lower bound of f."""
+        """Enter a state by its id (:meth:`remember` holds the state); the key defaults to (1 + eps)
+        times its lower bound of f."""
         if self.record_tree:
             self._f[ident] = lower
         key = (1.0 + self.eps) * lower if key is None else key
-        heapq.heappush(open_list, (key, -depth, next(self._tie), state, lower, stage, g, ident))
+        heapq.heappush(open_list, (key, -depth, next(self._tie), lower, stage, g, ident))
+
+    def remember(self, ident: int, state: State) -> None:
+        """Store a created state under its id."""
+        if ident >= len(self._states):
+            grown = np.zeros((2 * len(self._states), self.m), dtype=np.int32)
+            grown[: len(self._states)] = self._states
+            self._states = grown
+        self._states[ident] = state
+
+    def state_of(self, ident: int) -> State:
+        """The state stored under an id."""
+        return tuple(self._states[ident].tolist())
 
     def offer(self, q: float, state: State, parent: State | None, ident: int) -> None:
         """A terminal state's exact Q1: keep it if it beats the incumbent (ties: the first)."""
@@ -153,7 +168,8 @@ class Search(ChildRefinement):
         root: State = (0,) * self.m
         q0 = self.q0 = self.exact(root)
         open_list: list[Entry] = []
-        self.push(open_list, 0.0, 0, root, EXACT_G, 0.0, 0)
+        self.remember(0, root)
+        self.push(open_list, 0.0, 0, EXACT_G, 0.0, 0)
         deadline = math.inf if self.time_limit is None else wall0 + self.time_limit
         next_report = wall0 + PROGRESS_SECONDS
         stop = self.stop
@@ -165,7 +181,8 @@ class Search(ChildRefinement):
                 next_report = now + PROGRESS_SECONDS
                 self.on_progress(None if self.incumbent is None else self.incumbent.q, self.quick_bound(open_list))
             entry = heapq.heappop(open_list)
-            key, neg_depth, _, state, lower, stage, g, ident = entry
+            key, neg_depth, _, lower, stage, g, ident = entry
+            state = self.state_of(ident)
             depth = -neg_depth
             if stage == BOUND:
                 q = self.g_quality(state)
@@ -174,9 +191,9 @@ class Search(ChildRefinement):
                 if self.is_terminal(state):
                     self.offer(q, state, None, ident)
                 if self.is_terminal(state) or self.heuristic_kind == "none":
-                    self.push(open_list, max(lower, g), depth, state, EXACT, g, ident, key=g)
+                    self.push(open_list, max(lower, g), depth, EXACT, g, ident, key=g)
                 else:
-                    self.push(open_list, max(lower, g), depth, state, EXACT_G, g, ident)
+                    self.push(open_list, max(lower, g), depth, EXACT_G, g, ident)
                 continue
             if stage != EXACT:
                 self.refine(open_list, state, depth, lower, g, ident)
@@ -216,7 +233,7 @@ class Search(ChildRefinement):
         inc = self.incumbent
         if inc is None:
             # Every unexplored grasp lies below an open state, so q0 - min bounds the optimum.
-            upper = self.q0 - min(entry[4] for entry in open_list)
+            upper = self.q0 - min(entry[3] for entry in open_list)
             seconds = None if status == "interrupted" or self.time_limit is None else float(self.time_limit)
             raise SearchTimeout(self.config["method"], seconds, sum(self.visited.values()), None, upper)
         result = self.result(inc, self.q0 - inc.q, open_list, wall0, cpu0)
@@ -234,13 +251,14 @@ class Search(ChildRefinement):
         None when :data:`DIVE_BUDGET` states hold no valid grasp.
         """
         budget = DIVE_BUDGET
-        for entry in heapq.nsmallest(DIVE_STARTS, open_list, key=lambda e: e[4]):
-            stack = [entry[3]]
+        for entry in heapq.nsmallest(DIVE_STARTS, open_list, key=lambda e: e[3]):
+            start = self.state_of(entry[6])
+            stack = [start]
             while stack and budget > 0:
                 state = stack.pop()
                 budget -= 1
                 if self.is_terminal(state):
-                    self.offer(self.exact(state), tuple(sorted(state)), entry[3], entry[7])
+                    self.offer(self.exact(state), tuple(sorted(state)), start, entry[6])
                     break
                 children = self.successors(state)
                 # Ascending U, so the child with the highest bound is popped next.
@@ -266,6 +284,7 @@ class Search(ChildRefinement):
             child_depth = self.depth(child)
             self.created[child_depth] = self.created.get(child_depth, 0) + 1
             child_id = ids[child] = next(self._ids)
+            self.remember(child_id, child)
             if self.record_tree:
                 self._parent.append(ident)
                 self._level.append(child_depth)
@@ -273,7 +292,7 @@ class Search(ChildRefinement):
                 self._f.append(0.0)
             # U may be negative (then q = 0): clip so the bound never exceeds the true f.
             bound = q0 - min(q0, max(0.0, upper))
-            self.push(open_list, max(bound, inherited), child_depth, child, BOUND, math.nan, child_id)
+            self.push(open_list, max(bound, inherited), child_depth, BOUND, math.nan, child_id)
         inc = self.incumbent
         if inc is not None and inc.parent == state:
             # The incumbent is a created state now (first ordering of its contacts).
@@ -287,8 +306,9 @@ class Search(ChildRefinement):
         assert inc is not None
         if inc.parent is not None:
             # The parent is still on the open list (not expanded, never dropped).
-            entry = min(e for e in open_list if e[7] == inc.ident)
-            key, neg_depth, _, state, lower, _, g, ident = entry
+            entry = min(e for e in open_list if e[6] == inc.ident)
+            key, neg_depth, _, lower, _, g, ident = entry
+            state = self.state_of(ident)
             self.expand(open_list, state, -neg_depth, key, lower, g, ident)
             # Expanding the parent created the grasp's state and re-offered it.
             inc = self.incumbent
@@ -306,7 +326,7 @@ class Search(ChildRefinement):
     def result(self, inc: Incumbent, g: float, open_list: list[Entry], wall0: float, cpu0: float) -> SearchResult:
         q0, q, state = self.q0, inc.q, inc.state
         # Every unexplored grasp lies below an open state, whose stored value bounds its cost.
-        lowest_f = min([g] + [entry[4] for entry in open_list])
+        lowest_f = min([g] + [entry[3] for entry in open_list])
         # Nothing open below the returned cost: the grasp is optimal (q0 - (q0 - q) may
         # round above q, so do not recompute it).
         bound = q if lowest_f >= g else max(q, q0 - lowest_f)

@@ -22,8 +22,8 @@ from planner.search.search_space import SearchSpace, State
 
 #: Open-list stages (see :mod:`planner.search.best_first`).
 BOUND, EXACT_G, PARTIAL, EXACT = 0, 1, 2, 3
-#: (key, -depth, tie, state, lower bound of the unweighted f, stage, g or NaN, state id)
-Entry = tuple[float, int, int, State, float, int, float, int]
+#: (key, -depth, tie, lower bound of the unweighted f, stage, g or NaN, state id)
+Entry = tuple[float, int, int, float, int, float, int]
 #: Heuristic children waiting in a state's branch and bound: their keys
 #: (:data:`~planner.search.search_space.ChildKey`), one row each, shape (children, m). Masks
 #: and vectors are looked up again when one is tightened: at m >= 5 millions wait, most
@@ -56,7 +56,6 @@ class ChildRefinement(SearchSpace):
         open_list: list[Entry],
         lower: float,
         depth: int,
-        state: State,
         stage: int,
         g: float,
         ident: int,
@@ -90,7 +89,7 @@ class ChildRefinement(SearchSpace):
         """
         q0 = self.q0
         if self.is_terminal(state) or self.heuristic_kind == "none":
-            self.push(open_list, max(lower, g), depth, state, EXACT, g, ident, key=g)
+            self.push(open_list, max(lower, g), depth, EXACT, g, ident, key=g)
             return
         pending = self._pending.pop(state, None)
         if pending is None:
@@ -117,7 +116,7 @@ class ChildRefinement(SearchSpace):
                 break
             if open_list and (1.0 + self.eps) * lower > open_list[0][0]:
                 self._pending[state] = (children, bounds, levels, starts)
-                self.push(open_list, lower, depth, state, PARTIAL, g, ident)
+                self.push(open_list, lower, depth, PARTIAL, g, ident)
                 return
             child_key = tuple(children[i].tolist())
             child = self.child_state(child_key)
@@ -139,7 +138,7 @@ class ChildRefinement(SearchSpace):
         f = max(lower, q0 - bound)  # settled on a facet bound, f may lie below the lower bound held
         # With eps = 0 the key is f itself, not g + (f - g), which can round below f.
         key = f if self.eps == 0 else g + (1.0 + self.eps) * (f - g)
-        self.push(open_list, f, depth, state, EXACT, g, ident, key=key)
+        self.push(open_list, f, depth, EXACT, g, ident, key=key)
 
     def compiled_refine(
         self, open_list: list[Entry], state: State, depth: int, lower: float, g: float, ident: int, pending: Pending
@@ -156,7 +155,7 @@ class ChildRefinement(SearchSpace):
                 break
             if outcome == YIELD:
                 self._pending[state] = pending
-                self.push(open_list, lower, depth, state, PARTIAL, g, ident)
+                self.push(open_list, lower, depth, PARTIAL, g, ident)
                 return
             if outcome == NEEDS_ROWS:
                 self.node_vectors(tuple(children[i].tolist()))  # directions learned since the listing
@@ -174,7 +173,7 @@ class ChildRefinement(SearchSpace):
                 self.offer(float(bounds[i]), child, state, ident)
         f = max(lower, q0 - float(bounds[i]))
         key = f if self.eps == 0 else g + (1.0 + self.eps) * (f - g)
-        self.push(open_list, f, depth, state, EXACT, g, ident, key=key)
+        self.push(open_list, f, depth, EXACT, g, ident, key=key)
 
     def settles_on_bounds(self, child: State | None) -> bool:
         """Whether the largest bound, a facet bound, may stand for the child's exact Q1 in f.
