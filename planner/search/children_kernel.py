@@ -23,6 +23,7 @@ def shared_tree_children(
     widths: np.ndarray,
     sizes: np.ndarray,
     vectors: np.ndarray,
+    filled: np.ndarray,
     count: int,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, int]:
     """Valid Γh children of a state and their support bounds.
@@ -32,8 +33,8 @@ def shared_tree_children(
         table: Child nodes of each node, padded, shape (nodes, b); a leaf's only child is itself.
         widths: Number of children of each node, shape (nodes,).
         sizes: Number of contacts in each node, shape (nodes,).
-        vectors: Support vector of each node over the directions D, shape (nodes, >= count);
-            the rows of every child of ``state`` hold the first ``count`` entries.
+        vectors: Support vector of each node over the directions D, shape (nodes, >= count).
+        filled: Directions each node's support vector holds, shape (nodes,).
         count: |D|.
 
     Returns:
@@ -41,9 +42,17 @@ def shared_tree_children(
         int32; their support bounds U [-], shape (k,); the direction of D that gives each
         bound (the first of equal ones), where its first facet bound starts; whether each is
         a grasp (every node one contact); how many distinct combinations distinct contacts
-        ruled out.
+        ruled out, or -1, with nothing listed, when a node of the state has no row of
+        ``table`` yet or a child node's vector lacks some of the ``count`` directions (the
+        caller fills them and asks again).
     """
     m = state.shape[0]
+    for j in range(m):
+        if state[j] >= widths.shape[0] or widths[state[j]] == 0:
+            return np.empty((0, m), np.int32), np.empty(0), np.empty(0, np.int32), np.empty(0, np.bool_), -1
+        for c in range(widths[state[j]]):
+            if filled[table[state[j], c]] != count:
+                return np.empty((0, m), np.int32), np.empty(0), np.empty(0, np.int32), np.empty(0, np.bool_), -1
     total = 1
     for j in range(m):
         total *= widths[state[j]]

@@ -299,15 +299,16 @@ class SearchSpace:
         self, state: State
     ) -> tuple[NDArray[np.int32], NDArray[np.float64], NDArray[np.int32], NDArray[np.bool_], int]:
         """:func:`planner.search.children_kernel.shared_tree_children` of a state."""
-        self.fill_child_nodes(state)
+        nodes = np.array(state, dtype=np.int64)
+        count = self.oracle.bounds.count
         listing = shared_tree_children(
-            np.array(state, dtype=np.int64),
-            self._table,
-            self._widths,
-            self._sizes,
-            self._node_vectors,
-            self.oracle.bounds.count,
+            nodes, self._table, self._widths, self._sizes, self._node_vectors, self._filled, count
         )
+        if listing[4] < 0:  # child rows to fill first (new nodes, or directions learned since)
+            self.fill_child_nodes(state)
+            listing = shared_tree_children(
+                nodes, self._table, self._widths, self._sizes, self._node_vectors, self._filled, count
+            )
         self.bound_evaluations += len(listing[1])
         return listing
 
