@@ -27,7 +27,6 @@ most promising open states) with the certificate the open list gives at that mom
 from __future__ import annotations
 
 import dataclasses
-import heapq
 import itertools
 import math
 import threading
@@ -41,7 +40,8 @@ import numpy as np
 from planner.grasp.constraints import Constraint
 from planner.grasp.contact_set import ContactSet
 from planner.infra.errors import OgcpError, SearchTimeout
-from planner.search.refine import BOUND, EXACT, EXACT_G, ChildRefinement, Entry, Pending
+from planner.search.open_list import OpenList
+from planner.search.refine import BOUND, EXACT, EXACT_G, ChildRefinement, Pending
 from planner.search.result import (
     SearchResult,
     SearchStats,
@@ -123,7 +123,6 @@ class Search(ChildRefinement):
         #: The state of each id, one row each: open-list entries hold the id only (at m >= 5
         #: millions are open, and a tuple of node ids took half of each entry's 500 bytes).
         self._states = np.zeros((1024, m), dtype=np.int32)
-        self._tie = itertools.count()
         self.q0 = math.nan
         self.created: dict[int, int] = {0: 1}
         self.visited: dict[int, int] = {}
@@ -131,7 +130,7 @@ class Search(ChildRefinement):
 
     def push(
         self,
-        open_list: list[Entry],
+        open_list: OpenList,
         lower: float,
         depth: int,
         stage: int,
@@ -144,7 +143,7 @@ class Search(ChildRefinement):
         if self.record_tree:
             self._f[ident] = lower
         key = (1.0 + self.eps) * lower if key is None else key
-        heapq.heappush(open_list, (key, -depth, next(self._tie), lower, stage, g, ident))
+        open_list.push(key, -depth, lower, stage, g, ident)
 
     def remember(self, ident: int, state: State) -> None:
         """Store a created state under its id."""
@@ -167,7 +166,7 @@ class Search(ChildRefinement):
         wall0, cpu0 = time.perf_counter(), time.process_time()
         root: State = (0,) * self.m
         q0 = self.q0 = self.exact(root)
-        open_list: list[Entry] = []
+        open_list = OpenList()
         self.remember(0, root)
         self.push(open_list, 0.0, 0, EXACT_G, 0.0, 0)
         deadline = math.inf if self.time_limit is None else wall0 + self.time_limit
@@ -180,7 +179,7 @@ class Search(ChildRefinement):
             if now >= next_report:
                 next_report = now + PROGRESS_SECONDS
                 self.on_progress(None if self.incumbent is None else self.incumbent.q, self.quick_bound(open_list))
-            entry = heapq.heappop(open_list)
+            entry = open_list.pop()
             key, neg_depth, _, lower, stage, g, ident = entry
             state = self.state_of(ident)
             depth = -neg_depth
@@ -204,12 +203,12 @@ class Search(ChildRefinement):
                 q = self.exact(state)
                 if self.incumbent is None or not self.incumbent.q > q:
                     self.incumbent = Incumbent(q, state, None, ident)
-                open_list.append(entry)  # still open unless returned: the certificate counts it
+                open_list.restore(entry)  # still open unless returned: the certificate counts it
                 return self.finish(open_list, wall0, cpu0)
             self.expand(open_list, state, depth, key, lower, g, ident)
         raise OgcpError("no grasp satisfies the constraints")
 
-    def quick_bound(self, open_list: list[Entry]) -> float:
+    def quick_bound(self, open_list: OpenList) -> float:
         """A certified upper bound on the optimum in O(1), looser than the final one for WA*.
 
         Every open key is at most (1 + eps) times its state's lower bound of f, so the
@@ -218,9 +217,9 @@ class Search(ChildRefinement):
         best = 0.0 if self.incumbent is None else self.incumbent.q
         if not open_list:
             return best
-        return min(self.q0, max(best, self.q0 - open_list[0][0] / (1.0 + self.eps)))
+        return min(self.q0, max(best, self.q0 - open_list.first_key() / (1.0 + self.eps)))
 
-    def stopped(self, open_list: list[Entry], wall0: float, cpu0: float) -> SearchResult:
+    def stopped(self, open_list: OpenList, wall0: float, cpu0: float) -> SearchResult:
         """The result of a search stopped before its goal test: the best grasp and its certificate.
 
         Raises:
@@ -233,7 +232,7 @@ class Search(ChildRefinement):
         inc = self.incumbent
         if inc is None:
             # Every unexplored grasp lies below an open state, so q0 - min bounds the optimum.
-            upper = self.q0 - min(entry[3] for entry in open_list)
+            upper = self.q0 - open_list.lowest_lower()
             seconds = None if status == "interrupted" or self.time_limit is None else float(self.time_limit)
             raise SearchTimeout(self.config["method"], seconds, sum(self.visited.values()), None, upper)
         result = self.result(inc, self.q0 - inc.q, open_list, wall0, cpu0)
@@ -242,7 +241,7 @@ class Search(ChildRefinement):
             return result  # the incumbent already beats every open bound: proven, as if finished
         return dataclasses.replace(result, status=status)
 
-    def dive(self, open_list: list[Entry]) -> None:
+    def dive(self, open_list: OpenList) -> None:
         """Find valid grasps below the most promising open states: depth first, highest U first.
 
         Each of the :data:`DIVE_STARTS` open states with the smallest bounds is descended
@@ -251,7 +250,7 @@ class Search(ChildRefinement):
         None when :data:`DIVE_BUDGET` states hold no valid grasp.
         """
         budget = DIVE_BUDGET
-        for entry in heapq.nsmallest(DIVE_STARTS, open_list, key=lambda e: e[3]):
+        for entry in open_list.smallest_lower(DIVE_STARTS):
             start = self.state_of(entry[6])
             stack = [start]
             while stack and budget > 0:
@@ -265,7 +264,7 @@ class Search(ChildRefinement):
                 stack.extend(sorted(children, key=lambda child: self.upper(self.node_vectors(child))))
 
     def expand(
-        self, open_list: list[Entry], state: State, depth: int, key: float, lower: float, g: float, ident: int
+        self, open_list: OpenList, state: State, depth: int, key: float, lower: float, g: float, ident: int
     ) -> dict[State, int]:
         """Count the expansion and create the successors; returns their ids."""
         self.visited[depth] = self.visited.get(depth, 0) + 1
@@ -300,13 +299,13 @@ class Search(ChildRefinement):
             self.incumbent = Incumbent(inc.q, inc.state, None, child_id)
         return ids
 
-    def finish(self, open_list: list[Entry], wall0: float, cpu0: float) -> SearchResult:
+    def finish(self, open_list: OpenList, wall0: float, cpu0: float) -> SearchResult:
         """Return the incumbent, expanding the state that found it if it is not created yet."""
         inc = self.incumbent
         assert inc is not None
         if inc.parent is not None:
             # The parent is still on the open list (not expanded, never dropped).
-            entry = min(e for e in open_list if e[6] == inc.ident)
+            entry = open_list.first_of(inc.ident)
             key, neg_depth, _, lower, _, g, ident = entry
             state = self.state_of(ident)
             self.expand(open_list, state, -neg_depth, key, lower, g, ident)
@@ -323,10 +322,10 @@ class Search(ChildRefinement):
             self._f[inc.ident] = g
         return self.result(inc, g, open_list, wall0, cpu0)
 
-    def result(self, inc: Incumbent, g: float, open_list: list[Entry], wall0: float, cpu0: float) -> SearchResult:
+    def result(self, inc: Incumbent, g: float, open_list: OpenList, wall0: float, cpu0: float) -> SearchResult:
         q0, q, state = self.q0, inc.q, inc.state
         # Every unexplored grasp lies below an open state, whose stored value bounds its cost.
-        lowest_f = min([g] + [entry[3] for entry in open_list])
+        lowest_f = min(g, open_list.lowest_lower())
         # Nothing open below the returned cost: the grasp is optimal (q0 - (q0 - q) may
         # round above q, so do not recompute it).
         bound = q if lowest_f >= g else max(q, q0 - lowest_f)

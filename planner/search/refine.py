@@ -1,7 +1,7 @@
 """A state's f from its heuristic children: branch and bound over upper bounds of their Q1.
 
 The half of :class:`planner.search.best_first.Search` that turns a state's Γh children into its
-f (:meth:`ChildRefinement.refine`), and the open-list stages and entries both halves share. A
+f (:meth:`ChildRefinement.refine`), and the open-list stages both halves share. A
 child's bound climbs the ladder of :meth:`planner.grasp.subset_quality.GraspQuality.tighten`;
 where the children are listed by the compiled listing, the loop itself is compiled too
 (:mod:`planner.search.refine_kernel`) and returns to Python only for exact values.
@@ -9,7 +9,6 @@ where the children are listed by the compiled listing, the loop itself is compil
 
 from __future__ import annotations
 
-import math
 from typing import TypeGuard
 
 import numpy as np
@@ -17,13 +16,12 @@ from numpy.typing import NDArray
 
 from planner.grasp.subset_quality import EXACT as EXACT_Q1
 from planner.infra.tolerance import TOL
+from planner.search.open_list import OpenList
 from planner.search.refine_kernel import NEEDS_EXACT, NEEDS_ROWS, SETTLED, YIELD
 from planner.search.search_space import SearchSpace, State
 
 #: Open-list stages (see :mod:`planner.search.best_first`).
 BOUND, EXACT_G, PARTIAL, EXACT = 0, 1, 2, 3
-#: (key, -depth, tie, lower bound of the unweighted f, stage, g or NaN, state id)
-Entry = tuple[float, int, int, float, int, float, int]
 #: Heuristic children waiting in a state's branch and bound: their keys
 #: (:data:`~planner.search.search_space.ChildKey`), one row each, shape (children, m). Masks
 #: and vectors are looked up again when one is tightened: at m >= 5 millions wait, most
@@ -53,7 +51,7 @@ class ChildRefinement(SearchSpace):
 
     def push(
         self,
-        open_list: list[Entry],
+        open_list: OpenList,
         lower: float,
         depth: int,
         stage: int,
@@ -68,7 +66,7 @@ class ChildRefinement(SearchSpace):
         """Offer a grasp's exact Q1 as the incumbent (:meth:`planner.search.best_first.Search.offer`)."""
         raise NotImplementedError
 
-    def refine(self, open_list: list[Entry], state: State, depth: int, lower: float, g: float, ident: int) -> None:
+    def refine(self, open_list: OpenList, state: State, depth: int, lower: float, g: float, ident: int) -> None:
         """Branch and bound over the heuristic children, on ever tighter upper bounds of their Q1.
 
         The children wait with upper bounds, each at a level of
@@ -114,7 +112,7 @@ class ChildRefinement(SearchSpace):
             lower = max(lower, q0 - min(q0, max(0.0, bound)))
             if level == EXACT_Q1:
                 break
-            if open_list and (1.0 + self.eps) * lower > open_list[0][0]:
+            if (1.0 + self.eps) * lower > open_list.first_key():
                 self._pending[state] = (children, bounds, levels, starts)
                 self.push(open_list, lower, depth, PARTIAL, g, ident)
                 return
@@ -141,13 +139,13 @@ class ChildRefinement(SearchSpace):
         self.push(open_list, f, depth, EXACT, g, ident, key=key)
 
     def compiled_refine(
-        self, open_list: list[Entry], state: State, depth: int, lower: float, g: float, ident: int, pending: Pending
+        self, open_list: OpenList, state: State, depth: int, lower: float, g: float, ident: int, pending: Pending
     ) -> None:
         """:meth:`refine`'s loop, compiled between exact values (:meth:`SearchSpace.branch_and_bound`)."""
         children, bounds, levels, _ = pending
         q0 = self.q0
         while True:
-            first_key = open_list[0][0] if open_list else math.inf
+            first_key = open_list.first_key()
             outcome, i, lower = self.branch_and_bound(
                 state, pending, lower, q0, first_key, self.eps, self.children_can_win
             )

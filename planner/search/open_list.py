@@ -1,0 +1,140 @@
+"""The open list of a best-first search: a binary min-heap on arrays.
+
+A search at m >= 5 holds millions of open states. As Python tuples in a ``heapq`` list each
+took about 250 bytes; here an entry is six numbers in two arrays (48 bytes), and the heap's
+sifts run compiled. Entries order by (key, -depth, tie), the order of the tuples before, and
+ties are unique, so the states come out in the same sequence.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from planner.grasp.kernel.jit import cached_njit
+
+#: An entry: (key, -depth, tie, lower bound of the unweighted f, stage, g or NaN, state id).
+Entry = tuple[float, int, int, float, int, float, int]
+#: Stages take two bits of the packed id.
+_STAGE_BITS = 2
+
+
+@cached_njit(inline="always")
+def _less(values: np.ndarray, order: np.ndarray, a: int, b: int) -> bool:
+    """Whether entry ``a`` comes before entry ``b``: by key, then -depth, then tie."""
+    if values[a, 0] != values[b, 0]:
+        return values[a, 0] < values[b, 0]
+    if order[a, 0] != order[b, 0]:
+        return order[a, 0] < order[b, 0]
+    return order[a, 1] < order[b, 1]
+
+
+@cached_njit(inline="always")
+def _swap(values: np.ndarray, order: np.ndarray, a: int, b: int) -> None:
+    for j in range(3):
+        values[a, j], values[b, j] = values[b, j], values[a, j]
+        order[a, j], order[b, j] = order[b, j], order[a, j]
+
+
+@cached_njit()
+def _sift_up(values: np.ndarray, order: np.ndarray, pos: int) -> None:
+    while pos > 0:
+        parent = (pos - 1) // 2
+        if not _less(values, order, pos, parent):
+            return
+        _swap(values, order, pos, parent)
+        pos = parent
+
+
+@cached_njit()
+def _pop_top(values: np.ndarray, order: np.ndarray, size: int) -> None:
+    """Move the last of ``size`` entries to the top and sift it down (the top is read before)."""
+    last = size - 1
+    for j in range(3):
+        values[0, j] = values[last, j]
+        order[0, j] = order[last, j]
+    pos = 0
+    while True:
+        child = 2 * pos + 1
+        if child >= last:
+            return
+        if child + 1 < last and _less(values, order, child + 1, child):
+            child += 1
+        if not _less(values, order, child, pos):
+            return
+        _swap(values, order, pos, child)
+        pos = child
+
+
+class OpenList:
+    """Open states of one search, smallest (key, -depth, tie) first.
+
+    Args:
+        capacity: Initial room [entries]; it doubles when full.
+    """
+
+    def __init__(self, capacity: int = 1024) -> None:
+        self._values = np.empty((capacity, 3))  # key, lower bound of f, g
+        self._order = np.empty((capacity, 3), dtype=np.int64)  # -depth, tie, id * 4 + stage
+        self._size = 0
+        self._tie = 0
+
+    def __len__(self) -> int:
+        return self._size
+
+    def push(self, key: float, neg_depth: int, lower: float, stage: int, g: float, ident: int) -> None:
+        """Enter a state (the next tie number breaks equal keys and depths first come, first served)."""
+        self._insert(key, neg_depth, self._tie, lower, stage, g, ident)
+        self._tie += 1
+
+    def restore(self, entry: Entry) -> None:
+        """Enter a popped entry again, with its own tie number."""
+        key, neg_depth, tie, lower, stage, g, ident = entry
+        self._insert(key, neg_depth, tie, lower, stage, g, ident)
+
+    def _insert(self, key: float, neg_depth: int, tie: int, lower: float, stage: int, g: float, ident: int) -> None:
+        if self._size == len(self._values):
+            self._values = np.concatenate([self._values, np.empty_like(self._values)])
+            self._order = np.concatenate([self._order, np.empty_like(self._order)])
+        pos = self._size
+        self._values[pos] = key, lower, g
+        self._order[pos] = neg_depth, tie, (ident << _STAGE_BITS) | stage
+        self._size += 1
+        _sift_up(self._values, self._order, pos)
+
+    def pop(self) -> Entry:
+        """Remove and return the first entry."""
+        if not self._size:
+            raise IndexError("pop from an empty open list")
+        entry = self._entry(0)
+        _pop_top(self._values, self._order, self._size)
+        self._size -= 1
+        return entry
+
+    def first_key(self) -> float:
+        """The first entry's key (inf when empty)."""
+        return float(self._values[0, 0]) if self._size else np.inf
+
+    def lowest_lower(self) -> float:
+        """The smallest lower bound of f over the open states (inf when empty)."""
+        return float(self._values[: self._size, 1].min()) if self._size else np.inf
+
+    def smallest_lower(self, count: int) -> list[Entry]:
+        """The ``count`` entries of smallest lower bounds of f, smallest first (ties in heap order)."""
+        ranked = np.argsort(self._values[: self._size, 1], kind="stable")[:count]
+        return [self._entry(int(i)) for i in ranked]
+
+    def first_of(self, ident: int) -> Entry:
+        """The first entry of a state id (by the open list's order)."""
+        slots = np.flatnonzero((self._order[: self._size, 2] >> _STAGE_BITS) == ident)
+        if not len(slots):
+            raise KeyError(f"state {ident} is not open")
+        best = int(slots[0])
+        for slot in slots[1:].tolist():
+            if _less(self._values, self._order, slot, best):
+                best = slot
+        return self._entry(best)
+
+    def _entry(self, slot: int) -> Entry:
+        key, lower, g = self._values[slot].tolist()
+        neg_depth, tie, packed = self._order[slot].tolist()
+        return key, neg_depth, tie, lower, packed & ((1 << _STAGE_BITS) - 1), g, packed >> _STAGE_BITS
