@@ -228,7 +228,7 @@ class SearchSpace:
             bounds = self.oracle.bounds
             value, level = state_bound(
                 np.array(sorted(state), dtype=np.int32),
-                bounds._wrenches,
+                self.contacts.wrenches,
                 bounds.directions,
                 bounds.count,
                 self._masks,
@@ -363,7 +363,7 @@ class SearchSpace:
             first_key,
             eps,
             report_grasps,
-            bounds._wrenches,
+            self.contacts.wrenches,
             bounds.directions,
             bounds.count,
             self._masks,
