@@ -108,7 +108,7 @@ class Search(ChildRefinement):
         self.stop = stop
         #: Called about every :data:`PROGRESS_SECONDS` with (best Q1 or None, certified bound) [-].
         self.on_progress: Callable[[float | None, float], object] = lambda best, bound: None
-        self._pending: dict[State, Pending] = {}
+        self._pending: dict[int, Pending] = {}  # by state id: an int key, not a tuple of nodes
         # Heuristic children are successors only on the expansion tree and without the
         # symmetry filter; otherwise only created terminal states become incumbents.
         self.children_can_win = self.heuristic_shares_tree and self.symmetry is None

@@ -47,7 +47,7 @@ class ChildRefinement(SearchSpace):
     q0: float
     eps: float
     children_can_win: bool
-    _pending: dict[State, Pending]
+    _pending: dict[int, Pending]
 
     def push(
         self,
@@ -89,7 +89,7 @@ class ChildRefinement(SearchSpace):
         if self.is_terminal(state) or self.heuristic_kind == "none":
             self.push(open_list, max(lower, g), depth, EXACT, g, ident, key=g)
             return
-        pending = self._pending.pop(state, None)
+        pending = self._pending.pop(ident, None)
         if pending is None:
             children, bounds, starts, terminal = self.heuristic_bounds(state)
             if not len(bounds):
@@ -113,7 +113,7 @@ class ChildRefinement(SearchSpace):
             if level == EXACT_Q1:
                 break
             if (1.0 + self.eps) * lower > open_list.first_key():
-                self._pending[state] = (children, bounds, levels, starts)
+                self._pending[ident] = (children, bounds, levels, starts)
                 self.push(open_list, lower, depth, PARTIAL, g, ident)
                 return
             child_key = tuple(children[i].tolist())
@@ -152,7 +152,7 @@ class ChildRefinement(SearchSpace):
             if outcome == SETTLED:
                 break
             if outcome == YIELD:
-                self._pending[state] = pending
+                self._pending[ident] = pending
                 self.push(open_list, lower, depth, PARTIAL, g, ident)
                 return
             if outcome == NEEDS_ROWS:
