@@ -1,12 +1,13 @@
 """A state's branch and bound over its Γh children, in numba, up to the next exact value.
 
-:meth:`planner.search.best_first.Search.refine` tightens the child of the largest upper
-bound, one level at a time (support bound, first facet bound, more facet bounds, exact
+:meth:`planner.search.refine.ChildRefinement.refine` tightens the child of the largest
+upper bound, one level at a time (support bound, first facet bound, more facet bounds, exact
 Q1: :meth:`planner.grasp.subset_quality.GraspQuality.tighten`), until the largest is
-exact or the state must go back to the open list. Most steps are facet bounds of 5-10 µs,
+exact or the state must go back to the open list. Most steps are facet bounds of 5-40 µs,
 which Python wrapped in 20 µs of dictionaries, tuples and small numpy calls, hundreds of
 thousands of times a minute. Here one call runs the loop until it needs an exact value,
-which stays with the Python oracle (its cache, its learned directions).
+which stays with the Python oracle (its cache, its learned directions), or the caller lets
+f settle on the facet bound instead.
 
 Facet bounds are remembered per child (its sorted node tuple) in :class:`ChildBounds`, an
 open-addressing table, the compiled counterpart of the oracle's store of facet bounds:
@@ -31,7 +32,7 @@ from planner.grasp.subset_quality import EXACT, FACET_STARTS
 #: caller fills them; only the ranked facet bounds read them).
 SETTLED, YIELD, NEEDS_EXACT, GRASP_EXACT, NEEDS_ROWS = 0, 1, 2, 3, 4
 #: Slots of the table (a power of two); it starts afresh when half full, which costs
-#: recomputation only. 13 bytes a slot plus 4 per finger.
+#: recomputation only. 9 bytes a slot plus 4 per finger.
 TABLE_SLOTS = 1 << 20
 
 
@@ -144,7 +145,7 @@ def branch_and_bound(
 ) -> tuple[int, int, float]:
     """Tighten the largest of the children's upper bounds until the caller must act.
 
-    The loop of :meth:`planner.search.best_first.Search.refine`, step for step: the child
+    The loop of :meth:`planner.search.refine.ChildRefinement.refine`, step for step: the child
     of the largest bound (the first of equal ones) is tightened by one level, as
     :meth:`planner.grasp.subset_quality.GraspQuality.tighten` would, with the table in
     place of the oracle's store of facet bounds.
