@@ -1,9 +1,14 @@
 """Paper-scale timing table (the paper's Fig. 9): A*, WA*(eps) and ES per object.
 
-Run: ``python -m benchmarks.studies.paper_scale --out results/paper_scale [-n 1000] [--es]``.
+Run: ``python -m benchmarks.studies.paper_scale --out results/paper_scale [-n 1000] [--es]``;
+more fingers with ``--more-fingers 4,5,6 --more-fingers-objects bunny,plane [--time-limit S]``.
 Each finished run is appended to ``runs.csv`` at once, so an interrupted invocation resumes
-where it stopped (rows already present are skipped). ``table.md`` and ``table.csv`` hold
-minutes per object and method, plus created/visited states, b* and whether A* matched ES.
+where it stopped (rows already present are skipped). A search stopped by ``--time-limit`` is
+a row too, with status ``stopped`` and its certified bound. ``table.md`` and ``table.csv`` hold
+minutes per object and method, plus created/visited states, b*, whether A* matched ES, and
+for a search not proven optimal its status and the gap to its bound. Every row records the
+search's status, bound and peak memory; a ``runs.csv`` written before those columns existed
+is rewritten with them empty.
 """
 
 from __future__ import annotations
@@ -15,17 +20,49 @@ from pathlib import Path
 
 from planner import GraspPlanner, sample_contacts
 from planner.baselines.es import ExhaustiveSearch
+from planner.config.options import MAX_TIME_LIMIT
 from planner.grasp.reach import default_tip_radius
 from planner.objects.resolve import resolve_object
 
-FIELDS = ("object", "n", "m", "method", "eps", "q1", "grasp", "created", "visited", "b_star", "wall_s", "cpu_s")
+FIELDS = (
+    "object",
+    "n",
+    "m",
+    "method",
+    "eps",
+    "q1",
+    "grasp",
+    "created",
+    "visited",
+    "b_star",
+    "wall_s",
+    "cpu_s",
+    "status",
+    "bound",
+    "peak_mib",
+)
 
 
 def _read_rows(path: Path) -> list[dict[str, str]]:
+    """The rows of ``runs.csv``; a file of older columns is first rewritten with the new ones empty."""
     if not path.exists():
         return []
     with open(path, newline="") as handle:
-        return list(csv.DictReader(handle))
+        reader = csv.DictReader(handle)
+        rows = list(reader)
+        header = tuple(reader.fieldnames or ())
+    if header != FIELDS:
+        unknown = sorted(set(header) - set(FIELDS))
+        if unknown:
+            raise SystemExit(f"paper_scale: {path} has columns this version does not know: {', '.join(unknown)}")
+        rows = [{key: row.get(key) or "" for key in FIELDS} for row in rows]
+        partial = path.with_suffix(".csv.partial")
+        with open(partial, "w", newline="") as handle:
+            writer = csv.DictWriter(handle, fieldnames=FIELDS)
+            writer.writeheader()
+            writer.writerows(rows)
+        partial.replace(path)
+    return rows
 
 
 def _append(path: Path, row: dict[str, object]) -> None:
@@ -67,7 +104,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--jobs", type=int, default=2, help="processes for ES")
     parser.add_argument("--more-fingers", default="4,5,6", help="m values for the extra A* runs")
     parser.add_argument("--more-fingers-objects", default="", help="objects for the extra m runs")
+    parser.add_argument(
+        "--time-limit", type=float, default=None, help="wall seconds per A* / WA* search; a stopped search is a row too"
+    )
     args = parser.parse_args(argv)
+    if args.time_limit is not None and not 0 < args.time_limit <= MAX_TIME_LIMIT:
+        parser.error(f"--time-limit must be in (0, {MAX_TIME_LIMIT:g}] seconds, got {args.time_limit:g}")
     args.out.mkdir(parents=True, exist_ok=True)
     log = args.out / "runs.csv"
     done = {(r["object"], int(r["m"]), r["method"], float(r["eps"])) for r in _read_rows(log) if int(r["n"]) == args.n}
@@ -82,8 +124,12 @@ def main(argv: list[str] | None = None) -> int:
             es = ExhaustiveSearch(jobs=args.jobs, checkpoint=args.out / f"es_{name}_{args.n}", progress=True)
             r = es.run(contacts, m)
             row = {"created": "", "visited": "", "b_star": "", "wall_s": r.wall_seconds, "cpu_s": r.cpu_seconds}
+            row.update({"status": "optimal", "bound": r.q1, "peak_mib": ""})  # exhaustive: its own bound
         else:
-            r = GraspPlanner(method=method, eps=eps if method == "wastar" else None, seed=args.seed).plan(contacts, m)
+            planner = GraspPlanner(
+                method=method, eps=eps if method == "wastar" else None, seed=args.seed, time_limit=args.time_limit
+            )
+            r = planner.plan(contacts, m)
             s = r.stats
             row = {
                 "created": s.created,
@@ -91,6 +137,9 @@ def main(argv: list[str] | None = None) -> int:
                 "b_star": round(s.effective_branching_factor, 3),
                 "wall_s": s.wall_seconds,
                 "cpu_s": s.cpu_seconds,
+                "status": r.status,
+                "bound": r.bound,
+                "peak_mib": round(s.peak_rss_bytes / 2**20),
             }
         row.update(
             {
@@ -142,6 +191,9 @@ def write_tables(rows: list[dict[str, str]], out: Path, n: int) -> None:
                 es = index.get((name, "es", 0.0, 3))
                 if method == "astar" and m == 3 and es is not None:
                     extra += " A* = ES" if float(es["q1"]) == float(r["q1"]) else " A* != ES"
+                if r.get("status") in ("stopped", "interrupted") and r.get("bound"):
+                    gap = 1.0 - float(r["q1"]) / float(r["bound"]) if float(r["bound"]) > 0 else 0.0
+                    extra += f" {r['status']}, gap {100 * gap:.1f} %"
                 cells.append(f"{minutes:.2f}{extra}")
                 csv_cells.append(f"{minutes:.4f}")
             lines.append(f"| {label(method, eps, m)} | " + " | ".join(cells) + " |")
