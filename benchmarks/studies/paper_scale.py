@@ -4,7 +4,8 @@ Run: ``python -m benchmarks.studies.paper_scale --out results/paper_scale [-n 10
 more fingers with ``--more-fingers 4,5,6 --more-fingers-objects bunny,plane [--time-limit S]``.
 Each finished run is appended to ``runs.csv`` at once, so an interrupted invocation resumes
 where it stopped (rows already present are skipped). A search stopped by ``--time-limit`` is
-a row too, with status ``stopped`` and its certified bound. ``table.md`` and ``table.csv`` hold
+a row too, with status ``stopped`` and its certified bound; ``--retry-stopped`` runs it again
+(with a longer ``--time-limit``), and the table takes the newer row. ``table.md`` and ``table.csv`` hold
 minutes per object and method, plus created/visited states, b*, whether A* matched ES, and
 for a search not proven optimal its status and the gap to its bound. Every row records the
 search's status, bound and peak memory; a ``runs.csv`` written before those columns existed
@@ -107,12 +108,20 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--time-limit", type=float, default=None, help="wall seconds per A* / WA* search; a stopped search is a row too"
     )
+    parser.add_argument(
+        "--retry-stopped", action="store_true", help="run again the searches recorded as stopped (the last row counts)"
+    )
     args = parser.parse_args(argv)
     if args.time_limit is not None and not 0 < args.time_limit <= MAX_TIME_LIMIT:
         parser.error(f"--time-limit must be in (0, {MAX_TIME_LIMIT:g}] seconds, got {args.time_limit:g}")
     args.out.mkdir(parents=True, exist_ok=True)
     log = args.out / "runs.csv"
-    done = {(r["object"], int(r["m"]), r["method"], float(r["eps"])) for r in _read_rows(log) if int(r["n"]) == args.n}
+    unfinished = ("stopped", "interrupted") if args.retry_stopped else ()
+    done = {
+        (r["object"], int(r["m"]), r["method"], float(r["eps"]))
+        for r in _read_rows(log)
+        if int(r["n"]) == args.n and r["status"] not in unfinished
+    }
     for name, m, method, eps in runs(args):
         if (name, m, method, eps) in done:
             continue

@@ -43,6 +43,12 @@ def test_a_stopped_search_is_a_row_with_its_gap(tmp_path, monkeypatch):
     (row,) = _rows(tmp_path)
     assert row["status"] == "stopped" and float(row["bound"]) > float(row["q1"])
     assert "stopped, gap" in (tmp_path / "table.md").read_text()
+    assert paper_scale.main(argv) == 0 and len(_rows(tmp_path)) == 1  # recorded: skipped
+    monkeypatch.undo()  # a real clock: the search now ends well inside the limit
+    assert paper_scale.main([*argv, "--retry-stopped"]) == 0
+    stopped, finished = _rows(tmp_path)
+    assert stopped == row and finished["status"] == "optimal" and float(finished["bound"]) == float(finished["q1"])
+    assert "stopped, gap" not in (tmp_path / "table.md").read_text()  # the newer row counts
 
 
 def test_a_runs_file_of_older_columns_is_rewritten_with_the_new_ones(tmp_path):
