@@ -16,6 +16,20 @@ import numpy as np
 from planner.grasp.kernel.jit import cached_njit
 
 
+@cached_njit(inline="always")
+def _listed(rows: np.ndarray, count: int, combo: np.ndarray) -> bool:
+    """Whether ``combo`` equals one of the first ``count`` rows."""
+    for r in range(count):
+        same = True
+        for j in range(combo.shape[0]):
+            if rows[r, j] != combo[j]:
+                same = False
+                break
+        if same:
+            return True
+    return False
+
+
 @cached_njit()
 def shared_tree_children(
     state: np.ndarray,
@@ -69,22 +83,13 @@ def shared_tree_children(
     prefix = np.empty((m, count))
     fresh_from = 0
     k = 0
-    rejected = np.empty((total, m), dtype=np.int64)
+    rejected = np.empty((total, m), dtype=np.int32)
     nrejected = 0
     for _ in range(total):
         for j in range(m):
             combo[j] = table[state[j], index[j]]
         combo.sort()
-        fresh = True
-        for r in range(k):
-            same = True
-            for j in range(m):
-                if keys[r, j] != combo[j]:
-                    same = False
-                    break
-            if same:
-                fresh = False
-                break
+        fresh = not _listed(keys, k, combo)
         # Distinct contacts: the nodes of a state are equal or disjoint, so a node may be
         # repeated at most as often as it has contacts.
         valid = fresh
@@ -95,20 +100,9 @@ def shared_tree_children(
             run = run + 1 if combo[j] == combo[j - 1] else 1
             if run > sizes[combo[j]]:
                 valid = False
-        if fresh and not valid:
-            seen = False
-            for r in range(nrejected):
-                same = True
-                for j in range(m):
-                    if rejected[r, j] != combo[j]:
-                        same = False
-                        break
-                if same:
-                    seen = True
-                    break
-            if not seen:
-                rejected[nrejected] = combo
-                nrejected += 1
+        if fresh and not valid and not _listed(rejected, nrejected, combo):
+            rejected[nrejected] = combo
+            nrejected += 1
         if valid:
             for j in range(fresh_from, m):
                 row = vectors[table[state[j], index[j]]]
