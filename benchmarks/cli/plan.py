@@ -171,7 +171,10 @@ def register(commands: Any) -> None:
     _add_contact_options(plan, None)
     es, hfts = groups.values()
     es.add_argument(
-        "--jobs", type=typed(JOBS), default=None, help=f"worker processes (default {DEFAULT_JOBS}; {valid(JOBS)})"
+        "--jobs",
+        type=typed(JOBS),
+        default=None,
+        help=f"worker processes; A*, WA* and Dijkstra deal one search to this many (default {DEFAULT_JOBS}; {valid(JOBS)})",
     )
     es.add_argument(
         "--backend", default=None, help=f"parallel backend: {', '.join(BACKENDS)} (default {DEFAULT_BACKEND})"

@@ -8,8 +8,9 @@ a row too, with status ``stopped`` and its certified bound; ``--retry-stopped`` 
 (with a longer ``--time-limit``), and the table takes the newer row. ``table.md`` and ``table.csv`` hold
 minutes per object and method, plus created/visited states, b*, whether A* matched ES, and
 for a search not proven optimal its status and the gap to its bound. Every row records the
-search's status, bound and peak memory; a ``runs.csv`` written before those columns existed
-is rewritten with them empty.
+search's status, bound, peak memory (summed over its processes) and processes
+(``--search-jobs``: one search dealt to that many, see :mod:`planner.search.parts`); a
+``runs.csv`` written before those columns existed is rewritten with them empty.
 """
 
 from __future__ import annotations
@@ -41,6 +42,7 @@ FIELDS = (
     "status",
     "bound",
     "peak_mib",
+    "jobs",
 )
 
 
@@ -103,6 +105,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--eps", default="0.4", help="comma-separated WA* eps values")
     parser.add_argument("--es", action="store_true", help="also run exhaustive search (long)")
     parser.add_argument("--jobs", type=int, default=2, help="processes for ES")
+    parser.add_argument(
+        "--search-jobs", type=int, default=1, help="processes for each A* / WA* search (planner.search.parts)"
+    )
     parser.add_argument("--more-fingers", default="4,5,6", help="m values for the extra A* runs")
     parser.add_argument("--more-fingers-objects", default="", help="objects for the extra m runs")
     parser.add_argument(
@@ -112,6 +117,8 @@ def main(argv: list[str] | None = None) -> int:
         "--retry-stopped", action="store_true", help="run again the searches recorded as stopped (the last row counts)"
     )
     args = parser.parse_args(argv)
+    if args.search_jobs < 1:
+        parser.error(f"--search-jobs must be >= 1, got {args.search_jobs}")
     if args.time_limit is not None and not 0 < args.time_limit <= MAX_TIME_LIMIT:
         parser.error(f"--time-limit must be in (0, {MAX_TIME_LIMIT:g}] seconds, got {args.time_limit:g}")
     args.out.mkdir(parents=True, exist_ok=True)
@@ -133,10 +140,14 @@ def main(argv: list[str] | None = None) -> int:
             es = ExhaustiveSearch(jobs=args.jobs, checkpoint=args.out / f"es_{name}_{args.n}", progress=True)
             r = es.run(contacts, m)
             row = {"created": "", "visited": "", "b_star": "", "wall_s": r.wall_seconds, "cpu_s": r.cpu_seconds}
-            row.update({"status": "optimal", "bound": r.q1, "peak_mib": ""})  # exhaustive: its own bound
+            row.update({"status": "optimal", "bound": r.q1, "peak_mib": "", "jobs": args.jobs})  # its own bound
         else:
             planner = GraspPlanner(
-                method=method, eps=eps if method == "wastar" else None, seed=args.seed, time_limit=args.time_limit
+                method=method,
+                eps=eps if method == "wastar" else None,
+                seed=args.seed,
+                time_limit=args.time_limit,
+                jobs=args.search_jobs,
             )
             r = planner.plan(contacts, m)
             s = r.stats
@@ -149,6 +160,7 @@ def main(argv: list[str] | None = None) -> int:
                 "status": r.status,
                 "bound": r.bound,
                 "peak_mib": round(s.peak_rss_bytes / 2**20),
+                "jobs": args.search_jobs,
             }
         row.update(
             {

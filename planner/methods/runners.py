@@ -42,7 +42,8 @@ class RunOptions:
     Attributes:
         time_limit: Wall-clock budget of A*, WA* and Dijkstra [s]; None: unlimited.
         progress: Show a progress bar on stderr (search, exhaustive search).
-        jobs: Worker processes (exhaustive search, HFTS).
+        jobs: Worker processes (exhaustive search, HFTS); for A*, WA* and Dijkstra the
+            processes one search is dealt to (:mod:`planner.search.parts`).
         backend: Parallel backend ``loky`` or ``dask`` (exhaustive search, HFTS).
         address: Dask scheduler ``HOST:PORT`` (backend ``dask``).
         checkpoint: Directory of finished chunks, so a rerun resumes (exhaustive search).
@@ -121,7 +122,11 @@ def run_search(config: AStarConfig, contacts: ContactSet, m: int, options: RunOp
     """
     constraints, hand = constraints_of(config, m)
     planner = GraspPlanner(
-        method=config.method, constraints=constraints, time_limit=options.time_limit, **engine_arguments(config)
+        method=config.method,
+        constraints=constraints,
+        time_limit=options.time_limit,
+        jobs=options.jobs,
+        **engine_arguments(config),
     )
     result = planner.plan(contacts, m, progress=options.progress, stop=options.stop)
     return MethodRun(result, add_hand(result.to_dict(contact_set_record(contacts)), hand, contacts))

@@ -40,6 +40,7 @@ import numpy as np
 from planner.grasp.constraints import Constraint
 from planner.grasp.contact_set import ContactSet
 from planner.infra.errors import OgcpError, SearchTimeout
+from planner.search.deal import Board, Part, PartDone
 from planner.search.open_list import OpenList
 from planner.search.refine import BOUND, EXACT, EXACT_G, ChildRefinement, Pending
 from planner.search.result import (
@@ -90,6 +91,7 @@ class Search(ChildRefinement):
         time_limit: Wall-clock budget [s]; None: unlimited.
         stop: Set by another thread (or a signal handler) to stop the search; it then
             returns like at its time limit, with status ``interrupted``.
+        part: Search only this part of the grasps (:mod:`planner.search.parts`); None: all.
     """
 
     def __init__(
@@ -100,9 +102,11 @@ class Search(ChildRefinement):
         constraints: list[Constraint],
         record_tree: bool = False,
         time_limit: float | None = None,
-        stop: threading.Event | None = None,
+        stop: threading.Event | Board | None = None,
+        part: Part | None = None,
     ) -> None:
         super().__init__(contacts, m, config, constraints)
+        self.part = part
         self.eps = config["eps"]
         self.time_limit = time_limit
         self.stop = stop
@@ -127,6 +131,7 @@ class Search(ChildRefinement):
         self.created: dict[int, int] = {0: 1}
         self.visited: dict[int, int] = {}
         self.trace: list[tuple[int, float]] = []
+        self._clock = (time.perf_counter(), time.process_time())  # (wall, cpu) at the start of run [s]
 
     def push(
         self,
@@ -161,6 +166,8 @@ class Search(ChildRefinement):
         """A terminal state's exact Q1: keep it if it beats the incumbent (ties: the first)."""
         if self.incumbent is None or q > self.incumbent.q:
             self.incumbent = Incumbent(q, state, parent, ident)
+            if self.part is not None:
+                self.part.publish(q)
 
     def run(self) -> SearchResult:
         wall0, cpu0 = time.perf_counter(), time.process_time()
@@ -171,14 +178,20 @@ class Search(ChildRefinement):
         self.push(open_list, 0.0, 0, EXACT_G, 0.0, 0)
         deadline = math.inf if self.time_limit is None else wall0 + self.time_limit
         next_report = wall0 + PROGRESS_SECONDS
-        stop = self.stop
+        stop, part = self.stop, self.part
+        self._clock = (wall0, cpu0)
         while open_list:
             now = time.perf_counter()  # one reading per iteration (tests drive a fake clock)
             if now > deadline or (stop is not None and stop.is_set()):
-                return self.stopped(open_list, wall0, cpu0)
+                return self.stopped(open_list)
             if now >= next_report:
                 next_report = now + PROGRESS_SECONDS
-                self.on_progress(None if self.incumbent is None else self.incumbent.q, self.quick_bound(open_list))
+                self.report_progress(open_list)
+            if part is not None and part.beaten(q0 - open_list.first_key() / (1.0 + self.eps)):
+                # Nothing left in this part beats a grasp some part has found.
+                if self.incumbent is None:
+                    raise PartDone(self.q0 - open_list.lowest_lower())
+                return self.finish(open_list)
             entry = open_list.pop()
             key, neg_depth, _, lower, stage, g, ident = entry
             state = self.state_of(ident)
@@ -204,9 +217,20 @@ class Search(ChildRefinement):
                 if self.incumbent is None or not self.incumbent.q > q:
                     self.incumbent = Incumbent(q, state, None, ident)
                 open_list.restore(entry)  # still open unless returned: the certificate counts it
-                return self.finish(open_list, wall0, cpu0)
+                return self.finish(open_list)
             self.expand(open_list, state, depth, key, lower, g, ident)
+        if part is not None:
+            raise PartDone(0.0)  # no valid grasp in this part
         raise OgcpError("no grasp satisfies the constraints")
+
+    def report_progress(self, open_list: OpenList) -> None:
+        """Call :attr:`on_progress` with the best Q1 and the certified bound (of all parts) [-]."""
+        bound = self.quick_bound(open_list)
+        if self.part is None:
+            self.on_progress(None if self.incumbent is None else self.incumbent.q, bound)
+            return
+        self.part.report(bound)
+        self.on_progress(*self.part.overall())
 
     def quick_bound(self, open_list: OpenList) -> float:
         """A certified upper bound on the optimum in O(1), looser than the final one for WA*.
@@ -219,7 +243,7 @@ class Search(ChildRefinement):
             return best
         return min(self.q0, max(best, self.q0 - open_list.first_key() / (1.0 + self.eps)))
 
-    def stopped(self, open_list: OpenList, wall0: float, cpu0: float) -> SearchResult:
+    def stopped(self, open_list: OpenList) -> SearchResult:
         """The result of a search stopped before its goal test: the best grasp and its certificate.
 
         Raises:
@@ -235,7 +259,7 @@ class Search(ChildRefinement):
             upper = self.q0 - open_list.lowest_lower()
             seconds = None if status == "interrupted" or self.time_limit is None else float(self.time_limit)
             raise SearchTimeout(self.config["method"], seconds, sum(self.visited.values()), None, upper)
-        result = self.result(inc, self.q0 - inc.q, open_list, wall0, cpu0)
+        result = self.result(inc, self.q0 - inc.q, open_list)
         # The incumbent may already beat every open bound: then it is proven optimal.
         if result.bound <= result.q1:
             return result  # the incumbent already beats every open bound: proven, as if finished
@@ -279,8 +303,11 @@ class Search(ChildRefinement):
         # f when the heuristic uses the expansion tree (consistency, Thm. III.2b).
         inherited = lower if self.heuristic_shares_tree else g
         q0 = self.q0
+        part = self.part
         for child, upper in zip(*self.successors_with_bounds(state), strict=True):
             child_depth = self.depth(child)
+            if part is not None and child_depth == part.depth and not part.owns(self.first_contacts(child)):
+                continue
             self.created[child_depth] = self.created.get(child_depth, 0) + 1
             child_id = ids[child] = next(self._ids)
             self.remember(child_id, child)
@@ -299,7 +326,7 @@ class Search(ChildRefinement):
             self.incumbent = Incumbent(inc.q, inc.state, None, child_id)
         return ids
 
-    def finish(self, open_list: OpenList, wall0: float, cpu0: float) -> SearchResult:
+    def finish(self, open_list: OpenList) -> SearchResult:
         """Return the incumbent, expanding the state that found it if it is not created yet."""
         inc = self.incumbent
         assert inc is not None
@@ -320,9 +347,9 @@ class Search(ChildRefinement):
         if self.record_tree:
             self._visited[inc.ident] = True
             self._f[inc.ident] = g
-        return self.result(inc, g, open_list, wall0, cpu0)
+        return self.result(inc, g, open_list)
 
-    def result(self, inc: Incumbent, g: float, open_list: OpenList, wall0: float, cpu0: float) -> SearchResult:
+    def result(self, inc: Incumbent, g: float, open_list: OpenList) -> SearchResult:
         q0, q, state = self.q0, inc.q, inc.state
         # Every unexplored grasp lies below an open state, whose stored value bounds its cost.
         lowest_f = min(g, open_list.lowest_lower())
@@ -331,12 +358,32 @@ class Search(ChildRefinement):
         bound = q if lowest_f >= g else max(q, q0 - lowest_f)
         eps_bound = q0 - (q0 - q) / (1.0 + self.eps)
         grasp = tuple(sorted(int(self.tree.members[node][0]) for node in state))
+        idx = np.array(grasp, dtype=np.intp)
+        return SearchResult(
+            method=self.config["method"],
+            grasp=grasp,
+            positions=self.contacts.positions[idx].copy(),
+            normals=self.contacts.normals[idx].copy(),
+            q1=q,
+            q_ows=q0,
+            bound=bound,
+            eps=self.eps,
+            eps_bound=eps_bound,
+            stats=self.statistics(self.depth(state)),
+            config=self.config,
+            contact_source=self.contacts.source,
+            tree=self.search_tree(inc.ident) if self.record_tree else None,
+            status=self.finished_status(q, bound),
+        )
+
+    def statistics(self, solution_depth: int) -> SearchStats:
+        """The statistics of the run so far, for a solution at this depth."""
+        wall0, cpu0 = self._clock
         created, visited = self.created, self.visited
         levels = max(max(created), max(visited, default=0)) + 1
-        solution_depth = self.depth(state)
         table = self.child_bounds
         table_facet_bounds, table_rejections = (0, 0) if table is None else (table.facet_bounds, table.rejections)
-        stats = SearchStats(
+        return SearchStats(
             created=sum(created.values()),
             visited=sum(visited.values()),
             created_per_level=tuple(created.get(i, 0) for i in range(levels)),
@@ -355,23 +402,6 @@ class Search(ChildRefinement):
             cpu_seconds=time.process_time() - cpu0,
             peak_rss_bytes=peak_rss_bytes(),
             facet_bounds=self.oracle.facet_bounds + table_facet_bounds,
-        )
-        idx = np.array(grasp, dtype=np.intp)
-        return SearchResult(
-            method=self.config["method"],
-            grasp=grasp,
-            positions=self.contacts.positions[idx].copy(),
-            normals=self.contacts.normals[idx].copy(),
-            q1=q,
-            q_ows=q0,
-            bound=bound,
-            eps=self.eps,
-            eps_bound=eps_bound,
-            stats=stats,
-            config=self.config,
-            contact_source=self.contacts.source,
-            tree=self.search_tree(inc.ident) if self.record_tree else None,
-            status=self.finished_status(q, bound),
         )
 
     def finished_status(self, q1: float, bound: float) -> str:

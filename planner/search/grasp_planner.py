@@ -51,12 +51,13 @@ from planner.config.methods import (
     SearchConfig,
     WAStarConfig,
 )
-from planner.config.options import TIME_LIMIT, options_of
+from planner.config.options import JOBS, TIME_LIMIT, options_of
 from planner.grasp.constraints import Constraint, DistinctContacts
 from planner.grasp.contact_set import ContactSet
 from planner.infra.errors import OgcpError, choice_error
 from planner.infra.provenance import provenance
 from planner.search.best_first import Search
+from planner.search.parts import search_in_parts
 from planner.search.result import SearchResult
 
 METHODS = tuple(sorted(SEARCH_CONFIGS))
@@ -90,6 +91,8 @@ class GraspPlanner:
         time_limit: Wall-clock budget of :meth:`plan` [s]; past it the search returns the
             best grasp found with status ``stopped`` and the certified upper bound on the
             optimum (``bound``, ``gap``). None: unlimited.
+        jobs: Processes for one search (:mod:`planner.search.parts`): the grasps are dealt to
+            ``jobs`` parts searched side by side. A* returns an optimal grasp either way.
     """
 
     def __init__(
@@ -108,6 +111,7 @@ class GraspPlanner:
         constraints: Sequence[Constraint] = (),
         record_tree: bool = SearchConfig.record_tree,
         time_limit: float | None = None,
+        jobs: int = 1,
     ) -> None:
         self.method = method
         self.eps = eps
@@ -123,6 +127,7 @@ class GraspPlanner:
         self.constraints = constraints
         self.record_tree = record_tree
         self.time_limit = time_limit
+        self.jobs = jobs
 
     def resolved_config(self) -> dict[str, Any]:
         """Validate the parameters (by the method's configuration class) and fill in its defaults.
@@ -194,6 +199,22 @@ class GraspPlanner:
             raise OgcpError(f"time_limit must be a number of seconds > 0 or None, got {limit!r}")
         if limit is not None:
             TIME_LIMIT.check("time_limit", limit)
+        jobs = JOBS.check("jobs", self.jobs)
+        if jobs > 1 and self.record_tree:
+            raise OgcpError("record_tree needs jobs = 1: each part of a search keeps a tree of its own")
+        if jobs > 1:
+            with tqdm(desc=config["method"], unit=" expansions", disable=not progress, leave=False) as bar:
+                return search_in_parts(
+                    contacts,
+                    int(m),
+                    config,
+                    [DistinctContacts(), *self.constraints],
+                    jobs,
+                    None if limit is None else float(limit),
+                    stop,
+                    on_expand=lambda f: bar.update(),
+                    on_progress=lambda best, bound: bar.set_postfix_str(progress_text(best, bound)),
+                )
         search = Search(
             contacts,
             int(m),

@@ -16,6 +16,7 @@ from numpy.typing import NDArray
 
 from planner.grasp.subset_quality import EXACT as EXACT_Q1
 from planner.infra.tolerance import TOL
+from planner.search.deal import Part
 from planner.search.open_list import OpenList
 from planner.search.refine_kernel import NEEDS_EXACT, NEEDS_ROWS, SETTLED, YIELD
 from planner.search.search_space import SearchSpace, State
@@ -47,6 +48,7 @@ class ChildRefinement(SearchSpace):
     q0: float
     eps: float
     children_can_win: bool
+    part: Part | None
     _pending: dict[int, Pending]
 
     def push(
@@ -186,5 +188,9 @@ class ChildRefinement(SearchSpace):
         return bounds.count >= bounds.capacity and not self.wins(child)
 
     def wins(self, child: State | None) -> TypeGuard[State]:
-        """Whether a heuristic child is a grasp that may become the incumbent."""
-        return child is not None and self.children_can_win and self.is_terminal(child)
+        """Whether a heuristic child is a grasp that may become the incumbent (one of this
+        part's: the incumbent must become a state of this part's tree)."""
+        if child is None or not self.children_can_win or not self.is_terminal(child):
+            return False
+        part = self.part
+        return part is None or self.depth(child) != part.depth or part.owns(self.first_contacts(child))

@@ -92,6 +92,10 @@ class SearchSpace:
     def depth(self, state: State) -> int:
         return max(self.tree.depth[node] for node in state)
 
+    def first_contacts(self, state: State) -> list[int]:
+        """The first (smallest) contact of each node: the same in every process, unlike node ids."""
+        return [int(self.tree.members[node].min()) for node in state]
+
     def is_terminal(self, state: State) -> bool:
         return self.tree.leaves.issuperset(state)
 

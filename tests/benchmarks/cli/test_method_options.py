@@ -62,7 +62,7 @@ def _run(argv: list[str]) -> tuple[int, str, str]:
         (["--method", "hfts", "--max-spread", "0.1"], "--max-spread applies to methods astar, dijkstra, wastar, es"),
         (["--method", "es-pruned", "--bins", "7"], "--bins applies to method 'es' only"),
         (["--method", "astar", "--runs", "3"], "--runs applies to method 'hfts' only"),
-        (["--method", "astar", "--jobs", "2"], "--jobs applies to methods es, es-pruned, hfts only"),
+        (["--method", "astar", "--backend", "dask"], "--backend applies to methods es, es-pruned, hfts only"),
         (["--method", "es", "--no-optimum"], "--no-optimum applies to method 'hfts' only"),
         (["--method", "astar", "--hand-threshold", "0.2"], "hand_threshold: applies only with hand = 'sdh'"),
         (["--method", "hfts", "--runs", "0"], "runs: expected an integer >= 1, got 0"),
