@@ -32,7 +32,6 @@ import math
 import threading
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -42,14 +41,9 @@ from planner.grasp.contact_set import ContactSet
 from planner.infra.errors import OgcpError, SearchTimeout
 from planner.search.deal import Board, Part, PartDone
 from planner.search.open_list import OpenList
-from planner.search.refine import BOUND, EXACT, EXACT_G, ChildRefinement, Pending
-from planner.search.result import (
-    SearchResult,
-    SearchStats,
-    SearchTree,
-    effective_branching_factor,
-    peak_rss_bytes,
-)
+from planner.search.outcome import Incumbent, SearchOutcome
+from planner.search.refine import BOUND, EXACT, EXACT_G, Pending
+from planner.search.result import SearchResult
 from planner.search.search_space import State
 
 #: Iterations between two looks at the clock for progress reports (a report costs nothing
@@ -59,27 +53,13 @@ PROGRESS_SECONDS = 0.5
 DIVE_BUDGET = 20_000
 #: Open states a dive starts from, most promising first.
 DIVE_STARTS = 16
+#: [-] A state is dropped once its lower bound of f exceeds the best grasp's cost by this much:
+#: its bounds come from other arithmetic than the grasp's exact Q1, and the state that holds the
+#: best grasp must never go.
+DROP_MARGIN = 1e-9
 
 
-@dataclass(frozen=True)
-class Incumbent:
-    """The best grasp evaluated so far.
-
-    Attributes:
-        q: Its exact Q1 [-].
-        state: Its terminal state (sorted node tuple).
-        parent: The unexpanded state whose branch and bound found it; None once the
-            grasp is a created state.
-        ident: Id of the created state, or of the parent.
-    """
-
-    q: float
-    state: State
-    parent: State | None
-    ident: int
-
-
-class Search(ChildRefinement):
+class Search(SearchOutcome):
     """One search run: the open list, the incumbent, the statistics and the tree record.
 
     Args:
@@ -131,6 +111,9 @@ class Search(ChildRefinement):
         self.created: dict[int, int] = {0: 1}
         self.visited: dict[int, int] = {}
         self.trace: list[tuple[int, float]] = []
+        #: States whose lower bound of f exceeds this hold no grasp better than the best one found.
+        self.cutoff = math.inf
+        self.dropped = 0
         self._clock = (time.perf_counter(), time.process_time())  # (wall, cpu) at the start of run [s]
 
     def push(
@@ -144,7 +127,13 @@ class Search(ChildRefinement):
         key: float | None = None,
     ) -> None:
         """Enter a state by its id (:meth:`remember` holds the state); the key defaults to (1 + eps)
-        times its lower bound of f."""
+        times its lower bound of f. A state past :attr:`cutoff` is dropped instead, with any
+        branch and bound it had under way: at m >= 5 most states end up there, and the
+        certificate needs none of them (every grasp below them is no better than the best one)."""
+        if lower > self.cutoff:
+            self._pending.pop(ident, None)
+            self.dropped += 1
+            return
         if self.record_tree:
             self._f[ident] = lower
         key = (1.0 + self.eps) * lower if key is None else key
@@ -166,6 +155,7 @@ class Search(ChildRefinement):
         """A terminal state's exact Q1: keep it if it beats the incumbent (ties: the first)."""
         if self.incumbent is None or q > self.incumbent.q:
             self.incumbent = Incumbent(q, state, parent, ident)
+            self.cutoff = min(self.cutoff, self.q0 - q + DROP_MARGIN)
             if self.part is not None:
                 self.part.publish(q)
 
@@ -230,7 +220,10 @@ class Search(ChildRefinement):
             self.on_progress(None if self.incumbent is None else self.incumbent.q, bound)
             return
         self.part.report(bound)
-        self.on_progress(*self.part.overall())
+        best, overall = self.part.overall()
+        if best is not None:  # another part's grasp may drop states here too
+            self.cutoff = min(self.cutoff, self.q0 - best + DROP_MARGIN)
+        self.on_progress(best, min(self.q0, overall))  # inf until every part has reported
 
     def quick_bound(self, open_list: OpenList) -> float:
         """A certified upper bound on the optimum in O(1), looser than the final one for WA*.
@@ -330,10 +323,10 @@ class Search(ChildRefinement):
         """Return the incumbent, expanding the state that found it if it is not created yet."""
         inc = self.incumbent
         assert inc is not None
-        if inc.parent is not None:
-            # The parent is still on the open list (not expanded, never dropped).
-            entry = open_list.first_of(inc.ident)
-            key, neg_depth, _, lower, _, g, ident = entry
+        if inc.parent is not None and open_list.holds(inc.ident):
+            # The parent is still on the open list (not expanded; dropped only for a better
+            # grasp of another part, and then this part's grasp is not the result).
+            key, neg_depth, _, lower, _, g, ident = open_list.first_of(inc.ident)
             state = self.state_of(ident)
             self.expand(open_list, state, -neg_depth, key, lower, g, ident)
             # Expanding the parent created the grasp's state and re-offered it.
@@ -348,77 +341,3 @@ class Search(ChildRefinement):
             self._visited[inc.ident] = True
             self._f[inc.ident] = g
         return self.result(inc, g, open_list)
-
-    def result(self, inc: Incumbent, g: float, open_list: OpenList) -> SearchResult:
-        q0, q, state = self.q0, inc.q, inc.state
-        # Every unexplored grasp lies below an open state, whose stored value bounds its cost.
-        lowest_f = min(g, open_list.lowest_lower())
-        # Nothing open below the returned cost: the grasp is optimal (q0 - (q0 - q) may
-        # round above q, so do not recompute it).
-        bound = q if lowest_f >= g else max(q, q0 - lowest_f)
-        eps_bound = q0 - (q0 - q) / (1.0 + self.eps)
-        grasp = tuple(sorted(int(self.tree.members[node][0]) for node in state))
-        idx = np.array(grasp, dtype=np.intp)
-        return SearchResult(
-            method=self.config["method"],
-            grasp=grasp,
-            positions=self.contacts.positions[idx].copy(),
-            normals=self.contacts.normals[idx].copy(),
-            q1=q,
-            q_ows=q0,
-            bound=bound,
-            eps=self.eps,
-            eps_bound=eps_bound,
-            stats=self.statistics(self.depth(state)),
-            config=self.config,
-            contact_source=self.contacts.source,
-            tree=self.search_tree(inc.ident) if self.record_tree else None,
-            status=self.finished_status(q, bound),
-        )
-
-    def statistics(self, solution_depth: int) -> SearchStats:
-        """The statistics of the run so far, for a solution at this depth."""
-        wall0, cpu0 = self._clock
-        created, visited = self.created, self.visited
-        levels = max(max(created), max(visited, default=0)) + 1
-        table = self.child_bounds
-        table_facet_bounds, table_rejections = (0, 0) if table is None else (table.facet_bounds, table.rejections)
-        return SearchStats(
-            created=sum(created.values()),
-            visited=sum(visited.values()),
-            created_per_level=tuple(created.get(i, 0) for i in range(levels)),
-            visited_per_level=tuple(visited.get(i, 0) for i in range(levels)),
-            q1_evaluations=self.oracle.evaluations,
-            q1_cache_hits=self.oracle.cache_hits,
-            bound_evaluations=self.bound_evaluations,
-            bound_rejections=self.oracle.bound_rejections + table_rejections,
-            hull_calls=self.oracle.hull_calls,
-            pruned=self.pruned,
-            symmetric_removed=self.symmetry.removed if self.symmetry else 0,
-            effective_branching_factor=effective_branching_factor(sum(created.values()) - 1, solution_depth),
-            solution_depth=solution_depth,
-            trace=tuple(self.trace),
-            wall_seconds=time.perf_counter() - wall0,
-            cpu_seconds=time.process_time() - cpu0,
-            peak_rss_bytes=peak_rss_bytes(),
-            facet_bounds=self.oracle.facet_bounds + table_facet_bounds,
-        )
-
-    def finished_status(self, q1: float, bound: float) -> str:
-        """What a finished search certifies (see :data:`~planner.search.result.SEARCH_STATUSES`)."""
-        if self.symmetry is not None:
-            return "approximate"  # the bound covers the symmetry-reduced space only
-        return "optimal" if bound <= q1 else "bounded"
-
-    def search_tree(self, goal: int) -> SearchTree:
-        """The recorded tree, with the path from the root to ``goal``."""
-        path = [goal]
-        while self._parent[path[-1]] >= 0:
-            path.append(self._parent[path[-1]])
-        return SearchTree(
-            parent=tuple(self._parent),
-            level=tuple(self._level),
-            visited=tuple(self._visited),
-            f=tuple(self._f),
-            path=tuple(reversed(path)),
-        )

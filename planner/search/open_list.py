@@ -123,6 +123,10 @@ class OpenList:
         ranked = np.argsort(self._values[: self._size, 1], kind="stable")[:count]
         return [self._entry(int(i)) for i in ranked]
 
+    def holds(self, ident: int) -> bool:
+        """Whether a state id has an entry."""
+        return bool(((self._order[: self._size, 2] >> _STAGE_BITS) == ident).any())
+
     def first_of(self, ident: int) -> Entry:
         """The first entry of a state id (by the open list's order)."""
         slots = np.flatnonzero((self._order[: self._size, 2] >> _STAGE_BITS) == ident)

@@ -13,6 +13,7 @@ them through the shared board) and end with their parent.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import os
 import pickle
@@ -131,9 +132,12 @@ def search_in_parts(
         children: list[subprocess.Popen[bytes]] = []
         outcomes: list[PartOutcome] = []
         try:
+            # The child imports this very planner, wherever it was imported from here.
+            root = str(Path(__file__).resolve().parents[2])
+            env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [root, os.environ.get("PYTHONPATH")]))}
             for rank in range(1, jobs):
                 command = [sys.executable, "-m", "planner.search.part_child", str(folder), str(rank), str(os.getpid())]
-                children.append(subprocess.Popen(command, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE))
+                children.append(subprocess.Popen(command, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, env=env))
             own_part = Part(0, board)
             search = Search(contacts, m, config, constraints, False, time_limit, stop, own_part)
             search.on_expand, search.on_progress = on_expand, on_progress
@@ -143,7 +147,8 @@ def search_in_parts(
                 board.set()  # the request ends the others (each part keeps the deadline itself)
             outcomes.append(own)
             for rank, child in enumerate(children, start=1):
-                outcomes.append(_wait(rank, child, board, stop, deadline, own_part, on_progress))
+                report = functools.partial(_report, own_part, search.q0, on_progress)
+                outcomes.append(_wait(rank, child, board, stop, deadline, report))
         finally:
             board.set()
             for child in children:
@@ -161,8 +166,7 @@ def _wait(
     board: Board,
     stop: threading.Event | None,
     deadline: float | None,
-    part: Part,
-    on_progress: Callable[[float | None, float], object],
+    report: Callable[[], object],
 ) -> PartOutcome:
     """A child's outcome, passing on the caller's stop request meanwhile (the child keeps the
     deadline itself)."""
@@ -179,7 +183,7 @@ def _wait(
         due = min(math.inf if deadline is None else deadline, math.inf if asked is None else asked)
         if time.time() > due + STOP_GRACE_S:
             raise OgcpError(f"search part {rank} did not stop within {STOP_GRACE_S:g} s of its time limit or request")
-        on_progress(*part.overall())
+        report()
     try:
         outcome = pickle.loads(output)
     except Exception:  # noqa: BLE001 - a child killed mid-write leaves anything behind
@@ -190,6 +194,11 @@ def _wait(
         raise OgcpError(f"search part {rank} returned a {type(outcome).__name__}, not its outcome")
     board.bounds[rank] = outcome.bound
     return outcome
+
+
+def _report(part: Part, q0: float, on_progress: Callable[[float | None, float], object]) -> None:
+    best, bound = part.overall()
+    on_progress(best, min(q0, bound))  # inf until every part has reported
 
 
 def child_main(folder: Path, rank: int) -> bytes:
@@ -267,4 +276,5 @@ def merged_stats(parts: list[SearchStats], winner: SearchResult, wall_seconds: f
         cpu_seconds=float(sum(s.cpu_seconds for s in parts)),
         peak_rss_bytes=total("peak_rss_bytes"),
         facet_bounds=total("facet_bounds"),
+        dropped=total("dropped"),
     )

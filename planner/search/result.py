@@ -52,6 +52,9 @@ class SearchStats:
             before the search; 0 where the platform does not report it).
         facet_bounds: Facet bounds of Q1 computed (each settles a state's child, or its g
             for A*, without an exact value when it is low enough).
+        dropped: Open-list entries not kept because their lower bound of f showed that no
+            grasp below the state beats the best grasp found (memory only: A* would never
+            pop them before its goal).
     """
 
     created: int
@@ -72,6 +75,7 @@ class SearchStats:
     cpu_seconds: float
     peak_rss_bytes: int = 0
     facet_bounds: int = 0
+    dropped: int = 0
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready form."""
@@ -94,6 +98,7 @@ class SearchStats:
             "cpu_seconds": self.cpu_seconds,
             "peak_rss_bytes": self.peak_rss_bytes,
             "facet_bounds": self.facet_bounds,
+            "dropped": self.dropped,
         }
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import os
 import threading
 from pathlib import Path
 
@@ -45,6 +46,20 @@ def test_parts_together_find_the_brute_force_optimum(name, n, m, seed, parts, de
     assert result.q1 == pytest.approx(exhaustive_best(contacts, m), abs=1e-9)
     assert result.status == "optimal" and result.bound == result.q1
     assert result.stats.visited == sum(o.stats.visited for o in outcomes)
+
+
+@pytest.mark.parametrize("method,eps", [("wastar", 0.5), ("dijkstra", None)])
+def test_parts_keep_the_guarantee_of_wastar_and_dijkstra(method, eps, object_contacts, tmp_path):
+    contacts = object_contacts("amphora", 26, 2)
+    config = _config(method, eps, seed=2) | {"m": 3}
+    outcomes = _parts_in_turn(contacts, 3, config, tmp_path / "board", 2, 2)
+    q0 = max(o.result.q_ows for o in outcomes if o.result is not None)
+    result = merge(outcomes, config, q0, 1.0, None)
+    best = exhaustive_best(contacts, 3)
+    assert result.q1 <= best <= result.bound + 1e-12
+    assert q0 - result.q1 <= (1.0 + (eps or 0.0)) * (q0 - best) + 1e-12
+    if method == "dijkstra":
+        assert result.q1 == pytest.approx(best, abs=1e-9) and result.status == "optimal"
 
 
 def test_a_part_beaten_by_another_stops_early(object_contacts, tmp_path):
@@ -108,15 +123,17 @@ def test_merge_takes_the_best_grasp_and_the_largest_bound(object_contacts):
 
 
 def _part_children() -> list[int]:
-    """Pids of live ``planner.search.part_child`` processes of this user (Linux /proc)."""
+    """Pids of this process's live ``planner.search.part_child`` children (Linux /proc)."""
     found = []
     for entry in Path("/proc").iterdir():
         if entry.name.isdigit():
             try:
-                if b"planner.search.part_child" in (entry / "cmdline").read_bytes():
-                    found.append(int(entry.name))
-            except OSError:
-                pass
+                command = (entry / "cmdline").read_bytes()
+                parent = int((entry / "stat").read_text().rsplit(")", 1)[1].split()[1])
+            except (OSError, ValueError, IndexError):
+                continue  # ended meanwhile
+            if b"planner.search.part_child" in command and parent == os.getpid():
+                found.append(int(entry.name))
     return found
 
 

@@ -242,3 +242,16 @@ def test_a_search_stopped_before_any_valid_grasp_raises(object_contacts):
     stop.set()
     with pytest.raises(SearchTimeout, match="stopped by request after 0 expansions"):
         GraspPlanner(constraints=[_Nothing()]).plan(contacts, 3, stop=stop)
+
+
+@pytest.mark.parametrize("name", ["amphora", "sphere"])
+def test_dropping_states_past_the_best_grasp_changes_nothing_but_memory(name, object_contacts, optimum, monkeypatch):
+    """A* pops no state whose lower bound of f exceeds its goal's: dropping them keeps every expansion."""
+    contacts = object_contacts(name, 26, 2)
+    dropping = GraspPlanner(seed=2).plan(contacts, 3)
+    monkeypatch.setattr(search_run, "DROP_MARGIN", math.inf)  # the cutoff never falls: nothing dropped
+    keeping = GraspPlanner(seed=2).plan(contacts, 3)
+    assert dropping.stats.dropped > 0 and keeping.stats.dropped == 0
+    assert dropping.q1 == keeping.q1 == pytest.approx(optimum(name, 26, 3, 2), abs=1e-9)
+    assert dropping.grasp == keeping.grasp and dropping.status == "optimal"
+    assert dropping.stats.visited == keeping.stats.visited and dropping.stats.trace == keeping.stats.trace
