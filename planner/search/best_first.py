@@ -42,7 +42,7 @@ from planner.infra.errors import OgcpError, SearchTimeout
 from planner.search.deal import Board, Part, PartDone
 from planner.search.open_list import OpenList
 from planner.search.outcome import Incumbent, SearchOutcome
-from planner.search.refine import BOUND, EXACT, EXACT_G, Pending
+from planner.search.refine import BOUND, EXACT, EXACT_G, PARTIAL, Pending
 from planner.search.result import SearchResult
 from planner.search.search_space import State
 
@@ -57,6 +57,8 @@ DIVE_STARTS = 16
 #: its bounds come from other arithmetic than the grasp's exact Q1, and the state that holds the
 #: best grasp must never go.
 DROP_MARGIN = 1e-9
+#: [s] Least time between two purges of the open list (each costs O(open states)).
+PURGE_SECONDS = 10.0
 
 
 class Search(SearchOutcome):
@@ -114,6 +116,7 @@ class Search(SearchOutcome):
         #: States whose lower bound of f exceeds this hold no grasp better than the best one found.
         self.cutoff = math.inf
         self.dropped = 0
+        self._purged = (math.inf, -math.inf)  # (cutoff, clock) of the last purge
         self._clock = (time.perf_counter(), time.process_time())  # (wall, cpu) at the start of run [s]
 
     def push(
@@ -177,6 +180,7 @@ class Search(SearchOutcome):
             if now >= next_report:
                 next_report = now + PROGRESS_SECONDS
                 self.report_progress(open_list)
+                self.purge(open_list, now)
             if part is not None and part.beaten(q0 - open_list.first_key() / (1.0 + self.eps)):
                 # Nothing left in this part beats a grasp some part has found.
                 if self.incumbent is None:
@@ -212,6 +216,18 @@ class Search(SearchOutcome):
         if part is not None:
             raise PartDone(0.0)  # no valid grasp in this part
         raise OgcpError("no grasp satisfies the constraints")
+
+    def purge(self, open_list: OpenList, now: float) -> None:
+        """Drop the open states past a cutoff that fell since the last purge (see :meth:`push`),
+        at most every :data:`PURGE_SECONDS`: the entries made before a better grasp was found."""
+        cutoff, last = self._purged
+        if not (self.cutoff < cutoff and now >= last + PURGE_SECONDS):
+            return
+        self._purged = (self.cutoff, now)
+        idents, stages = open_list.purge(self.cutoff)
+        self.dropped += len(idents)
+        for ident in idents[stages == PARTIAL].tolist():
+            self._pending.pop(ident, None)
 
     def report_progress(self, open_list: OpenList) -> None:
         """Call :attr:`on_progress` with the best Q1 and the certified bound (of all parts) [-]."""

@@ -45,6 +45,20 @@ def _sift_up(values: np.ndarray, order: np.ndarray, pos: int) -> None:
         pos = parent
 
 
+@cached_njit(inline="always")
+def _sift_down(values: np.ndarray, order: np.ndarray, pos: int, size: int) -> None:
+    while True:
+        child = 2 * pos + 1
+        if child >= size:
+            return
+        if child + 1 < size and _less(values, order, child + 1, child):
+            child += 1
+        if not _less(values, order, child, pos):
+            return
+        _swap(values, order, pos, child)
+        pos = child
+
+
 @cached_njit()
 def _pop_top(values: np.ndarray, order: np.ndarray, size: int) -> None:
     """Move the last of ``size`` entries to the top and sift it down (the top is read before)."""
@@ -52,17 +66,13 @@ def _pop_top(values: np.ndarray, order: np.ndarray, size: int) -> None:
     for j in range(3):
         values[0, j] = values[last, j]
         order[0, j] = order[last, j]
-    pos = 0
-    while True:
-        child = 2 * pos + 1
-        if child >= last:
-            return
-        if child + 1 < last and _less(values, order, child + 1, child):
-            child += 1
-        if not _less(values, order, child, pos):
-            return
-        _swap(values, order, pos, child)
-        pos = child
+    _sift_down(values, order, 0, last)
+
+
+@cached_njit()
+def _heapify(values: np.ndarray, order: np.ndarray, size: int) -> None:
+    for pos in range(size // 2 - 1, -1, -1):
+        _sift_down(values, order, pos, size)
 
 
 class OpenList:
@@ -109,6 +119,25 @@ class OpenList:
         _pop_top(self._values, self._order, self._size)
         self._size -= 1
         return entry
+
+    def purge(self, cutoff: float) -> tuple[np.ndarray, np.ndarray]:
+        """Remove every entry whose lower bound of f exceeds ``cutoff``.
+
+        The others come out in the same order as before (the order is total).
+
+        Returns:
+            The removed entries' state ids and stages, shape (removed,) each.
+        """
+        size = self._size
+        keep = self._values[:size, 1] <= cutoff
+        packed = self._order[:size, 2][~keep]
+        kept = size - len(packed)
+        if kept < size:
+            self._values[:kept] = self._values[:size][keep]
+            self._order[:kept] = self._order[:size][keep]
+            self._size = kept
+            _heapify(self._values, self._order, kept)
+        return packed >> _STAGE_BITS, packed & ((1 << _STAGE_BITS) - 1)
 
     def first_key(self) -> float:
         """The first entry's key (inf when empty)."""

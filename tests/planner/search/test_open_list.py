@@ -61,3 +61,24 @@ def test_a_restored_entry_keeps_its_tie_and_an_empty_list_says_so():
     assert open_list.pop() == first  # tie 0 still comes before tie 1
     with pytest.raises(KeyError):
         open_list.first_of(99)
+
+
+@pytest.mark.parametrize("seed", [0, 3])
+def test_a_purge_removes_the_entries_past_the_cutoff_and_keeps_the_order_of_the_rest(seed):
+    ours = OpenList(capacity=8)
+    theirs: list[tuple] = []
+    for tie, (_, key, neg_depth, ident) in enumerate(_random_ops(seed, 2000)):
+        lower, stage = key / 2, ident % 4
+        ours.push(key, neg_depth, lower, stage, 0.0, ident)
+        heapq.heappush(theirs, (key, neg_depth, tie, lower, stage, 0.0, ident))
+    cutoff = 1.5 / 7
+    idents, stages = ours.purge(cutoff)
+    gone = sorted((e[6], e[4]) for e in theirs if e[3] > cutoff)
+    assert sorted(zip(idents.tolist(), stages.tolist(), strict=True)) == gone and gone
+    assert ours.holds(idents[0]) is False
+    theirs = [e for e in theirs if e[3] <= cutoff]
+    heapq.heapify(theirs)
+    assert len(ours) == len(theirs) and ours.holds(theirs[0][6])
+    while theirs:
+        assert _same(ours.pop(), heapq.heappop(theirs))
+    assert [len(a) for a in ours.purge(0.0)] == [0, 0]

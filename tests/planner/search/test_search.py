@@ -255,3 +255,10 @@ def test_dropping_states_past_the_best_grasp_changes_nothing_but_memory(name, ob
     assert dropping.q1 == keeping.q1 == pytest.approx(optimum(name, 26, 3, 2), abs=1e-9)
     assert dropping.grasp == keeping.grasp and dropping.status == "optimal"
     assert dropping.stats.visited == keeping.stats.visited and dropping.stats.trace == keeping.stats.trace
+    # Purged at every iteration once the cutoff falls: still the same expansions.
+    monkeypatch.setattr(search_run, "DROP_MARGIN", 1e-9)
+    monkeypatch.setattr(search_run, "PROGRESS_SECONDS", 0.0)
+    monkeypatch.setattr(search_run, "PURGE_SECONDS", 0.0)
+    purging = GraspPlanner(seed=2).plan(contacts, 3)
+    assert purging.stats.trace == keeping.stats.trace and purging.grasp == keeping.grasp
+    assert purging.stats.dropped > dropping.stats.dropped  # entries made before the best grasp was found
