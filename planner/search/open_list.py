@@ -70,9 +70,24 @@ def _pop_top(values: np.ndarray, order: np.ndarray, size: int) -> None:
 
 
 @cached_njit()
-def _heapify(values: np.ndarray, order: np.ndarray, size: int) -> None:
-    for pos in range(size // 2 - 1, -1, -1):
-        _sift_down(values, order, pos, size)
+def _purge(values: np.ndarray, order: np.ndarray, size: int, cutoff: float, removed: np.ndarray) -> int:
+    """Move the entries of lower bound <= ``cutoff`` to the front in place (no copy of millions of
+    rows), collect the others' packed ids in ``removed`` and make the front a heap again."""
+    kept = 0
+    gone = 0
+    for i in range(size):
+        if values[i, 1] <= cutoff:
+            if kept != i:
+                for j in range(3):
+                    values[kept, j] = values[i, j]
+                    order[kept, j] = order[i, j]
+            kept += 1
+        else:
+            removed[gone] = order[i, 2]
+            gone += 1
+    for pos in range(kept // 2 - 1, -1, -1):
+        _sift_down(values, order, pos, kept)
+    return kept
 
 
 class OpenList:
@@ -129,14 +144,9 @@ class OpenList:
             The removed entries' state ids and stages, shape (removed,) each.
         """
         size = self._size
-        keep = self._values[:size, 1] <= cutoff
-        packed = self._order[:size, 2][~keep]
-        kept = size - len(packed)
-        if kept < size:
-            self._values[:kept] = self._values[:size][keep]
-            self._order[:kept] = self._order[:size][keep]
-            self._size = kept
-            _heapify(self._values, self._order, kept)
+        packed = np.empty(int(np.count_nonzero(self._values[:size, 1] > cutoff)), dtype=np.int64)
+        if len(packed):
+            self._size = _purge(self._values, self._order, size, cutoff, packed)
         return packed >> _STAGE_BITS, packed & ((1 << _STAGE_BITS) - 1)
 
     def first_key(self) -> float:
