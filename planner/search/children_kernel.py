@@ -17,15 +17,19 @@ from planner.grasp.kernel.jit import cached_njit
 
 
 @cached_njit(inline="always")
+def row_equals(rows: np.ndarray, r: int, key: np.ndarray) -> bool:
+    """Whether row ``r`` of ``rows`` equals ``key`` (node tuples, shape (m,))."""
+    for j in range(key.shape[0]):
+        if rows[r, j] != key[j]:
+            return False
+    return True
+
+
+@cached_njit(inline="always")
 def _listed(rows: np.ndarray, count: int, combo: np.ndarray) -> bool:
     """Whether ``combo`` equals one of the first ``count`` rows."""
     for r in range(count):
-        same = True
-        for j in range(combo.shape[0]):
-            if rows[r, j] != combo[j]:
-                same = False
-                break
-        if same:
+        if row_equals(rows, r, combo):
             return True
     return False
 

@@ -23,6 +23,7 @@ from planner.grasp.kernel.geometry import CUT_MARGIN, FC_TOL
 from planner.grasp.kernel.jit import cached_njit
 from planner.grasp.kernel.ray_bound import union_facet_bound, union_facet_bound_along
 from planner.grasp.subset_quality import EXACT, FACET_STARTS
+from planner.search.children_kernel import row_equals
 
 #: Outcomes of :func:`branch_and_bound`: the largest bound is exact (the state's f is
 #: known); the state's lower bound of f passed the open list's first key (it goes back);
@@ -88,12 +89,7 @@ def _slot(keys: np.ndarray, levels: np.ndarray, key: np.ndarray) -> int:
     mask = levels.shape[0] - 1
     s = np.int64(h >> np.uint64(1)) & mask
     while levels[s] >= 0:
-        same = True
-        for j in range(key.shape[0]):
-            if keys[s, j] != key[j]:
-                same = False
-                break
-        if same:
+        if row_equals(keys, s, key):
             return s
         s = (s + 1) & mask
     return s
