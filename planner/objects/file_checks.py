@@ -86,6 +86,16 @@ def _text(data: bytes) -> str:
     return data.decode("utf-8", errors="replace")
 
 
+def _not_text(data: bytes, kind: str) -> str | None:
+    """Why an OBJ or OFF file (text formats) is no UTF-8 text, or None: trimesh would hand it to
+    an optional character-set detector and fail with an error about that module instead."""
+    try:
+        data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        return f"cannot read mesh: the byte at offset {exc.start} (0x{data[exc.start]:02x}) is not UTF-8 text, as {kind} is; binary or damaged?"
+    return None
+
+
 def _plural(name: str, count: int) -> str:
     word = name if count == 1 else ("vertices" if name == "vertex" else f"{name}s")
     return f"{count} {word}"
@@ -103,6 +113,9 @@ def _as_int(token: str) -> int | None:
 
 def _check_off(data: bytes) -> str | None:
     """The first disagreement of an OFF file's counts, face sizes or indices with its lines, or None."""
+    not_text = _not_text(data, "OFF")
+    if not_text is not None:
+        return not_text
     rows = list(_rows(_text(data)))
     # Only the keywords trimesh's OFF reader accepts; anything else it refuses itself.
     if not rows or rows[0][1][0].upper() not in ("OFF", "COFF"):
@@ -154,6 +167,9 @@ def _check_off(data: bytes) -> str | None:
 
 def _check_obj(data: bytes) -> str | None:
     """The first short ``v`` or ``f`` statement, or face index without a vertex, of an OBJ file, or None."""
+    not_text = _not_text(data, "OBJ")
+    if not_text is not None:
+        return not_text
     # A trailing backslash continues an OBJ statement on the next line.
     text = _text(data).replace("\\\r\n", " ").replace("\\\n", " ")
     n_vertices = 0

@@ -19,9 +19,13 @@ returned: the goal itself, or (WA* only; A*'s goal is optimal) a strictly better
 which keeps the guarantee and costs nothing but the expansion of the state whose branch
 and bound found it, so that the returned grasp is a state of the tree.
 
-A search stopped by its time limit or by a stop request is a result too: the incumbent
+A* and Dijkstra also take grasps from local search (:mod:`planner.search.polish`), run for
+a share of the time at progress reports: they only lower the cutoff below which states are
+dropped, which such a search would never pop, so its expansions and finished result stay the
+same. A search stopped by its time limit or by a stop request is a result too: the incumbent
 (or, when none was evaluated yet, the first valid grasp of a depth-first dive below the
-most promising open states) with the certificate the open list gives at that moment.
+most promising open states), climbed from once more, with the certificate the open list
+gives at that moment.
 """
 
 from __future__ import annotations
@@ -38,27 +42,36 @@ import numpy as np
 
 from planner.grasp.constraints import Constraint
 from planner.grasp.contact_set import ContactSet
+from planner.infra.arrays import grow_rows
 from planner.infra.errors import OgcpError, SearchTimeout
 from planner.search.deal import Board, Part, PartDone
 from planner.search.open_list import OpenList
 from planner.search.outcome import Incumbent, SearchOutcome
-from planner.search.refine import BOUND, EXACT, EXACT_G, PARTIAL, Pending
+from planner.search.polish import Polisher
+from planner.search.refine import BOUND, EXACT, EXACT_G, PARTIAL, Waiting
 from planner.search.result import SearchResult
 from planner.search.search_space import State
 
 #: Iterations between two looks at the clock for progress reports (a report costs nothing
 #: but a clock reading; the clock is read every iteration for the deadline anyway).
 PROGRESS_SECONDS = 0.5
-#: States a dive may visit before it gives up (each costs one successor generation).
-DIVE_BUDGET = 20_000
-#: Open states a dive starts from, most promising first.
-DIVE_STARTS = 16
 #: [-] A state is dropped once its lower bound of f exceeds the best grasp's cost by this much:
 #: its bounds come from other arithmetic than the grasp's exact Q1, and the state that holds the
 #: best grasp must never go.
 DROP_MARGIN = 1e-9
 #: [s] Least time between two purges of the open list (each costs O(open states)).
 PURGE_SECONDS = 10.0
+#: [-] Share of a run's time that local search from its best grasps may take
+#: (:mod:`planner.search.polish`).
+POLISH_SHARE = 0.1
+#: [s] Time a search runs before local search starts (a stopped search climbs once anyway):
+#: searches that end sooner need no cutoff, and a tenth of their time is a tenth.
+POLISH_AFTER = 10.0
+#: [s] Most time local search may take in all: a long search's certificate needs the time more.
+POLISH_SECONDS = 30.0
+#: [s] Longest one call of local search runs: progress reports, the deadline and the other
+#: parts wait meanwhile.
+POLISH_SLICE = 2.0
 
 
 class Search(SearchOutcome):
@@ -94,7 +107,7 @@ class Search(SearchOutcome):
         self.stop = stop
         #: Called about every :data:`PROGRESS_SECONDS` with (best Q1 or None, certified bound) [-].
         self.on_progress: Callable[[float | None, float], object] = lambda best, bound: None
-        self._pending: dict[int, Pending] = {}  # by state id: an int key, not a tuple of nodes
+        self._pending: dict[int, Waiting] = {}  # by state id: an int key, not a tuple of nodes
         # Heuristic children are successors only on the expansion tree and without the
         # symmetry filter; otherwise only created terminal states become incumbents.
         self.children_can_win = self.heuristic_shares_tree and self.symmetry is None
@@ -117,6 +130,13 @@ class Search(SearchOutcome):
         self.cutoff = math.inf
         self.dropped = 0
         self._purged = (math.inf, -math.inf)  # (cutoff, clock) of the last purge
+        # Local search's grasps are no states of the tree (which a recorded tree's path needs),
+        # may beat a symmetry-reduced optimum, and are sorted (constraints that read the finger
+        # order judge the tree's order).
+        polish = not (record_tree or config["symmetry"] or config["ordered"])
+        rank = 0 if part is None else part.rank
+        self.polisher = Polisher(contacts, m, constraints, config["seed"], rank) if polish else None
+        self._polished = False  # local search found no valid grasp to climb from
         self._clock = (time.perf_counter(), time.process_time())  # (wall, cpu) at the start of run [s]
 
     def push(
@@ -145,9 +165,7 @@ class Search(SearchOutcome):
     def remember(self, ident: int, state: State) -> None:
         """Store a created state under its id."""
         if ident >= len(self._states):
-            grown = np.zeros((2 * len(self._states), self.m), dtype=np.int32)
-            grown[: len(self._states)] = self._states
-            self._states = grown
+            grow_rows(self._states, ident + 1)
         self._states[ident] = state
 
     def state_of(self, ident: int) -> State:
@@ -157,10 +175,32 @@ class Search(SearchOutcome):
     def offer(self, q: float, state: State, parent: State | None, ident: int) -> None:
         """A terminal state's exact Q1: keep it if it beats the incumbent (ties: the first)."""
         if self.incumbent is None or q > self.incumbent.q:
-            self.incumbent = Incumbent(q, state, parent, ident)
-            self.cutoff = min(self.cutoff, self.q0 - q + DROP_MARGIN)
-            if self.part is not None:
-                self.part.publish(q)
+            self.take(Incumbent(q, state, parent, ident))
+            self._polished = False  # local search may climb from it
+
+    def take(self, incumbent: Incumbent) -> None:
+        """Make a better grasp the incumbent: drop what it beats, tell the other parts."""
+        self.incumbent = incumbent
+        self.cutoff = min(self.cutoff, self.q0 - incumbent.q + DROP_MARGIN)
+        if self.part is not None:
+            self.part.publish(incumbent.q)
+
+    def polish(self, now: float, stopping: bool = False) -> None:
+        """Local search from the search's grasps and from random ones (:mod:`planner.search.polish`),
+        after :data:`POLISH_AFTER` (at once when ``stopping``), within :data:`POLISH_SHARE` of the
+        time so far and :data:`POLISH_SECONDS` in all; a better grasp becomes the incumbent."""
+        polisher, inc = self.polisher, self.incumbent
+        elapsed = now - self._clock[0]
+        if polisher is None or self._polished or (elapsed < POLISH_AFTER and not stopping):
+            return
+        budget = min(POLISH_SECONDS, POLISH_SHARE * elapsed)
+        allowance = min(POLISH_SLICE, budget - polisher.seconds)
+        if allowance <= 0:
+            return
+        start = None if inc is None or inc.state is None else (self.grasp_of(inc), inc.q)
+        grasp, q, self._polished = polisher.climb(start, now + allowance)
+        if grasp and (inc is None or q > inc.q):
+            self.take(Incumbent(q, None, None, -1, grasp))
 
     def run(self) -> SearchResult:
         wall0, cpu0 = time.perf_counter(), time.process_time()
@@ -179,6 +219,8 @@ class Search(SearchOutcome):
                 return self.stopped(open_list)
             if now >= next_report:
                 next_report = now + PROGRESS_SECONDS
+                if self.eps == 0:  # WA* may pop a state A* never would: its cutoff must not move with the clock
+                    self.polish(now)
                 self.report_progress(open_list)
                 self.purge(open_list, now)
             if part is not None and part.beaten(q0 - open_list.first_key() / (1.0 + self.eps)):
@@ -262,6 +304,8 @@ class Search(SearchOutcome):
         status = "interrupted" if self.stop is not None and self.stop.is_set() else "stopped"
         if self.incumbent is None:
             self.dive(open_list)
+        if status == "stopped":  # not when interrupted: the user is waiting
+            self.polish(time.perf_counter(), stopping=True)
         inc = self.incumbent
         if inc is None:
             # Every unexplored grasp lies below an open state, so q0 - min bounds the optimum.
@@ -273,28 +317,6 @@ class Search(SearchOutcome):
         if result.bound <= result.q1:
             return result  # the incumbent already beats every open bound: proven, as if finished
         return dataclasses.replace(result, status=status)
-
-    def dive(self, open_list: OpenList) -> None:
-        """Find valid grasps below the most promising open states: depth first, highest U first.
-
-        Each of the :data:`DIVE_STARTS` open states with the smallest bounds is descended
-        until its first valid terminal state, which is offered as the incumbent (found by
-        the open state it lies below, so the certificate is unchanged). The incumbent stays
-        None when :data:`DIVE_BUDGET` states hold no valid grasp.
-        """
-        budget = DIVE_BUDGET
-        for entry in open_list.smallest_lower(DIVE_STARTS):
-            start = self.state_of(entry[6])
-            stack = [start]
-            while stack and budget > 0:
-                state = stack.pop()
-                budget -= 1
-                if self.is_terminal(state):
-                    self.offer(self.exact(state), tuple(sorted(state)), start, entry[6])
-                    break
-                children = self.successors(state)
-                # Ascending U, so the child with the highest bound is popped next.
-                stack.extend(sorted(children, key=lambda child: self.upper(self.node_vectors(child))))
 
     def expand(
         self, open_list: OpenList, state: State, depth: int, key: float, lower: float, g: float, ident: int
@@ -339,6 +361,8 @@ class Search(SearchOutcome):
         """Return the incumbent, expanding the state that found it if it is not created yet."""
         inc = self.incumbent
         assert inc is not None
+        if inc.state is None:  # local search's grasp: no state to count as the goal
+            return self.result(inc, self.q0 - inc.q, open_list)
         if inc.parent is not None and open_list.holds(inc.ident):
             # The parent is still on the open list (not expanded; dropped only for a better
             # grasp of another part, and then this part's grasp is not the result).
@@ -348,7 +372,7 @@ class Search(SearchOutcome):
             # Expanding the parent created the grasp's state and re-offered it.
             inc = self.incumbent
             assert inc is not None
-        goal_depth = self.depth(inc.state)
+        goal_depth = self.incumbent_depth(inc)
         g = self.q0 - inc.q
         self.visited[goal_depth] = self.visited.get(goal_depth, 0) + 1
         self.trace.append((len(self.trace), g))

@@ -43,7 +43,7 @@ def shared_tree_children(
     vectors: np.ndarray,
     filled: np.ndarray,
     count: int,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, int]:
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, int, np.ndarray]:
     """Valid Γh children of a state and their support bounds.
 
     Args:
@@ -56,21 +56,22 @@ def shared_tree_children(
         count: |D|.
 
     Returns:
-        (keys, bounds, starts, terminal, rejected): the children's sorted nodes, shape (k, m),
-        int32; their support bounds U [-], shape (k,); the direction of D that gives each
-        bound (the first of equal ones), where its first facet bound starts; whether each is
-        a grasp (every node one contact); how many distinct combinations distinct contacts
+        (keys, bounds, starts, terminal, rejected, codes): the children's sorted nodes, shape
+        (k, m), int32; their support bounds U [-], shape (k,); the direction of D that gives
+        each bound (the first of equal ones), where its first facet bound starts; whether each
+        is a grasp (every node one contact); how many distinct combinations distinct contacts
         ruled out, or -1, with nothing listed, when a node of the state has no row of
         ``table`` yet or a child node's vector lacks some of the ``count`` directions (the
-        caller fills them and asks again).
+        caller fills them and asks again); each child's number in product order, shape (k,),
+        int64 (:func:`decode_child` turns it back into the child's nodes).
     """
     m = state.shape[0]
     for j in range(m):
         if state[j] >= widths.shape[0] or widths[state[j]] == 0:
-            return np.empty((0, m), np.int32), np.empty(0), np.empty(0, np.int32), np.empty(0, np.bool_), -1
+            return _nothing(m)
         for c in range(widths[state[j]]):
             if filled[table[state[j], c]] != count:
-                return np.empty((0, m), np.int32), np.empty(0), np.empty(0, np.int32), np.empty(0, np.bool_), -1
+                return _nothing(m)
     total = 1
     for j in range(m):
         total *= widths[state[j]]
@@ -78,6 +79,7 @@ def shared_tree_children(
     bounds = np.empty(total)
     terminal = np.empty(total, dtype=np.bool_)
     starts = np.empty(total, dtype=np.int32)
+    codes = np.empty(total, dtype=np.int64)
     index = np.zeros(m, dtype=np.int64)
     combo = np.empty(m, dtype=np.int64)
     # prefix[j] = the support vector of the first j + 1 nodes of the current combination (in
@@ -89,7 +91,7 @@ def shared_tree_children(
     k = 0
     rejected = np.empty((total, m), dtype=np.int32)
     nrejected = 0
-    for _ in range(total):
+    for code in range(total):
         for j in range(m):
             combo[j] = table[state[j], index[j]]
         combo.sort()
@@ -131,6 +133,7 @@ def shared_tree_children(
             bounds[k] = bound
             starts[k] = lowest
             terminal[k] = leaf
+            codes[k] = code
             k += 1
         # Next index in itertools.product order (the last position fastest).
         j = m - 1
@@ -141,7 +144,31 @@ def shared_tree_children(
             index[j] = 0
             j -= 1
         fresh_from = min(fresh_from, max(j, 0))
-    return keys[:k], bounds[:k], starts[:k], terminal[:k], nrejected
+    return keys[:k], bounds[:k], starts[:k], terminal[:k], nrejected, codes[:k]
+
+
+@cached_njit(inline="always")
+def _nothing(m: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, int, np.ndarray]:
+    """The listing's answer when rows are missing (see :func:`shared_tree_children`)."""
+    return (
+        np.empty((0, m), np.int32),
+        np.empty(0),
+        np.empty(0, np.int32),
+        np.empty(0, np.bool_),
+        -1,
+        np.empty(0, np.int64),
+    )
+
+
+@cached_njit(inline="always")
+def decode_child(state: np.ndarray, table: np.ndarray, widths: np.ndarray, code: int, key: np.ndarray) -> None:
+    """Write into ``key`` (shape (m,)) the sorted nodes of the child numbered ``code`` in
+    :func:`shared_tree_children`'s product order (the last position fastest)."""
+    for j in range(state.shape[0] - 1, -1, -1):
+        width = widths[state[j]]
+        key[j] = table[state[j], code % width]
+        code //= width
+    key.sort()
 
 
 @cached_njit()

@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from planner.grasp.kernel.jit import cached_njit
+from planner.infra.arrays import grow_rows
 
 #: An entry: (key, -depth, tie, lower bound of the unweighted f, stage, g or NaN, state id).
 Entry = tuple[float, int, int, float, int, float, int]
@@ -94,7 +95,7 @@ class OpenList:
     """Open states of one search, smallest (key, -depth, tie) first.
 
     Args:
-        capacity: Initial room [entries]; it doubles when full.
+        capacity: Initial room [entries]; it grows in place when full (:func:`planner.infra.arrays.grow_rows`).
     """
 
     def __init__(self, capacity: int = 1024) -> None:
@@ -118,8 +119,8 @@ class OpenList:
 
     def _insert(self, key: float, neg_depth: int, tie: int, lower: float, stage: int, g: float, ident: int) -> None:
         if self._size == len(self._values):
-            self._values = np.concatenate([self._values, np.empty_like(self._values)])
-            self._order = np.concatenate([self._order, np.empty_like(self._order)])
+            grow_rows(self._values, self._size + 1)
+            grow_rows(self._order, len(self._values))
         pos = self._size
         self._values[pos] = key, lower, g
         self._order[pos] = neg_depth, tie, (ident << _STAGE_BITS) | stage

@@ -1,7 +1,8 @@
 """What a search run returns: the incumbent, the certified result, its statistics and tree.
 
 The half of :class:`planner.search.best_first.Search` that turns the state of a run (its
-incumbent, its open list, its counters) into a :class:`~planner.search.result.SearchResult`.
+incumbent, its open list, its counters) into a :class:`~planner.search.result.SearchResult`,
+and the dive that finds a grasp for a search stopped before it evaluated one.
 """
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from planner.search.open_list import OpenList
+from planner.search.polish import Polisher
 from planner.search.refine import ChildRefinement
 from planner.search.result import (
     SearchResult,
@@ -22,6 +24,11 @@ from planner.search.result import (
 )
 from planner.search.search_space import State
 
+#: States a dive may visit before it gives up (each costs one successor generation).
+DIVE_BUDGET = 20_000
+#: Open states a dive starts from, most promising first.
+DIVE_STARTS = 16
+
 
 @dataclass(frozen=True)
 class Incumbent:
@@ -29,16 +36,19 @@ class Incumbent:
 
     Attributes:
         q: Its exact Q1 [-].
-        state: Its terminal state (sorted node tuple).
+        state: Its terminal state (sorted node tuple); None for a grasp found by local search
+            (:mod:`planner.search.polish`), which is no state of the tree.
         parent: The unexpanded state whose branch and bound found it; None once the
-            grasp is a created state.
-        ident: Id of the created state, or of the parent.
+            grasp is a created state, and for local search's grasps.
+        ident: Id of the created state, or of the parent (-1 for local search's grasps).
+        contacts: The grasp's sorted contact indices where ``state`` is None.
     """
 
     q: float
-    state: State
+    state: State | None
     parent: State | None
     ident: int
+    contacts: tuple[int, ...] = ()
 
 
 class SearchOutcome(ChildRefinement):
@@ -50,6 +60,7 @@ class SearchOutcome(ChildRefinement):
     visited: dict[int, int]
     trace: list[tuple[int, float]]
     dropped: int
+    polisher: Polisher | None
     _clock: tuple[float, float]
     _parent: list[int]
     _level: list[int]
@@ -57,14 +68,14 @@ class SearchOutcome(ChildRefinement):
     _f: list[float]
 
     def result(self, inc: Incumbent, g: float, open_list: OpenList) -> SearchResult:
-        q0, q, state = self.q0, inc.q, inc.state
+        q0, q = self.q0, inc.q
         # Every unexplored grasp lies below an open state, whose stored value bounds its cost.
         lowest_f = min(g, open_list.lowest_lower())
         # Nothing open below the returned cost: the grasp is optimal (q0 - (q0 - q) may
         # round above q, so do not recompute it).
         bound = q if lowest_f >= g else max(q, q0 - lowest_f)
         eps_bound = q0 - (q0 - q) / (1.0 + self.eps)
-        grasp = tuple(sorted(int(self.tree.members[node][0]) for node in state))
+        grasp = self.grasp_of(inc)
         idx = np.array(grasp, dtype=np.intp)
         return SearchResult(
             method=self.config["method"],
@@ -76,12 +87,44 @@ class SearchOutcome(ChildRefinement):
             bound=bound,
             eps=self.eps,
             eps_bound=eps_bound,
-            stats=self.statistics(self.depth(state)),
+            stats=self.statistics(self.incumbent_depth(inc)),
             config=self.config,
             contact_source=self.contacts.source,
             tree=self.search_tree(inc.ident) if self.record_tree else None,
             status=self.finished_status(q, bound),
         )
+
+    def grasp_of(self, inc: Incumbent) -> tuple[int, ...]:
+        """The incumbent's sorted contact indices."""
+        if inc.state is None:
+            return inc.contacts
+        return tuple(sorted(int(self.tree.members[node][0]) for node in inc.state))
+
+    def incumbent_depth(self, inc: Incumbent) -> int:
+        """The depth of the incumbent's state; the deepest created for local search's grasps."""
+        return max(self.created) if inc.state is None else self.depth(inc.state)
+
+    def dive(self, open_list: OpenList) -> None:
+        """Find valid grasps below the most promising open states: depth first, highest U first.
+
+        Each of the :data:`DIVE_STARTS` open states with the smallest bounds is descended
+        until its first valid terminal state, which is offered as the incumbent (found by
+        the open state it lies below, so the certificate is unchanged). The incumbent stays
+        None when :data:`DIVE_BUDGET` states hold no valid grasp.
+        """
+        budget = DIVE_BUDGET
+        for entry in open_list.smallest_lower(DIVE_STARTS):
+            start = self.state_of(entry[6])
+            stack = [start]
+            while stack and budget > 0:
+                state = stack.pop()
+                budget -= 1
+                if self.is_terminal(state):
+                    self.offer(self.exact(state), tuple(sorted(state)), start, entry[6])
+                    break
+                children = self.successors(state)
+                # Ascending U, so the child with the highest bound is popped next.
+                stack.extend(sorted(children, key=lambda child: self.upper(self.node_vectors(child))))
 
     def statistics(self, solution_depth: int) -> SearchStats:
         """The statistics of the run so far, for a solution at this depth."""
@@ -110,6 +153,8 @@ class SearchOutcome(ChildRefinement):
             peak_rss_bytes=peak_rss_bytes(),
             facet_bounds=self.oracle.facet_bounds + table_facet_bounds,
             dropped=self.dropped,
+            local_search_evaluations=0 if self.polisher is None else self.polisher.evaluations,
+            local_search_seconds=0.0 if self.polisher is None else self.polisher.seconds,
         )
 
     def finished_status(self, q1: float, bound: float) -> str:

@@ -277,4 +277,6 @@ def merged_stats(parts: list[SearchStats], winner: SearchResult, wall_seconds: f
         peak_rss_bytes=total("peak_rss_bytes"),
         facet_bounds=total("facet_bounds"),
         dropped=total("dropped"),
+        local_search_evaluations=total("local_search_evaluations"),
+        local_search_seconds=float(sum(s.local_search_seconds for s in parts)),
     )

@@ -15,10 +15,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from planner.grasp.subset_quality import EXACT as EXACT_Q1
+from planner.grasp.subset_quality import MAX_DIRECTIONS
 from planner.infra.tolerance import TOL
 from planner.search.deal import Part
 from planner.search.open_list import OpenList
 from planner.search.refine_kernel import NEEDS_EXACT, NEEDS_ROWS, SETTLED, YIELD
+from planner.search.refine_kernel import branch_and_bound as compiled_branch_and_bound
 from planner.search.search_space import SearchSpace, State
 
 #: Open-list stages (see :mod:`planner.search.best_first`).
@@ -33,6 +35,39 @@ Children = NDArray[np.int32]
 #: of shape (children,): 13 bytes a child, where a heap of tuples took 90, and the largest
 #: is found by argmax).
 Pending = tuple[Children, NDArray[np.float64], NDArray[np.int8], NDArray[np.int32]]
+#: Bytes of one child waiting in a compiled branch and bound (:func:`pack_waiting`): its upper
+#: bound (float64), level (int8), support bound's direction (int16) and number in the listing's
+#: product order (uint8: the compiled listing runs where b^m <= 256). A third of a row of
+#: :data:`Pending` at m = 6, and one buffer per state instead of four arrays: at m = 6 tens of
+#: millions wait, and they held half of a search's memory.
+CHILD_BYTES = 12
+#: What waits of a state's branch and bound: :data:`Pending` rows (the Python loop) or a
+#: :func:`pack_waiting` record (the compiled one).
+Waiting = Pending | NDArray[np.uint8]
+assert MAX_DIRECTIONS < 2**15, "directions of D are numbered in int16"
+
+
+def pack_waiting(
+    codes: NDArray[np.int64], bounds: NDArray[np.float64], levels: NDArray[np.int8], starts: NDArray[np.int32]
+) -> NDArray[np.uint8]:
+    """One buffer holding a compiled branch and bound's waiting children (see :data:`CHILD_BYTES`)."""
+    record = np.empty(CHILD_BYTES * len(bounds), dtype=np.uint8)
+    values, levels_out, starts_out, codes_out = unpack_waiting(record)
+    values[:], levels_out[:], starts_out[:], codes_out[:] = bounds, levels, starts, codes
+    return record
+
+
+def unpack_waiting(
+    record: NDArray[np.uint8],
+) -> tuple[NDArray[np.float64], NDArray[np.int8], NDArray[np.int16], NDArray[np.uint8]]:
+    """Views of a :func:`pack_waiting` buffer: bounds [-], levels, start directions, numbers."""
+    k = len(record) // CHILD_BYTES
+    return (
+        record[: 8 * k].view(np.float64),
+        record[8 * k : 9 * k].view(np.int8),
+        record[9 * k : 11 * k].view(np.int16),
+        record[11 * k :],
+    )
 
 
 class ChildRefinement(SearchSpace):
@@ -49,7 +84,7 @@ class ChildRefinement(SearchSpace):
     eps: float
     children_can_win: bool
     part: Part | None
-    _pending: dict[int, Pending]
+    _pending: dict[int, Waiting]
 
     def push(
         self,
@@ -66,6 +101,10 @@ class ChildRefinement(SearchSpace):
 
     def offer(self, q: float, state: State, parent: State | None, ident: int) -> None:
         """Offer a grasp's exact Q1 as the incumbent (:meth:`planner.search.best_first.Search.offer`)."""
+        raise NotImplementedError
+
+    def state_of(self, ident: int) -> State:
+        """The state stored under an id (:meth:`planner.search.best_first.Search.state_of`)."""
         raise NotImplementedError
 
     def refine(self, open_list: OpenList, state: State, depth: int, lower: float, g: float, ident: int) -> None:
@@ -92,21 +131,18 @@ class ChildRefinement(SearchSpace):
             self.push(open_list, max(lower, g), depth, EXACT, g, ident, key=g)
             return
         pending = self._pending.pop(ident, None)
+        if self.child_bounds is not None:
+            assert pending is None or isinstance(pending, np.ndarray)
+            self.compiled_refine(open_list, state, depth, lower, g, ident, pending)
+            return
         if pending is None:
             children, bounds, starts, terminal = self.heuristic_bounds(state)
             if not len(bounds):
                 return  # no valid grasp below this state
-            levels = np.zeros(len(bounds), dtype=np.int8)
-            if self.eps > 0 and self.children_can_win:
-                # WA* returns the best grasp it has evaluated: its terminal children skip the facet
-                # bounds (the next tightening of a bound one level below exact is the exact value),
-                # so every one the branch and bound reaches becomes a candidate.
-                levels[terminal] = EXACT_Q1 - 1
+            levels = self.start_levels(terminal)
         else:
+            assert isinstance(pending, tuple)
             children, bounds, levels, starts = pending
-        if self.child_bounds is not None:
-            self.compiled_refine(open_list, state, depth, lower, g, ident, (children, bounds, levels, starts))
-            return
         while True:
             i = int(bounds.argmax())  # the first of equal bounds: the lowest index
             bound, level = float(bounds[i]), int(levels[i])
@@ -141,39 +177,137 @@ class ChildRefinement(SearchSpace):
         self.push(open_list, f, depth, EXACT, g, ident, key=key)
 
     def compiled_refine(
-        self, open_list: OpenList, state: State, depth: int, lower: float, g: float, ident: int, pending: Pending
+        self,
+        open_list: OpenList,
+        state: State,
+        depth: int,
+        lower: float,
+        g: float,
+        ident: int,
+        record: NDArray[np.uint8] | None,
     ) -> None:
-        """:meth:`refine`'s loop, compiled between exact values (:meth:`SearchSpace.branch_and_bound`)."""
-        children, bounds, levels, _ = pending
+        """:meth:`refine`'s loop, compiled between exact values (:meth:`SearchSpace.branch_and_bound`),
+        on the children's :func:`pack_waiting` record (None: list them first)."""
+        if record is None:
+            numbers, listed, directions, terminal = self.numbered_children(state)
+            if not len(listed):
+                return  # no valid grasp below this state
+            record = pack_waiting(numbers, listed, self.start_levels(terminal), directions)
+        waiting = unpack_waiting(record)
+        bounds, levels, _, codes = waiting
+        nodes = np.array(state, dtype=np.int64)
         q0 = self.q0
         while True:
             first_key = open_list.first_key()
             outcome, i, lower = self.branch_and_bound(
-                state, pending, lower, q0, first_key, self.eps, self.children_can_win
+                nodes, waiting, lower, q0, first_key, self.eps, self.children_can_win
             )
             if outcome == SETTLED:
                 break
             if outcome == YIELD:
-                self._pending[ident] = pending
+                self._pending[ident] = record
                 self.push(open_list, lower, depth, PARTIAL, g, ident)
                 return
+            child = self.child_of_number(state, int(codes[i]))
             if outcome == NEEDS_ROWS:
-                self.node_vectors(tuple(children[i].tolist()))  # directions learned since the listing
+                self.node_vectors(child)  # directions learned since the listing
                 continue
-            child_key = tuple(children[i].tolist())
-            child = self.child_state(child_key)
             if outcome == NEEDS_EXACT and levels[i] == EXACT_Q1 - 1 and self.settles_on_bounds(child):
                 break
             if outcome == NEEDS_EXACT:
-                masks, vectors = self.child_masks(child_key), self.child_vectors(child_key)
+                masks, vectors = self.child_masks(child), self.child_vectors(child)
                 value, _ = self.oracle.tighten(masks, vectors, EXACT_Q1 - 1, float(bounds[i]))
                 bounds[i], levels[i] = value, EXACT_Q1
-                self.store_child_bound(children[i], value)
+                self.store_child_bound(np.array(child, dtype=np.int32), value)
             if self.wins(child):
                 self.offer(float(bounds[i]), child, state, ident)
         f = max(lower, q0 - float(bounds[i]))
         key = f if self.eps == 0 else g + (1.0 + self.eps) * (f - g)
         self.push(open_list, f, depth, EXACT, g, ident, key=key)
+
+    def waiting(self, ident: int) -> Pending | None:
+        """The children waiting in a state's branch and bound as :data:`Pending` rows (either
+        record), or None when none wait."""
+        pending = self._pending.get(ident)
+        if pending is None or isinstance(pending, tuple):
+            return pending
+        bounds, levels, starts, codes = unpack_waiting(pending)
+        state = self.state_of(ident)
+        rows = np.array([self.child_of_number(state, int(code)) for code in codes.tolist()], dtype=np.int32)
+        return rows.reshape(len(codes), self.m), bounds, levels, starts.astype(np.int32)
+
+    def branch_and_bound(
+        self,
+        state: NDArray[np.int64],
+        waiting: tuple[NDArray[np.float64], NDArray[np.int8], NDArray[np.int16], NDArray[np.uint8]],
+        lower: float,
+        q0: float,
+        first_key: float,
+        eps: float,
+        report_grasps: bool,
+    ) -> tuple[int, int, float]:
+        """One compiled run of a state's branch and bound (:func:`planner.search.refine_kernel.branch_and_bound`).
+
+        Args:
+            state: The state's nodes, as listed by :meth:`numbered_children`, shape (m,).
+            waiting: Its Γh children's upper bounds [-], levels, start directions and numbers
+                (:func:`planner.search.refine.unpack_waiting`); bounds and levels updated in place.
+            lower: The state's lower bound of f so far [-].
+            q0: Q1 of all contacts [-].
+            first_key: The open list's first key (inf when empty).
+            eps: WA*'s eps.
+            report_grasps: Return when a grasp child becomes exact.
+
+        Returns:
+            (outcome, child index, lower bound of f [-]).
+        """
+        table = self.child_bounds
+        assert table is not None
+        bounds = self.oracle.bounds
+        values, levels, starts, codes = waiting
+        outcome, index, lower = compiled_branch_and_bound(
+            codes,
+            values,
+            levels,
+            starts,
+            state,
+            self._table,
+            self._widths,
+            lower,
+            q0,
+            first_key,
+            eps,
+            report_grasps,
+            self.contacts.wrenches,
+            bounds.directions,
+            bounds.count,
+            self._masks,
+            self._node_vectors,
+            self._filled,
+            self._sizes,
+            table.keys,
+            table.values,
+            table.levels,
+            table.counters,
+        )
+        return int(outcome), int(index), float(lower)
+
+    def store_child_bound(self, key: NDArray[np.int32], value: float) -> None:
+        """Remember a Γh child's exact Q1 [-] for the compiled branch and bound."""
+        assert self.child_bounds is not None
+        self.child_bounds.store(key, value, EXACT_Q1)
+
+    def start_levels(self, terminal: NDArray[np.bool_]) -> NDArray[np.int8]:
+        """The level each child's bound starts at, given which children are grasps.
+
+        WA* returns the best grasp it has evaluated: its terminal children skip the facet
+        bounds (the next tightening of a bound one level below exact is the exact value), so
+        every one the branch and bound reaches becomes a candidate.
+        """
+        levels = np.zeros(len(terminal), dtype=np.int8)
+        if self.eps > 0 and self.children_can_win:
+            levels[terminal] = EXACT_Q1 - 1
+        return levels
 
     def settles_on_bounds(self, child: State | None) -> bool:
         """Whether the largest bound, a facet bound, may stand for the child's exact Q1 in f.

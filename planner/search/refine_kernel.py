@@ -23,7 +23,7 @@ from planner.grasp.kernel.geometry import CUT_MARGIN, FC_TOL
 from planner.grasp.kernel.jit import cached_njit
 from planner.grasp.kernel.ray_bound import union_facet_bound, union_facet_bound_along
 from planner.grasp.subset_quality import EXACT, FACET_STARTS
-from planner.search.children_kernel import row_equals
+from planner.search.children_kernel import decode_child, row_equals
 
 #: Outcomes of :func:`branch_and_bound`: the largest bound is exact (the state's f is
 #: known); the state's lower bound of f passed the open list's first key (it goes back);
@@ -118,10 +118,13 @@ def _store(
 
 @cached_njit()
 def branch_and_bound(
-    children: np.ndarray,
+    codes: np.ndarray,
     bounds: np.ndarray,
     levels: np.ndarray,
     starts: np.ndarray,
+    state: np.ndarray,
+    table: np.ndarray,
+    widths: np.ndarray,
     lower: float,
     q0: float,
     first_key: float,
@@ -147,11 +150,15 @@ def branch_and_bound(
     place of the oracle's store of facet bounds.
 
     Args:
-        children: Sorted node tuples of the children, shape (k, m).
+        codes: The children's numbers in the listing's product order
+            (:func:`planner.search.children_kernel.decode_child`), shape (k,).
         bounds: Their upper bounds of Q1 [-], shape (k,); updated in place.
         levels: The level of each bound (0 to :data:`EXACT`), shape (k,); updated in place.
         starts: Direction of D of each support bound, where the first facet bound starts,
             shape (k,).
+        state: The state's nodes as listed, shape (m,).
+        table: Child nodes of each tree node, padded, shape (nodes, b).
+        widths: Number of children of each tree node, shape (nodes,).
         lower: The state's lower bound of f so far [-].
         q0: Q1 of all contacts [-].
         first_key: The open list's first key (inf when empty).
@@ -174,9 +181,10 @@ def branch_and_bound(
         :data:`NEEDS_EXACT`, :data:`GRASP_EXACT`, :data:`NEEDS_ROWS`; the child of the largest bound (or the
         grasp that became exact); the state's lower bound of f [-].
     """
-    m = children.shape[1]
+    m = state.shape[0]
     union = np.empty(node_masks.shape[1], dtype=np.uint8)
     rows = np.empty((m, count))
+    key = np.empty(m, dtype=np.int32)
     while True:
         i = 0
         for r in range(1, bounds.shape[0]):
@@ -191,7 +199,7 @@ def branch_and_bound(
             return YIELD, i, lower
         if level >= EXACT - 1 or bound <= FC_TOL:
             return NEEDS_EXACT, i, lower
-        key = children[i]
+        decode_child(state, table, widths, codes[i], key)
         s = _slot(table_keys, table_levels, key)
         known_level = table_levels[s]
         if known_level > level:

@@ -55,6 +55,8 @@ class SearchStats:
         dropped: Open-list entries not kept because their lower bound of f showed that no
             grasp below the state beats the best grasp found (memory only: A* would never
             pop them before its goal).
+        local_search_evaluations: Grasps scored by local search (:mod:`planner.search.polish`).
+        local_search_seconds: Wall-clock time local search took, part of ``wall_seconds`` [s].
     """
 
     created: int
@@ -76,6 +78,8 @@ class SearchStats:
     peak_rss_bytes: int = 0
     facet_bounds: int = 0
     dropped: int = 0
+    local_search_evaluations: int = 0
+    local_search_seconds: float = 0.0
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready form."""
@@ -99,6 +103,8 @@ class SearchStats:
             "peak_rss_bytes": self.peak_rss_bytes,
             "facet_bounds": self.facet_bounds,
             "dropped": self.dropped,
+            "local_search_evaluations": self.local_search_evaluations,
+            "local_search_seconds": self.local_search_seconds,
         }
 
 

@@ -14,11 +14,11 @@ from numpy.typing import NDArray
 
 from planner.grasp.constraints import Constraint, DistinctContacts
 from planner.grasp.contact_set import ContactSet
-from planner.grasp.subset_quality import EXACT, GraspQuality, PackedMask
+from planner.grasp.subset_quality import GraspQuality, PackedMask
 from planner.grasp.support_bound import Vector
 from planner.search.children_kernel import shared_tree_children, stale_children, support_bounds
 from planner.search.partitions import Indices, PartitionTree, make_partitioner
-from planner.search.refine_kernel import ChildBounds, branch_and_bound, state_bound
+from planner.search.refine_kernel import ChildBounds, state_bound
 from planner.search.symmetry import SymmetryFilter
 
 State = tuple[int, ...]
@@ -196,7 +196,7 @@ class SearchSpace:
         call. Otherwise U of the Python successors in one compiled call where it applies.
         """
         if self._compiled_children and self.symmetry is None and not self.config["ordered"]:
-            keys, bounds, _, _, rejected = self._listing(state)
+            keys, bounds, _, _, rejected, _ = self._listing(state)
             self.pruned += rejected
             return [tuple(key) for key in keys.tolist()], bounds.tolist()
         children = self.successors(state)
@@ -296,12 +296,29 @@ class SearchSpace:
             shared = self.heuristic_shares_tree
             terminal = np.array([shared and self.is_terminal(key) for key, _ in found], dtype=np.bool_)
             return keys, bounds, np.full(len(bounds), -1, dtype=np.int32), terminal
-        keys, bounds, starts, terminal, _ = self._listing(state)
+        keys, bounds, starts, terminal, _, _ = self._listing(state)
         return keys, bounds, starts, terminal
+
+    def numbered_children(
+        self, state: State
+    ) -> tuple[NDArray[np.int64], NDArray[np.float64], NDArray[np.int32], NDArray[np.bool_]]:
+        """:meth:`heuristic_bounds` where the compiled listing applies, with each child's number in
+        its product order (:meth:`child_of_number`) in place of its nodes."""
+        _, bounds, starts, terminal, _, codes = self._listing(state)
+        return codes, bounds, starts, terminal
+
+    def child_of_number(self, state: State, code: int) -> State:
+        """The sorted nodes of a state's Γh child numbered ``code`` by :meth:`numbered_children`."""
+        nodes = []
+        for node in reversed(state):
+            width = int(self._widths[node])
+            nodes.append(int(self._table[node, code % width]))
+            code //= width
+        return tuple(sorted(nodes))
 
     def _listing(
         self, state: State
-    ) -> tuple[NDArray[np.int32], NDArray[np.float64], NDArray[np.int32], NDArray[np.bool_], int]:
+    ) -> tuple[NDArray[np.int32], NDArray[np.float64], NDArray[np.int32], NDArray[np.bool_], int, NDArray[np.int64]]:
         """:func:`planner.search.children_kernel.shared_tree_children` of a state."""
         nodes = np.array(state, dtype=np.int64)
         count = self.oracle.bounds.count
@@ -328,63 +345,6 @@ class SearchSpace:
                 self._widths[node] = len(children)
         for child in stale_children(np.array(state), self._table, self._widths, self._filled, count).tolist():
             self._fill(child)
-
-    def branch_and_bound(
-        self,
-        state: State,
-        pending: tuple[NDArray[np.int32], NDArray[np.float64], NDArray[np.int8], NDArray[np.int32]],
-        lower: float,
-        q0: float,
-        first_key: float,
-        eps: float,
-        report_grasps: bool,
-    ) -> tuple[int, int, float]:
-        """One compiled run of a state's branch and bound (:func:`planner.search.refine_kernel.branch_and_bound`).
-
-        Args:
-            state: The state whose Γh children wait.
-            pending: Their keys, upper bounds [-], levels and start directions; updated in place.
-            lower: The state's lower bound of f so far [-].
-            q0: Q1 of all contacts [-].
-            first_key: The open list's first key (inf when empty).
-            eps: WA*'s eps.
-            report_grasps: Return when a grasp child becomes exact.
-
-        Returns:
-            (outcome, child index, lower bound of f [-]).
-        """
-        table = self.child_bounds
-        assert table is not None
-        bounds = self.oracle.bounds
-        children, values, levels, starts = pending
-        outcome, index, lower = branch_and_bound(
-            children,
-            values,
-            levels,
-            starts,
-            lower,
-            q0,
-            first_key,
-            eps,
-            report_grasps,
-            self.contacts.wrenches,
-            bounds.directions,
-            bounds.count,
-            self._masks,
-            self._node_vectors,
-            self._filled,
-            self._sizes,
-            table.keys,
-            table.values,
-            table.levels,
-            table.counters,
-        )
-        return int(outcome), int(index), float(lower)
-
-    def store_child_bound(self, key: NDArray[np.int32], value: float) -> None:
-        """Remember a Γh child's exact Q1 [-] for the compiled branch and bound."""
-        assert self.child_bounds is not None
-        self.child_bounds.store(key, value, EXACT)
 
     def child_state(self, key: ChildKey) -> State | None:
         """The state of a Γh child, or None when Γh is not the expansion tree."""

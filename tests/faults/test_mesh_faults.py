@@ -94,6 +94,19 @@ def test_obj_cut_inside_a_line_is_refused(tmp_path):
     _refused(_write(tmp_path / "mesh.obj", cut), f"line {line}: face 1 has 1 vertices, at least 3 needed")
 
 
+@pytest.mark.parametrize("suffix", [".obj", ".off"])
+def test_binary_bytes_in_a_text_format_are_named(tmp_path, suffix):
+    """Not an error about trimesh's optional character-set detector, which it would reach."""
+    text = ICO.export(file_type=suffix[1:]).encode()
+    damaged = text[:200] + b"\xff\xfe\x00" + text[200:]
+    _refused(
+        _write(tmp_path / f"mesh{suffix}", damaged),
+        f"the byte at offset 200 (0xff) is not UTF-8 text, as {suffix[1:].upper()} is",
+    )
+    glb = ICO.export(file_type="glb")  # a binary mesh under a text format's name
+    _refused(_write(tmp_path / f"glb{suffix}", glb), "is not UTF-8 text")
+
+
 def test_ply_cut_short_is_refused_in_both_encodings(tmp_path):
     ascii_ply = ICO.export(file_type="ply", encoding="ascii")
     _refused(_write(tmp_path / "a.ply", ascii_ply[: int(len(ascii_ply) * 0.9)]), "header says 320 faces, file has ")

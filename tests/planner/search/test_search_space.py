@@ -83,7 +83,10 @@ def test_waiting_children_are_compact_and_their_bounds_hold(object_contacts, heu
     result = search.run()
     assert result.status == "optimal" and search._pending
     checked = 0
-    for children, bounds, levels, starts in search._pending.values():
+    for ident, record in search._pending.items():
+        if heuristic_branching == 2:  # the compiled branch and bound: one buffer per state
+            assert isinstance(record, np.ndarray) and record.dtype == np.uint8
+        children, bounds, levels, starts = search.waiting(ident)
         assert starts.dtype == np.int32 and len(starts) == len(bounds)
         assert children.dtype == np.int32 and children.shape == (len(bounds), 4)
         assert bounds.dtype == np.float64 and levels.dtype == np.int8 and len(levels) == len(bounds)
@@ -113,6 +116,9 @@ def test_compiled_children_are_the_python_listing(object_contacts, m):
         keys, bounds, starts, terminal = space.heuristic_bounds(state)
         found = space.heuristic_children(state)
         assert [tuple(row) for row in keys.tolist()] == [key for key, _ in found]
+        # The compact numbers of the children name the same children.
+        numbers = space.numbered_children(state)[0]
+        assert [space.child_of_number(state, int(c)) for c in numbers] == [key for key, _ in found]
         for key, bound, start, grasp, (_, vectors) in zip(keys.tolist(), bounds, starts, terminal, found, strict=True):
             assert bound == space.oracle.bounds.bound(vectors)
             assert (bound, int(start)) == space.oracle.bounds.lowest(vectors)
