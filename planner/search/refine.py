@@ -186,7 +186,7 @@ class ChildRefinement(SearchSpace):
         ident: int,
         record: NDArray[np.uint8] | None,
     ) -> None:
-        """:meth:`refine`'s loop, compiled between exact values (:meth:`SearchSpace.branch_and_bound`),
+        """:meth:`refine`'s loop, compiled between exact values (:meth:`branch_and_bound`),
         on the children's :func:`pack_waiting` record (None: list them first)."""
         if record is None:
             numbers, listed, directions, terminal = self.numbered_children(state)
