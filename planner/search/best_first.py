@@ -137,7 +137,7 @@ class Search(SearchOutcome):
         polish = not (record_tree or config["symmetry"] or config["ordered"])
         rank = 0 if part is None else part.rank
         self.polisher = Polisher(contacts, m, constraints, config["seed"], rank) if polish else None
-        self._polished = False  # local search found no valid grasp to climb from
+        self._barren = False  # local search found no valid grasp to climb from
         self._clock = (time.perf_counter(), time.process_time())  # (wall, cpu) at the start of run [s]
 
     def push(
@@ -177,7 +177,7 @@ class Search(SearchOutcome):
         """A terminal state's exact Q1: keep it if it beats the incumbent (ties: the first)."""
         if self.incumbent is None or q > self.incumbent.q:
             self.take(Incumbent(q, state, parent, ident))
-            self._polished = False  # local search may climb from it
+            self._barren = False  # local search may climb from it
 
     def take(self, incumbent: Incumbent) -> None:
         """Make a better grasp the incumbent: drop what it beats, tell the other parts."""
@@ -192,14 +192,14 @@ class Search(SearchOutcome):
         time so far and :data:`POLISH_SECONDS` in all; a better grasp becomes the incumbent."""
         polisher, inc = self.polisher, self.incumbent
         elapsed = now - self._clock[0]
-        if polisher is None or self._polished or (elapsed < POLISH_AFTER and not stopping):
+        if polisher is None or self._barren or (elapsed < POLISH_AFTER and not stopping):
             return
         budget = min(POLISH_SECONDS, POLISH_SHARE * elapsed)
         allowance = min(POLISH_SLICE, budget - polisher.seconds)
         if allowance <= 0:
             return
         start = None if inc is None or inc.state is None else (self.grasp_of(inc), inc.q)
-        grasp, q, self._polished = polisher.climb(start, now + allowance)
+        grasp, q, self._barren = polisher.climb(start, now + allowance)
         if grasp and (inc is None or q > inc.q):
             self.take(Incumbent(q, None, None, -1, grasp))
 
