@@ -17,8 +17,10 @@ contacts = 30
 [[methods]]
 method = "astar"
 label = "A*"
+position_weight = 1.0
 """
-#: The ids of BASE's two cells before contacts knew the fingertip (plain sampling).
+#: The ids of BASE's two cells before contacts knew the fingertip (plain sampling), when the
+#: searches' position weight defaulted to 1.
 PLAIN_IDS = ["1956639be7f7aa3c", "b779e027cc36bec3"]
 
 

@@ -25,21 +25,22 @@ from planner.methods.registry import method_spec
 from planner.objects import file_sha256
 from planner.records.grasps import GRASPS_SCHEMA
 
-#: The quick suite's cell ids before suites took mu lists: a scalar mu keeps every id.
+#: The quick suite's cell ids (since the searches' position weight became 2): a scalar mu keeps
+#: every id that suites gave before they took mu lists.
 QUICK_IDS = {
-    "a8ce6fdd6ca7a400",
-    "4766bdcd66ee3ddf",
-    "a03a52f08c1ae3d1",
-    "55d45c9bf5fd9c39",
     "00d1ece61cedfdfb",
-    "f2cbaa82b1043d46",
-    "f40608d129fa93c7",
-    "bab23bd8578cf6be",
-    "a6b55326d6bb4285",
+    "06563c98a44e5eba",
+    "0f341843e64ed92b",
+    "135144be2c1617f3",
+    "55d45c9bf5fd9c39",
+    "5a30eb9bc10e2a5e",
     "66b13f07e3d045b0",
-    "fcea89972fc68578",
-    "10ef68d1344a6cc4",
-    "9d6a8e328224d475",
+    "6e770eca0ed6f472",
+    "9d3373df760f9a7c",
+    "a6b55326d6bb4285",
+    "a83520bd567b94ba",
+    "cf34be020f425d54",
+    "ed91f52957c276ac",
 }
 SWEEP = """schema_version = 1
 objects = ["box"]

@@ -91,6 +91,16 @@ def test_dijkstra_and_ordered_tree_find_the_optimum(name, object_contacts, optim
     assert ordered.stats.created > sorted_states.stats.created
 
 
+@pytest.mark.parametrize("weight", [0.25, 1.0, 2.0, 16.0])
+@pytest.mark.parametrize("name", ["box", "amphora"])
+def test_astar_is_optimal_whatever_the_position_weight(name, weight, object_contacts, optimum):
+    """The weight shapes Γ^fc's tree (how many states A* expands), never the optimum it returns."""
+    contacts = object_contacts(name, 26, 2)
+    result = GraspPlanner(position_weight=weight).plan(contacts, 3)
+    assert result.status == "optimal" and result.bound == result.q1
+    assert result.q1 == pytest.approx(optimum(name, 26, 3, 2), abs=1e-9)
+
+
 def test_m2_optimum_is_zero_and_search_still_returns_a_grasp(object_contacts):
     result = GraspPlanner().plan(object_contacts("box", 12, 0), 2)
     assert result.q1 == 0.0 and len(set(result.grasp)) == 2
