@@ -73,6 +73,8 @@ class KMeansPartitioner:
 
     Initialisation is k-means++ seeded by the content; empty clusters are re-seeded with
     the point farthest from its centre; identical features fall back to an index split.
+    Lloyd's loop ends early once an assignment repeats the one the centres are the means
+    of: the remaining iterations would change nothing, so the split is that of all t.
     """
 
     name = "fc"
@@ -102,9 +104,13 @@ class KMeansPartitioner:
         rng = np.random.default_rng(content_seed(self.seed, indices))
         centres = self._kmeans_pp(x, k, rng)
         labels = np.zeros(n, dtype=np.intp)
+        settled: NDArray[np.intp] | None = None  # labels whose means the centres are
         for _ in range(max(1, self.iterations)):
             dist = ((x[:, None, :] - centres[None, :, :]) ** 2).sum(axis=2)
             labels = np.argmin(dist, axis=1)
+            if settled is not None and np.array_equal(labels, settled):
+                break  # converged: every later iteration would repeat this one exactly
+            reseeded = False
             for j in range(k):
                 members = labels == j
                 if members.any():
@@ -113,6 +119,8 @@ class KMeansPartitioner:
                     far = int(np.argmax(dist[np.arange(n), labels]))
                     centres[j] = x[far]
                     labels[far] = j
+                    reseeded = True
+            settled = None if reseeded else labels
         parts = [indices[labels == j] for j in range(k)]
         parts = [p for p in parts if len(p) > 0]
         # Duplicate features can leave clusters empty; contacts with identical features

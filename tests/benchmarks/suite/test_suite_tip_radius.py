@@ -18,9 +18,10 @@ contacts = 30
 method = "astar"
 label = "A*"
 position_weight = 1.0
+kmeans_iterations = 10
 """
 #: The ids of BASE's two cells before contacts knew the fingertip (plain sampling), when the
-#: searches' position weight defaulted to 1.
+#: searches' Γ^fc defaulted to position weight 1 and 10 k-means iterations.
 PLAIN_IDS = ["1956639be7f7aa3c", "b779e027cc36bec3"]
 
 

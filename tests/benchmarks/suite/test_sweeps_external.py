@@ -25,22 +25,22 @@ from planner.methods.registry import method_spec
 from planner.objects import file_sha256
 from planner.records.grasps import GRASPS_SCHEMA
 
-#: The quick suite's cell ids (since the searches' position weight became 2): a scalar mu keeps
+#: The quick suite's cell ids (since the searches' Γ^fc defaults became w = 2, t = 100): a scalar mu keeps
 #: every id that suites gave before they took mu lists.
 QUICK_IDS = {
     "00d1ece61cedfdfb",
-    "06563c98a44e5eba",
-    "0f341843e64ed92b",
-    "135144be2c1617f3",
+    "0971e1c8265dcebf",
+    "0c434e40a1a88dd8",
+    "2fea9979585e5ada",
+    "3ff063bc2ef0fb85",
+    "409f7a98405809e3",
+    "41115d344c5e794b",
+    "44185837f10db402",
     "55d45c9bf5fd9c39",
-    "5a30eb9bc10e2a5e",
     "66b13f07e3d045b0",
-    "6e770eca0ed6f472",
-    "9d3373df760f9a7c",
+    "77eb9efb85efb623",
     "a6b55326d6bb4285",
-    "a83520bd567b94ba",
-    "cf34be020f425d54",
-    "ed91f52957c276ac",
+    "b00c55dd27ba8835",
 }
 SWEEP = """schema_version = 1
 objects = ["box"]

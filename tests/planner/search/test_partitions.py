@@ -9,6 +9,7 @@ from planner import builtin_mesh
 from planner.grasp import ContactSet, sample_contacts
 from planner.infra import OgcpError
 from planner.search import KMeansPartitioner, PartitionTree, RandomPartitioner, make_partitioner
+from planner.search.partitions import content_seed
 
 N = 60
 
@@ -87,6 +88,40 @@ def test_kmeans_separates_two_clusters(seed):
     contacts = _two_clusters()
     parts = make_partitioner("fc", contacts, 2, seed=seed).split(np.arange(20, dtype=np.intp))
     assert [p.tolist() for p in parts] == [list(range(10)), list(range(10, 20))]
+
+
+def _lloyd_every_iteration(partitioner: KMeansPartitioner, indices: np.ndarray) -> list[np.ndarray]:
+    """The split as ``t`` full Lloyd iterations compute it (no stop at convergence)."""
+    x = partitioner._features[indices]
+    k = min(partitioner.branching, len(indices))
+    rng = np.random.default_rng(content_seed(partitioner.seed, indices))
+    centres = partitioner._kmeans_pp(x, k, rng)
+    labels = np.zeros(len(indices), dtype=np.intp)
+    for _ in range(partitioner.iterations):
+        dist = ((x[:, None, :] - centres[None, :, :]) ** 2).sum(axis=2)
+        labels = np.argmin(dist, axis=1)
+        for j in range(k):
+            members = labels == j
+            if members.any():
+                centres[j] = x[members].mean(axis=0)
+            else:
+                far = int(np.argmax(dist[np.arange(len(indices)), labels]))
+                centres[j] = x[far]
+                labels[far] = j
+    return sorted((np.sort(indices[labels == j]) for j in range(k) if (labels == j).any()), key=lambda p: int(p[0]))
+
+
+@pytest.mark.parametrize("iterations", [1, 2, 10, 100])
+@pytest.mark.parametrize("b", [2, 3, 5])
+def test_kmeans_stopping_at_convergence_changes_no_split(contacts, iterations, b):
+    partitioner = KMeansPartitioner(contacts, b, iterations, position_weight=2.0, seed=3)
+    rng = np.random.default_rng(iterations * 10 + b)
+    for indices in _index_sets(rng)[3:]:
+        expected = _lloyd_every_iteration(partitioner, indices)
+        if len(expected) < min(b, len(indices)):
+            continue  # duplicate features: the split halves parts after Lloyd's loop, alike either way
+        got = partitioner.split(indices)
+        assert [p.tolist() for p in got] == [p.tolist() for p in expected]
 
 
 @pytest.mark.parametrize("b", [2, 3, 4])
