@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import argparse
 import statistics
+import sys
 import time
 
 from planner import GraspPlanner, resolve_object, sample_contacts
@@ -99,10 +100,18 @@ def main() -> None:
         cases, settings = parse_cases(args.cases), parse_settings(args.weights, args.iterations)
     except OgcpError as error:
         parser.error(str(error))
+    for flag, value, least in (("--contacts", args.contacts, 1), ("--repeats", args.repeats, 1)):
+        if value < least:
+            parser.error(f"{flag}: expected an integer >= {least}, got {value}")
+    if not args.time_limit >= 0:
+        parser.error(f"--time-limit: expected seconds >= 0 (0: none), got {args.time_limit}")
     limit = args.time_limit if args.time_limit > 0 else None
     print("case        w, t      wall [s]  ratio  expanded  ratio   created  status     Q1         bound")
     for name, m in cases:
-        rows = run_case(name, m, settings, args.contacts, limit, args.repeats)
+        try:
+            rows = run_case(name, m, settings, args.contacts, limit, args.repeats)
+        except OgcpError as error:  # an unknown object, too few contacts, no grasp in time: one line
+            sys.exit(f"position_weight: {name} m={m}: {error}")
         ref_time, ref_result = statistics.median(rows[0][1]), rows[0][2]
         finished = {r.q1 for _, _, r in rows if r.status == "optimal"}
         for (weight, iterations), times, result in rows:

@@ -39,3 +39,28 @@ def test_every_setting_reaches_the_same_optimum():
     assert len({r.q1 for r in results}) == 1
     # Different trees: the setting is really passed on (the same tree would expand the same states).
     assert len({(r.stats.visited, r.stats.created) for r in results}) > 1
+
+
+@pytest.mark.parametrize(
+    "argv,message",
+    [
+        (["--cases", "nosuch:3"], "position_weight: nosuch m=3: unknown object 'nosuch'"),
+        (["--cases", "box:3", "--contacts", "2"], "position_weight: box m=3: m = 3 exceeds the number of contacts"),
+    ],
+)
+def test_a_failing_case_is_one_line(monkeypatch, argv, message):
+    monkeypatch.setattr("sys.argv", ["position_weight", *argv])
+    with pytest.raises(SystemExit) as stop:
+        position_weight.main()
+    assert str(stop.value).startswith(message) and "\n" not in str(stop.value)
+
+
+@pytest.mark.parametrize(
+    "argv,message",
+    [(["--repeats", "0"], "--repeats: expected an integer >= 1"), (["--time-limit", "-1"], "--time-limit: expected")],
+)
+def test_bad_counts_are_refused(monkeypatch, capsys, argv, message):
+    monkeypatch.setattr("sys.argv", ["position_weight", *argv])
+    with pytest.raises(SystemExit):
+        position_weight.main()
+    assert message in capsys.readouterr().err
