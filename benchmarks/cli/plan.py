@@ -31,7 +31,7 @@ from benchmarks.cli.options import (
     valid,
 )
 from planner.config.methods import DEFAULT_FINGERS, DEFAULT_METHOD, DEFAULT_SEED
-from planner.config.options import JOBS, TIME_LIMIT
+from planner.config.options import JOBS, MEMORY_LIMIT, TIME_LIMIT
 from planner.grasp.defaults import (
     CONE_EDGES,
     CONTACT_SEED,
@@ -57,6 +57,7 @@ if TYPE_CHECKING:
 #: Run-time flags (destination -> flag); each applies to the methods whose spec lists it.
 RUN_FLAGS = {
     "time_limit": "--time-limit",
+    "memory_limit": "--memory-limit",
     "jobs": "--jobs",
     "backend": "--backend",
     "address": "--address",
@@ -168,6 +169,15 @@ def register(commands: Any) -> None:
         help="stop A*/WA*/Dijkstra after this many seconds; the result is the best grasp so far "
         "with its certified bound and gap (status 'stopped', exit status 3)",
     )
+    plan.add_argument(
+        "--memory-limit",
+        type=typed(MEMORY_LIMIT),
+        default=None,
+        metavar="GIB",
+        help=f"most memory of an A*/WA*/Dijkstra search, all its processes (default {MEMORY_LIMIT.default:g}); "
+        "past it the search forgets its least promising states and may end with its best grasp "
+        "and certified bound (status 'memory', exit status 4)",
+    )
     _add_contact_options(plan, None)
     es, hfts = groups.values()
     es.add_argument(
@@ -273,7 +283,7 @@ def run_contacts(args: argparse.Namespace) -> int:
 
 
 #: Exit status of ``ogcp plan`` by the result's status: a stopped search is a result, not an error.
-EXIT_STATUS = {"stopped": 3, "interrupted": 130}
+EXIT_STATUS = {"stopped": 3, "memory": 4, "interrupted": 130}
 
 
 def run_plan(args: argparse.Namespace) -> int:

@@ -36,10 +36,10 @@ def search_summary(result: SearchResult, contacts: ContactSet) -> str:
     heuristic = f"Γh={c['heuristic']} b={c['heuristic_branching']}" if c["heuristic"] != "none" else "no heuristic"
     method = METHODS[result.method].title + (f" (eps={result.eps:g})" if result.method == "wastar" else "")
     if result.status in UNFINISHED:
-        why = "at its time limit" if result.status == "stopped" else "by request"
+        why = {"stopped": "stopped at its time limit", "memory": "stopped at its memory limit"}
         relative = result.gap / result.bound if result.bound > 0 else 0.0
         certificate = (
-            f"{result.status} {why}: best so far, optimum <= {result.bound:.6f} "
+            f"{why.get(result.status, 'interrupted by request')}: best so far, optimum <= {result.bound:.6f} "
             f"(gap {result.gap:.6f}, {100 * relative:.2f} % of the bound)"
         )
     elif result.method == "wastar":

@@ -25,6 +25,7 @@ from planner.baselines.es import ExhaustiveSearch
 from planner.config.options import MAX_TIME_LIMIT
 from planner.grasp.reach import default_tip_radius
 from planner.objects.resolve import resolve_object
+from planner.search.result import UNFINISHED
 
 FIELDS = (
     "object",
@@ -123,7 +124,7 @@ def main(argv: list[str] | None = None) -> int:
         parser.error(f"--time-limit must be in (0, {MAX_TIME_LIMIT:g}] seconds, got {args.time_limit:g}")
     args.out.mkdir(parents=True, exist_ok=True)
     log = args.out / "runs.csv"
-    unfinished = ("stopped", "interrupted") if args.retry_stopped else ()
+    unfinished = UNFINISHED if args.retry_stopped else ()
     done = {
         (r["object"], int(r["m"]), r["method"], float(r["eps"]))
         for r in _read_rows(log)
@@ -212,7 +213,7 @@ def write_tables(rows: list[dict[str, str]], out: Path, n: int) -> None:
                 es = index.get((name, "es", 0.0, 3))
                 if method == "astar" and m == 3 and es is not None:
                     extra += " A* = ES" if float(es["q1"]) == float(r["q1"]) else " A* != ES"
-                if r.get("status") in ("stopped", "interrupted") and r.get("bound"):
+                if r.get("status") in UNFINISHED and r.get("bound"):
                     gap = 1.0 - float(r["q1"]) / float(r["bound"]) if float(r["bound"]) > 0 else 0.0
                     extra += f" {r['status']}, gap {100 * gap:.1f} %"
                 cells.append(f"{minutes:.2f}{extra}")

@@ -250,5 +250,8 @@ class MethodConfig:
 
 #: Wall-clock budget of a search cell or ``ogcp plan``'s search [s]; None: unlimited.
 TIME_LIMIT = Option("float", None, "wall-clock budget [s]", minimum=0, exclusive=True, maximum=MAX_TIME_LIMIT)
+#: Most memory of one search, all its processes together [GiB]: past it the search forgets its
+#: least promising open states (:mod:`planner.search.memory`).
+MEMORY_LIMIT = Option("float", 4.0, "memory of one search, all its processes [GiB]", minimum=0, exclusive=True)
 #: Local worker processes (a Dask cluster decides its own).
 JOBS = Option("int", 1, "worker processes", minimum=1, maximum=max_jobs())

@@ -14,23 +14,32 @@ class OgcpError(ValueError):
 
 
 class SearchTimeout(OgcpError):
-    """A search stopped (time limit or stop request) before it had a grasp to return.
+    """A search stopped (time limit, memory limit or stop request) before it had a grasp to return.
 
-    A search that has a grasp when it stops returns it, with status ``stopped`` or
-    ``interrupted`` and its certified bound; this is raised only when it has none.
+    A search that has a grasp when it stops returns it, with status ``stopped``, ``memory``
+    or ``interrupted`` and its certified bound; this is raised only when it has none.
 
     Attributes:
-        seconds: The time limit that was reached [s]; None when stopped by a request.
+        seconds: The time limit that was reached [s]; None when stopped otherwise.
         visited: States expanded until then.
         best_q1: Best exact Q1 of a grasp seen so far (None if no grasp was evaluated) [-].
         upper_bound: Certified upper bound on the optimal Q1 at that moment [-].
+        memory: Stopped at its memory limit.
     """
 
     def __init__(
-        self, method: str, seconds: float | None, visited: int, best_q1: float | None, upper_bound: float
+        self,
+        method: str,
+        seconds: float | None,
+        visited: int,
+        best_q1: float | None,
+        upper_bound: float,
+        memory: bool = False,
     ) -> None:
         best = "no grasp evaluated yet" if best_q1 is None else f"best Q1 found {best_q1:.6f}"
         why = "by request" if seconds is None else f"at its time limit of {seconds:g} s"
+        if memory:
+            why = "at its memory limit"
         super().__init__(
             f"{method} stopped {why} after {visited} expansions ({best}; the optimum is at most {upper_bound:.6f})"
         )
@@ -38,6 +47,7 @@ class SearchTimeout(OgcpError):
         self.visited = visited
         self.best_q1 = best_q1
         self.upper_bound = upper_bound
+        self.memory = memory
 
 
 def choice_error(what: str, given: object, valid: Iterable[str]) -> OgcpError:

@@ -94,7 +94,7 @@ class MethodSpec:
         return self.runner(config, contacts, m, options or RunOptions())
 
 
-_SEARCH_RUN_OPTIONS = ("time_limit", "jobs")
+_SEARCH_RUN_OPTIONS = ("time_limit", "memory_limit", "jobs")
 _ES_RUN_OPTIONS = ("jobs", "backend", "address", "checkpoint")
 _HFTS_RUN_OPTIONS = ("jobs", "backend", "address", "optimum")
 

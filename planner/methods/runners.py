@@ -24,7 +24,7 @@ from planner.config.methods import (
     HandOptions,
     HFTSConfig,
 )
-from planner.config.options import MethodConfig, options_of
+from planner.config.options import MEMORY_LIMIT, MethodConfig, options_of
 from planner.grasp.constraints import Constraint, MaxFingerSpread
 from planner.grasp.contact_set import ContactSet
 from planner.hands.reachability import SDHReachability
@@ -41,6 +41,8 @@ class RunOptions:
 
     Attributes:
         time_limit: Wall-clock budget of A*, WA* and Dijkstra [s]; None: unlimited.
+        memory_limit: Most memory of one A*, WA* or Dijkstra search, all its processes [GiB]
+            (:mod:`planner.search.memory`); None: unlimited.
         progress: Show a progress bar on stderr (search, exhaustive search).
         jobs: Worker processes (exhaustive search, HFTS); for A*, WA* and Dijkstra the
             processes one search is dealt to (:mod:`planner.search.parts`).
@@ -55,6 +57,7 @@ class RunOptions:
     """
 
     time_limit: float | None = None
+    memory_limit: float | None = MEMORY_LIMIT.default
     progress: bool = False
     jobs: int = DEFAULT_JOBS
     backend: str = DEFAULT_BACKEND
@@ -117,8 +120,8 @@ def run_search(config: AStarConfig, contacts: ContactSet, m: int, options: RunOp
     Raises:
         OgcpError: For invalid parameters, or when no grasp satisfies the constraints.
         SearchTimeout: When the search stops (time limit or ``options.stop``) before it
-            found any valid grasp; with one, it is returned with status ``stopped`` or
-            ``interrupted``.
+            found any valid grasp; with one, it is returned with status ``stopped``,
+            ``memory`` or ``interrupted``.
     """
     constraints, hand = constraints_of(config, m)
     planner = GraspPlanner(
@@ -126,6 +129,7 @@ def run_search(config: AStarConfig, contacts: ContactSet, m: int, options: RunOp
         constraints=constraints,
         time_limit=options.time_limit,
         jobs=options.jobs,
+        memory_limit=options.memory_limit,
         **engine_arguments(config),
     )
     result = planner.plan(contacts, m, progress=options.progress, stop=options.stop)

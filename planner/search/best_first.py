@@ -48,9 +48,10 @@ from planner.search.deal import Board, Part, PartDone
 from planner.search.open_list import OpenList
 from planner.search.outcome import Incumbent, SearchOutcome
 from planner.search.polish import Polisher
-from planner.search.refine import BOUND, EXACT, EXACT_G, PARTIAL, Waiting
+from planner.search.refine import BOUND, EXACT, EXACT_G
 from planner.search.result import SearchResult
 from planner.search.search_space import State
+from planner.search.storage import IdPool, WaitingStore
 
 #: Iterations between two looks at the clock for progress reports (a report costs nothing
 #: but a clock reading; the clock is read every iteration for the deadline anyway).
@@ -59,8 +60,9 @@ PROGRESS_SECONDS = 0.5
 #: its bounds come from other arithmetic than the grasp's exact Q1, and the state that holds the
 #: best grasp must never go.
 DROP_MARGIN = 1e-9
-#: [s] Least time between two purges of the open list (each costs O(open states)).
-PURGE_SECONDS = 10.0
+#: Iterations between two looks at the memory a search's open states take (a look costs a few
+#: additions; between two, a search creates at most a few hundred kilobytes of states).
+MEMORY_CHECK_ITERATIONS = 256
 #: [-] Share of a run's time that local search from its best grasps may take
 #: (:mod:`planner.search.polish`).
 POLISH_SHARE = 0.1
@@ -88,6 +90,10 @@ class Search(SearchOutcome):
         stop: Set by another thread (or a signal handler) to stop the search; it then
             returns like at its time limit, with status ``interrupted``.
         part: Search only this part of the grasps (:mod:`planner.search.parts`); None: all.
+        memory_limit: Most bytes its open states may take (:mod:`planner.search.memory`); past
+            it the search forgets those of the largest keys, and returns with status
+            ``memory`` once it would have to expand a state no better than one it forgot.
+            None: unlimited.
     """
 
     def __init__(
@@ -100,6 +106,7 @@ class Search(SearchOutcome):
         time_limit: float | None = None,
         stop: threading.Event | Board | None = None,
         part: Part | None = None,
+        memory_limit: float | None = None,
     ) -> None:
         super().__init__(contacts, m, config, constraints)
         self.part = part
@@ -108,7 +115,12 @@ class Search(SearchOutcome):
         self.stop = stop
         #: Called about every :data:`PROGRESS_SECONDS` with (best Q1 or None, certified bound) [-].
         self.on_progress: Callable[[float | None, float], object] = lambda best, bound: None
-        self._pending: dict[int, Waiting] = {}  # by state id: an int key, not a tuple of nodes
+        self._pending = WaitingStore()  # by state id: an int key, not a tuple of nodes
+        self.memory_limit = memory_limit
+        #: The smallest key and lower bound of f of the states forgotten for memory (inf: none
+        #: that could hold a grasp better than the best one found).
+        self.forgotten_key = self.forgotten_lower = math.inf
+        self.forgotten = 0
         # Heuristic children are successors only on the expansion tree and without the
         # symmetry filter; otherwise only created terminal states become incumbents.
         self.children_can_win = self.heuristic_shares_tree and self.symmetry is None
@@ -119,7 +131,7 @@ class Search(SearchOutcome):
         self._level: list[int] = [0]
         self._visited: list[bool] = [False]
         self._f: list[float] = [0.0]
-        self._ids = itertools.count(1)
+        self._ids = IdPool(recycle=not record_tree)
         #: The state of each id, one row each: open-list entries hold the id only (at m >= 5
         #: millions are open, and a tuple of node ids took half of each entry's 500 bytes).
         self._states = np.zeros((1024, m), dtype=np.int32)
@@ -155,7 +167,8 @@ class Search(SearchOutcome):
         branch and bound it had under way: at m >= 5 most states end up there, and the
         certificate needs none of them (every grasp below them is no better than the best one)."""
         if lower > self.cutoff:
-            self._pending.pop(ident, None)
+            self._pending.take(ident)
+            self._ids.give(ident)
             self.dropped += 1
             return
         if self.record_tree:
@@ -182,7 +195,7 @@ class Search(SearchOutcome):
     def take(self, incumbent: Incumbent) -> None:
         """Make a better grasp the incumbent: drop what it beats, tell the other parts."""
         self.incumbent = incumbent
-        self.cutoff = min(self.cutoff, self.q0 - incumbent.q + DROP_MARGIN)
+        self.lower_cutoff(self.q0 - incumbent.q + DROP_MARGIN)
         if self.part is not None:
             self.part.publish(incumbent.q)
 
@@ -214,7 +227,9 @@ class Search(SearchOutcome):
         next_report = wall0 + PROGRESS_SECONDS
         stop, part = self.stop, self.part
         self._clock = (wall0, cpu0)
-        while open_list:
+        for iteration in itertools.count():
+            if not open_list:
+                break
             now = time.perf_counter()  # one reading per iteration (tests drive a fake clock)
             if now > deadline or (stop is not None and stop.is_set()):
                 return self.stopped(open_list)
@@ -224,11 +239,16 @@ class Search(SearchOutcome):
                     self.polish(now)
                 self.report_progress(open_list)
                 self.purge(open_list, now)
-            if part is not None and part.beaten(q0 - open_list.first_key() / (1.0 + self.eps)):
+            if iteration % MEMORY_CHECK_ITERATIONS == 0:  # by count, not clock: the same states go every run
+                self.forget(open_list, -1 if self.incumbent is None else self.incumbent.ident)
+            if part is not None and part.beaten(q0 - self.frontier(open_list) / (1.0 + self.eps)):
                 # Nothing left in this part beats a grasp some part has found.
                 if self.incumbent is None:
-                    raise PartDone(self.q0 - open_list.lowest_lower())
+                    raise PartDone(self.q0 - self.lowest_lower(open_list))
                 return self.finish(open_list)
+            if open_list.first_key() > self.forgotten_key:
+                # A forgotten state comes first: the search cannot go on exactly.
+                return self.stopped(open_list, "memory")
             entry = open_list.pop()
             key, neg_depth, _, lower, stage, g, ident = entry
             state = self.state_of(ident)
@@ -256,21 +276,12 @@ class Search(SearchOutcome):
                 open_list.restore(entry)  # still open unless returned: the certificate counts it
                 return self.finish(open_list)
             self.expand(open_list, state, depth, key, lower, g, ident)
+            self._ids.give(ident)  # expanded: nothing refers to the state any more
+        if self.forgotten_key < math.inf:
+            return self.stopped(open_list, "memory")  # forgotten states may hold every grasp left
         if part is not None:
             raise PartDone(0.0)  # no valid grasp in this part
         raise OgcpError("no grasp satisfies the constraints")
-
-    def purge(self, open_list: OpenList, now: float) -> None:
-        """Drop the open states past a cutoff that fell since the last purge (see :meth:`push`),
-        at most every :data:`PURGE_SECONDS`: the entries made before a better grasp was found."""
-        cutoff, last = self._purged
-        if not (self.cutoff < cutoff and now >= last + PURGE_SECONDS):
-            return
-        self._purged = (self.cutoff, now)
-        idents, stages = open_list.purge(self.cutoff)
-        self.dropped += len(idents)
-        for ident in idents[stages == PARTIAL].tolist():
-            self._pending.pop(ident, None)
 
     def report_progress(self, open_list: OpenList) -> None:
         """Call :attr:`on_progress` with the best Q1 and the certified bound (of all parts) [-]."""
@@ -281,7 +292,7 @@ class Search(SearchOutcome):
         self.part.report(bound)
         best, overall = self.part.overall()
         if best is not None:  # another part's grasp may drop states here too
-            self.cutoff = min(self.cutoff, self.q0 - best + DROP_MARGIN)
+            self.lower_cutoff(self.q0 - best + DROP_MARGIN)
         self.on_progress(best, min(self.q0, overall))  # inf until every part has reported
 
     def quick_bound(self, open_list: OpenList) -> float:
@@ -291,28 +302,35 @@ class Search(SearchOutcome):
         smallest key over 1 + eps bounds the smallest f from below.
         """
         best = 0.0 if self.incumbent is None else self.incumbent.q
-        if not open_list:
+        frontier = self.frontier(open_list)
+        if frontier == math.inf:
             return best
-        return min(self.q0, max(best, self.q0 - open_list.first_key() / (1.0 + self.eps)))
+        return min(self.q0, max(best, self.q0 - frontier / (1.0 + self.eps)))
 
-    def stopped(self, open_list: OpenList) -> SearchResult:
+    def stopped(self, open_list: OpenList, status: str | None = None) -> SearchResult:
         """The result of a search stopped before its goal test: the best grasp and its certificate.
+
+        Args:
+            open_list: The open states.
+            status: Why it stopped; None: its time limit or its stop request.
 
         Raises:
             SearchTimeout: When no valid grasp could be found in time (none was evaluated
                 and the dive found none).
         """
-        status = "interrupted" if self.stop is not None and self.stop.is_set() else "stopped"
+        if status is None:
+            status = "interrupted" if self.stop is not None and self.stop.is_set() else "stopped"
         if self.incumbent is None:
             self.dive(open_list)
-        if status == "stopped":  # not when interrupted: the user is waiting
+        if status != "interrupted":  # the user is waiting
             self.polish(time.perf_counter(), stopping=True)
         inc = self.incumbent
         if inc is None:
-            # Every unexplored grasp lies below an open state, so q0 - min bounds the optimum.
-            upper = self.q0 - open_list.lowest_lower()
-            seconds = None if status == "interrupted" or self.time_limit is None else float(self.time_limit)
-            raise SearchTimeout(self.config["method"], seconds, sum(self.visited.values()), None, upper)
+            # Every unexplored grasp lies below an open or forgotten state, so q0 - min bounds the optimum.
+            upper = self.q0 - self.lowest_lower(open_list)
+            seconds = None if status != "stopped" or self.time_limit is None else float(self.time_limit)
+            visited = sum(self.visited.values())
+            raise SearchTimeout(self.config["method"], seconds, visited, None, upper, status == "memory")
         result = self.result(inc, self.q0 - inc.q, open_list)
         # The incumbent may already beat every open bound: then it is proven optimal.
         if result.bound <= result.q1:
@@ -341,20 +359,24 @@ class Search(SearchOutcome):
             if part is not None and child_depth == part.depth and not part.owns(self.first_contacts(child)):
                 continue
             self.created[child_depth] = self.created.get(child_depth, 0) + 1
-            child_id = ids[child] = next(self._ids)
+            # U may be negative (then q = 0): clip so the bound never exceeds the true f.
+            child_lower = max(q0 - min(q0, max(0.0, upper)), inherited)
+            if child_lower > self.cutoff and not self.record_tree:
+                self.dropped += 1  # as push would, without taking an id and a row
+                continue
+            child_id = ids[child] = self._ids.take()
             self.remember(child_id, child)
             if self.record_tree:
                 self._parent.append(ident)
                 self._level.append(child_depth)
                 self._visited.append(False)
                 self._f.append(0.0)
-            # U may be negative (then q = 0): clip so the bound never exceeds the true f.
-            bound = q0 - min(q0, max(0.0, upper))
-            self.push(open_list, max(bound, inherited), child_depth, BOUND, math.nan, child_id)
+            self.push(open_list, child_lower, child_depth, BOUND, math.nan, child_id)
         inc = self.incumbent
         if inc is not None and inc.parent == state:
-            # The incumbent is a created state now (first ordering of its contacts).
-            child_id = next(i for c, i in ids.items() if tuple(sorted(c)) == inc.state)
+            # The incumbent is a created state now (first ordering of its contacts); its lower
+            # bound is at most its cost, below the cutoff, so it was not dropped (-1 if it were).
+            child_id = next((i for c, i in ids.items() if tuple(sorted(c)) == inc.state), -1)
             self.incumbent = Incumbent(inc.q, inc.state, None, child_id)
         return ids
 

@@ -51,12 +51,13 @@ from planner.config.methods import (
     SearchConfig,
     WAStarConfig,
 )
-from planner.config.options import JOBS, TIME_LIMIT, options_of
+from planner.config.options import JOBS, MEMORY_LIMIT, TIME_LIMIT, options_of
 from planner.grasp.constraints import Constraint, DistinctContacts
 from planner.grasp.contact_set import ContactSet
 from planner.infra.errors import OgcpError, choice_error
 from planner.infra.provenance import provenance
 from planner.search.best_first import Search
+from planner.search.memory import states_budget
 from planner.search.parts import search_in_parts
 from planner.search.result import SearchResult
 
@@ -93,6 +94,10 @@ class GraspPlanner:
             optimum (``bound``, ``gap``). None: unlimited.
         jobs: Processes for one search (:mod:`planner.search.parts`): the grasps are dealt to
             ``jobs`` parts searched side by side. A* returns an optimal grasp either way.
+        memory_limit: Most memory of the search, all its processes together [GiB]. Past it a
+            search forgets its least promising open states, and once it would have to expand
+            one no better than a forgotten state it returns its best grasp with status
+            ``memory`` and the certified bound (:mod:`planner.search.memory`). None: unlimited.
     """
 
     def __init__(
@@ -112,6 +117,7 @@ class GraspPlanner:
         record_tree: bool = SearchConfig.record_tree,
         time_limit: float | None = None,
         jobs: int = 1,
+        memory_limit: float | None = MEMORY_LIMIT.default,
     ) -> None:
         self.method = method
         self.eps = eps
@@ -128,6 +134,7 @@ class GraspPlanner:
         self.record_tree = record_tree
         self.time_limit = time_limit
         self.jobs = jobs
+        self.memory_limit = memory_limit
 
     def resolved_config(self) -> dict[str, Any]:
         """Validate the parameters (by the method's configuration class) and fill in its defaults.
@@ -200,6 +207,8 @@ class GraspPlanner:
         if limit is not None:
             TIME_LIMIT.check("time_limit", limit)
         jobs = JOBS.check("jobs", self.jobs)
+        memory = None if self.memory_limit is None else MEMORY_LIMIT.check("memory_limit", self.memory_limit)
+        budget = states_budget(memory, jobs)
         if jobs > 1 and self.record_tree:
             raise OgcpError("record_tree needs jobs = 1: each part of a search keeps a tree of its own")
         if jobs > 1:
@@ -214,6 +223,7 @@ class GraspPlanner:
                     stop,
                     on_expand=lambda f: bar.update(),
                     on_progress=lambda best, bound: bar.set_postfix_str(progress_text(best, bound)),
+                    memory_limit=budget,
                 )
         search = Search(
             contacts,
@@ -223,6 +233,7 @@ class GraspPlanner:
             self.record_tree,
             None if limit is None else float(limit),
             stop,
+            memory_limit=budget,
         )
         with tqdm(desc=config["method"], unit=" expansions", disable=not progress, leave=False) as bar:
             search.on_expand = lambda f: bar.update()

@@ -71,13 +71,16 @@ def _pop_top(values: np.ndarray, order: np.ndarray, size: int) -> None:
 
 
 @cached_njit()
-def _purge(values: np.ndarray, order: np.ndarray, size: int, cutoff: float, removed: np.ndarray) -> int:
-    """Move the entries of lower bound <= ``cutoff`` to the front in place (no copy of millions of
-    rows), collect the others' packed ids in ``removed`` and make the front a heap again."""
+def _purge(
+    values: np.ndarray, order: np.ndarray, size: int, column: int, limit: float, keep: int, removed: np.ndarray
+) -> int:
+    """Move the entries whose value in ``column`` (0: key, 1: lower bound) is <= ``limit``, and the
+    entry of packed id ``keep``, to the front in place (no copy of millions of rows), collect the
+    others' packed ids in ``removed`` and make the front a heap again."""
     kept = 0
     gone = 0
     for i in range(size):
-        if values[i, 1] <= cutoff:
+        if values[i, column] <= limit or order[i, 2] == keep:
             if kept != i:
                 for j in range(3):
                     values[kept, j] = values[i, j]
@@ -89,6 +92,49 @@ def _purge(values: np.ndarray, order: np.ndarray, size: int, cutoff: float, remo
     for pos in range(kept // 2 - 1, -1, -1):
         _sift_down(values, order, pos, kept)
     return kept
+
+
+@cached_njit()
+def _scan_from(
+    values: np.ndarray, order: np.ndarray, size: int, threshold: float, keep: int
+) -> tuple[int, float, float, int]:
+    """(count, smallest key, smallest lower bound) of the entries of key >= ``threshold`` but
+    state id ``keep``'s, and the packed id of ``keep``'s entry (-1: none)."""
+    count = 0
+    key = np.inf
+    lowest = np.inf
+    keep_packed = -1
+    for i in range(size):
+        if order[i, 2] >> _STAGE_BITS == keep:
+            keep_packed = order[i, 2]
+        elif values[i, 0] >= threshold:
+            count += 1
+            key = min(key, values[i, 0])
+            lowest = min(lowest, values[i, 1])
+    return count, key, lowest, keep_packed
+
+
+@cached_njit()
+def _key_weights(
+    values: np.ndarray, order: np.ndarray, size: int, bins: int, base: float, stage: int, extra: float
+) -> tuple[float, float, np.ndarray]:
+    """(smallest key, largest key, weight per bin): see :meth:`OpenList.key_weights`."""
+    low = np.inf
+    high = -np.inf
+    for i in range(size):
+        low = min(low, values[i, 0])
+        high = max(high, values[i, 0])
+    weights = np.zeros(bins)
+    span = high - low
+    for i in range(size):
+        b = bins - 1
+        if span > 0:
+            b = min(int((values[i, 0] - low) / span * bins), bins - 1)
+        weight = base
+        if order[i, 2] & ((1 << _STAGE_BITS) - 1) == stage:
+            weight += extra
+        weights[b] += weight
+    return low, high, weights
 
 
 class OpenList:
@@ -147,8 +193,36 @@ class OpenList:
         size = self._size
         packed = np.empty(int(np.count_nonzero(self._values[:size, 1] > cutoff)), dtype=np.int64)
         if len(packed):
-            self._size = _purge(self._values, self._order, size, cutoff, packed)
+            self._size = _purge(self._values, self._order, size, 1, cutoff, -1, packed)
         return packed >> _STAGE_BITS, packed & ((1 << _STAGE_BITS) - 1)
+
+    def forget(self, threshold: float, keep: int = -1) -> tuple[np.ndarray, np.ndarray, float, float]:
+        """Remove every entry whose key is >= ``threshold``, except those of state id ``keep``.
+
+        The others come out in the same order as before. Compiled passes, with no array of the
+        open list's size: a search forgets at its memory limit.
+
+        Returns:
+            The removed entries' state ids and stages, shape (removed,) each, and their smallest
+            key and smallest lower bound of f (inf when none was removed).
+        """
+        size = self._size
+        count, key, lowest, keep_packed = _scan_from(self._values, self._order, size, threshold, keep)
+        packed = np.empty(count, dtype=np.int64)
+        if count:
+            below = float(np.nextafter(threshold, -np.inf))
+            self._size = _purge(self._values, self._order, size, 0, below, keep_packed, packed)
+        return packed >> _STAGE_BITS, packed & ((1 << _STAGE_BITS) - 1), float(key), float(lowest)
+
+    def key_weights(self, bins: int, base: float, stage: int, extra: float) -> tuple[np.ndarray, np.ndarray]:
+        """What the entries weigh by key: a histogram of ``bins`` equal bins from the smallest
+        key to the largest, each entry weighing ``base``, plus ``extra`` at ``stage``.
+
+        Returns:
+            The bins' edges, shape (bins + 1,), and weights, shape (bins,).
+        """
+        low, high, weights = _key_weights(self._values, self._order, self._size, bins, base, stage, extra)
+        return np.linspace(low, high, bins + 1), weights
 
     def first_key(self) -> float:
         """The first entry's key (inf when empty)."""

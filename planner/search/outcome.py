@@ -12,9 +12,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from planner.search.memory import Forgetting
 from planner.search.open_list import OpenList
 from planner.search.polish import Polisher
-from planner.search.refine import ChildRefinement
 from planner.search.result import (
     SearchResult,
     SearchStats,
@@ -51,7 +51,7 @@ class Incumbent:
     contacts: tuple[int, ...] = ()
 
 
-class SearchOutcome(ChildRefinement):
+class SearchOutcome(Forgetting):
     """Results of a run (a base of :class:`planner.search.best_first.Search`, which holds the
     counters and the tree record read here)."""
 
@@ -70,7 +70,7 @@ class SearchOutcome(ChildRefinement):
     def result(self, inc: Incumbent, g: float, open_list: OpenList) -> SearchResult:
         q0, q = self.q0, inc.q
         # Every unexplored grasp lies below an open state, whose stored value bounds its cost.
-        lowest_f = min(g, open_list.lowest_lower())
+        lowest_f = min(g, self.lowest_lower(open_list))
         # Nothing open below the returned cost: the grasp is optimal (q0 - (q0 - q) may
         # round above q, so do not recompute it).
         bound = q if lowest_f >= g else max(q, q0 - lowest_f)
@@ -155,6 +155,7 @@ class SearchOutcome(ChildRefinement):
             dropped=self.dropped,
             local_search_evaluations=0 if self.polisher is None else self.polisher.evaluations,
             local_search_seconds=0.0 if self.polisher is None else self.polisher.seconds,
+            forgotten=self.forgotten,
         )
 
     def finished_status(self, q1: float, bound: float) -> str:

@@ -49,8 +49,8 @@ class PartOutcome:
     Attributes:
         result: Its best grasp's result; None when it evaluated no grasp of its own.
         bound: Certified upper bound on the Q1 of its grasps [-].
-        status: ``finished`` (its goal, or beaten by another part's grasp), ``stopped`` or
-            ``interrupted``.
+        status: ``finished`` (its goal, or beaten by another part's grasp), ``stopped``,
+            ``memory`` or ``interrupted``.
         stats: Its statistics.
     """
 
@@ -71,6 +71,7 @@ class PartTask:
         constraints: Grasp constraints, distinct contacts included.
         parts: Number of parts.
         deadline: Wall-clock time (``time.time()``) at which every part stops; None: none.
+        memory_limit: Most bytes the part's open states may take; None: unlimited.
     """
 
     contacts: ContactSet
@@ -79,6 +80,7 @@ class PartTask:
     constraints: list[Constraint]
     parts: int
     deadline: float | None
+    memory_limit: float | None = None
 
 
 def run_part(search: Search) -> PartOutcome:
@@ -89,7 +91,7 @@ def run_part(search: Search) -> PartOutcome:
         return PartOutcome(None, max(0.0, min(search.q0, done.bound)), "finished", search.statistics(0))
     except SearchTimeout as timeout:
         status = "interrupted" if search.stop is not None and search.stop.is_set() else "stopped"
-        return PartOutcome(None, timeout.upper_bound, status, search.statistics(0))
+        return PartOutcome(None, timeout.upper_bound, "memory" if timeout.memory else status, search.statistics(0))
     status = result.status if result.status in UNFINISHED else "finished"
     return PartOutcome(result, result.bound, status, result.stats)
 
@@ -104,6 +106,7 @@ def search_in_parts(
     stop: threading.Event | None = None,
     on_expand: Callable[[float], object] = lambda f: None,
     on_progress: Callable[[float | None, float], object] = lambda best, bound: None,
+    memory_limit: float | None = None,
 ) -> SearchResult:
     """One search over ``jobs`` processes (see the module docstring).
 
@@ -118,6 +121,8 @@ def search_in_parts(
         on_expand: Called with f at each expansion of part 0.
         on_progress: Called about every 0.5 s with the best Q1 of all parts (None before the
             first) and their certified bound [-].
+        memory_limit: Most bytes the open states of each part may take
+            (:func:`planner.search.memory.states_budget`); None: unlimited.
 
     Raises:
         OgcpError: When no grasp satisfies the constraints, or a part failed.
@@ -128,7 +133,7 @@ def search_in_parts(
     with owned_tempdir(TEMP_PREFIX) as folder:
         board = Board.create(folder / "board", jobs)
         with open(folder / "task.pickle", "wb") as handle:
-            pickle.dump(PartTask(contacts, m, config, constraints, jobs, deadline), handle)
+            pickle.dump(PartTask(contacts, m, config, constraints, jobs, deadline, memory_limit), handle)
         children: list[subprocess.Popen[bytes]] = []
         outcomes: list[PartOutcome] = []
         try:
@@ -139,7 +144,7 @@ def search_in_parts(
                 command = [sys.executable, "-m", "planner.search.part_child", str(folder), str(rank), str(os.getpid())]
                 children.append(subprocess.Popen(command, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, env=env))
             own_part = Part(0, board)
-            search = Search(contacts, m, config, constraints, False, time_limit, stop, own_part)
+            search = Search(contacts, m, config, constraints, False, time_limit, stop, own_part, memory_limit)
             search.on_expand, search.on_progress = on_expand, on_progress
             own = run_part(search)
             own_part.report(own.bound)
@@ -209,7 +214,10 @@ def child_main(folder: Path, rank: int) -> bytes:
             task = pickle.load(handle)
         board = Board(folder / "board", task.parts)
         limit = None if task.deadline is None else max(1e-3, task.deadline - time.time())
-        search = Search(task.contacts, task.m, task.config, task.constraints, False, limit, board, Part(rank, board))
+        part = Part(rank, board)
+        search = Search(
+            task.contacts, task.m, task.config, task.constraints, False, limit, board, part, task.memory_limit
+        )
         return pickle.dumps(run_part(search))
     except Exception as error:  # noqa: BLE001 - every failure must reach the caller as one line
         return pickle.dumps(f"search part {rank}: {type(error).__name__}: {error}")
@@ -226,17 +234,20 @@ def merge(
     """
     stopped = [o for o in outcomes if o.status in UNFINISHED]
     interrupted = any(o.status == "interrupted" for o in stopped)
+    # The time limit or a request ended the run; a part past its memory limit ended only itself.
+    why = "interrupted" if interrupted else "stopped" if any(o.status == "stopped" for o in stopped) else "memory"
     bound = max(o.bound for o in outcomes)
     found = [o.result for o in outcomes if o.result is not None]
     if not found:
         if stopped:
             visited = sum(o.stats.visited for o in outcomes)
-            raise SearchTimeout(config["method"], None if interrupted else time_limit, visited, None, min(q0, bound))
+            seconds = time_limit if why == "stopped" else None
+            raise SearchTimeout(config["method"], seconds, visited, None, min(q0, bound), why == "memory")
         raise OgcpError("no grasp satisfies the constraints")
     winner = max(found, key=lambda r: r.q1)  # the first of equals: the lowest part
     bound = min(q0, max(winner.q1, bound))
     if bound > winner.q1 and stopped:
-        status = "interrupted" if interrupted else "stopped"
+        status = why
     elif config["symmetry"]:
         status = "approximate"
     else:
@@ -279,4 +290,5 @@ def merged_stats(parts: list[SearchStats], winner: SearchResult, wall_seconds: f
         dropped=total("dropped"),
         local_search_evaluations=total("local_search_evaluations"),
         local_search_seconds=float(sum(s.local_search_seconds for s in parts)),
+        forgotten=total("forgotten"),
     )

@@ -9,7 +9,7 @@ where the children are listed by the compiled listing, the loop itself is compil
 
 from __future__ import annotations
 
-from typing import TypeGuard
+from typing import TypeGuard, cast
 
 import numpy as np
 from numpy.typing import NDArray
@@ -22,6 +22,7 @@ from planner.search.open_list import OpenList
 from planner.search.refine_kernel import NEEDS_EXACT, NEEDS_ROWS, SETTLED, YIELD
 from planner.search.refine_kernel import branch_and_bound as compiled_branch_and_bound
 from planner.search.search_space import SearchSpace, State
+from planner.search.storage import IdPool, WaitingStore
 
 #: Open-list stages (see :mod:`planner.search.best_first`).
 BOUND, EXACT_G, PARTIAL, EXACT = 0, 1, 2, 3
@@ -84,7 +85,9 @@ class ChildRefinement(SearchSpace):
     eps: float
     children_can_win: bool
     part: Part | None
-    _pending: dict[int, Waiting]
+    forgotten_key: float
+    _pending: WaitingStore
+    _ids: IdPool
 
     def push(
         self,
@@ -130,7 +133,7 @@ class ChildRefinement(SearchSpace):
         if self.is_terminal(state) or self.heuristic_kind == "none":
             self.push(open_list, max(lower, g), depth, EXACT, g, ident, key=g)
             return
-        pending = self._pending.pop(ident, None)
+        pending = self._pending.take(ident)
         if self.child_bounds is not None:
             assert pending is None or isinstance(pending, np.ndarray)
             self.compiled_refine(open_list, state, depth, lower, g, ident, pending)
@@ -138,7 +141,8 @@ class ChildRefinement(SearchSpace):
         if pending is None:
             children, bounds, starts, terminal = self.heuristic_bounds(state)
             if not len(bounds):
-                return  # no valid grasp below this state
+                self._ids.give(ident)
+                return  # no valid grasp below this state: the state is dead
             levels = self.start_levels(terminal)
         else:
             assert isinstance(pending, tuple)
@@ -150,8 +154,8 @@ class ChildRefinement(SearchSpace):
             lower = max(lower, q0 - min(q0, max(0.0, bound)))
             if level == EXACT_Q1:
                 break
-            if (1.0 + self.eps) * lower > open_list.first_key():
-                self._pending[ident] = (children, bounds, levels, starts)
+            if (1.0 + self.eps) * lower > min(open_list.first_key(), self.forgotten_key):
+                self._pending.put(ident, (children, bounds, levels, starts))
                 self.push(open_list, lower, depth, PARTIAL, g, ident)
                 return
             child_key = tuple(children[i].tolist())
@@ -191,21 +195,22 @@ class ChildRefinement(SearchSpace):
         if record is None:
             numbers, listed, directions, terminal = self.numbered_children(state)
             if not len(listed):
-                return  # no valid grasp below this state
+                self._ids.give(ident)
+                return  # no valid grasp below this state: the state is dead
             record = pack_waiting(numbers, listed, self.start_levels(terminal), directions)
         waiting = unpack_waiting(record)
         bounds, levels, _, codes = waiting
         nodes = np.array(state, dtype=np.int64)
         q0 = self.q0
         while True:
-            first_key = open_list.first_key()
+            first_key = min(open_list.first_key(), self.forgotten_key)
             outcome, i, lower = self.branch_and_bound(
                 nodes, waiting, lower, q0, first_key, self.eps, self.children_can_win
             )
             if outcome == SETTLED:
                 break
             if outcome == YIELD:
-                self._pending[ident] = record
+                self._pending.put(ident, record)
                 self.push(open_list, lower, depth, PARTIAL, g, ident)
                 return
             child = self.child_of_number(state, int(codes[i]))
@@ -230,7 +235,7 @@ class ChildRefinement(SearchSpace):
         record), or None when none wait."""
         pending = self._pending.get(ident)
         if pending is None or isinstance(pending, tuple):
-            return pending
+            return cast(Pending | None, pending)
         bounds, levels, starts, codes = unpack_waiting(pending)
         state = self.state_of(ident)
         rows = np.array([self.child_of_number(state, int(code)) for code in codes.tolist()], dtype=np.int32)

@@ -18,11 +18,12 @@ from planner.records.plan import check_result, plan_record
 #: What a search result certifies. ``optimal``: no grasp beats it (bound = Q1);
 #: ``bounded``: WA* finished, its cost within 1 + eps of the optimum's; ``approximate``:
 #: optimal over the symmetry-reduced space only; ``stopped``: the time limit ran out, the
-#: best grasp found so far is returned with the certified bound; ``interrupted``: the same,
-#: stopped by a request (Ctrl-C in the CLI).
-SEARCH_STATUSES = ("optimal", "bounded", "approximate", "stopped", "interrupted")
+#: best grasp found so far is returned with the certified bound; ``memory``: the same, stopped
+#: at its memory limit (:mod:`planner.search.memory`); ``interrupted``: the same, stopped by a
+#: request (Ctrl-C in the CLI).
+SEARCH_STATUSES = ("optimal", "bounded", "approximate", "stopped", "memory", "interrupted")
 #: The statuses of a search that did not finish.
-UNFINISHED = ("stopped", "interrupted")
+UNFINISHED = ("stopped", "memory", "interrupted")
 
 
 @dataclass(frozen=True)
@@ -57,6 +58,7 @@ class SearchStats:
             pop them before its goal).
         local_search_evaluations: Grasps scored by local search (:mod:`planner.search.polish`).
         local_search_seconds: Wall-clock time local search took, part of ``wall_seconds`` [s].
+        forgotten: Open states forgotten at the memory limit (:mod:`planner.search.memory`).
     """
 
     created: int
@@ -80,6 +82,7 @@ class SearchStats:
     dropped: int = 0
     local_search_evaluations: int = 0
     local_search_seconds: float = 0.0
+    forgotten: int = 0
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready form."""
@@ -105,6 +108,7 @@ class SearchStats:
             "dropped": self.dropped,
             "local_search_evaluations": self.local_search_evaluations,
             "local_search_seconds": self.local_search_seconds,
+            "forgotten": self.forgotten,
         }
 
 

@@ -75,3 +75,26 @@ def test_ctrl_c_stops_the_search_and_prints_its_best_grasp(tmp_path):
     assert record["status"] == "interrupted" and "stopping; the best grasp so far follows" in err
     assert json.loads(path.read_text()) == record
     _check_certificate(record, 1000)
+
+
+def test_memory_limit_prints_the_best_grasp_with_its_bound_and_exits_4(monkeypatch):
+    """A search past its memory limit is a result too (the process allowance shrunk so that a few
+    kilobytes of open states hit it)."""
+    from planner.search import memory
+
+    monkeypatch.setattr(memory, "PROCESS_BYTES", 2**30 - 8 * 1024)
+    monkeypatch.setattr(memory, "MIN_STATES_BYTES", 1024)
+    argv = ["plan", "sphere", "-n", "40", "-m", "4", "--memory-limit", "1", "--json"]
+    status, out, err = _run(argv)
+    record = json.loads(out)
+    assert status == 4 and record["status"] == "memory" and err == ""
+    assert record["stats"]["forgotten"] > 0
+    _check_certificate(record, 40)
+    status, text, _ = _run(argv[:-1])
+    assert status == 4 and "stopped at its memory limit: best so far, optimum <=" in text
+
+
+def test_a_memory_limit_too_small_for_the_processes_is_one_line(tmp_path):
+    status, _, err = _run(["plan", "box", "-n", "20", "--memory-limit", "0.5", "--jobs", "2"])
+    assert status == 2 and err.count("\n") == 1
+    assert "memory_limit 0.5 GiB is too small for a search in 2 process(es): give at least 0.875 GiB" in err

@@ -12,7 +12,7 @@ import pytest
 
 from planner.grasp import q1
 from planner.infra import OgcpError, SearchTimeout
-from planner.search import GraspPlanner, effective_branching_factor
+from planner.search import GraspPlanner, effective_branching_factor, memory
 from planner.search import best_first as search_run
 from tests.conftest import exhaustive_best
 
@@ -268,7 +268,7 @@ def test_dropping_states_past_the_best_grasp_changes_nothing_but_memory(name, ob
     # Purged at every iteration once the cutoff falls: still the same expansions.
     monkeypatch.setattr(search_run, "DROP_MARGIN", 1e-9)
     monkeypatch.setattr(search_run, "PROGRESS_SECONDS", 0.0)
-    monkeypatch.setattr(search_run, "PURGE_SECONDS", 0.0)
+    monkeypatch.setattr(memory, "PURGE_SECONDS", 0.0)
     purging = GraspPlanner(seed=2).plan(contacts, 3)
     assert purging.stats.trace == keeping.stats.trace and purging.grasp == keeping.grasp
     assert purging.stats.dropped > dropping.stats.dropped  # entries made before the best grasp was found
