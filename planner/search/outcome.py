@@ -58,7 +58,8 @@ class SearchOutcome(Forgetting):
     record_tree: bool
     created: dict[int, int]
     visited: dict[int, int]
-    trace: list[tuple[int, float]]
+    trace: np.ndarray
+    expansions: int
     dropped: int
     polisher: Polisher | None
     _clock: tuple[float, float]
@@ -147,7 +148,7 @@ class SearchOutcome(Forgetting):
             symmetric_removed=self.symmetry.removed if self.symmetry else 0,
             effective_branching_factor=effective_branching_factor(sum(created.values()) - 1, solution_depth),
             solution_depth=solution_depth,
-            trace=tuple(self.trace),
+            trace=tuple(enumerate(self.trace[: self.expansions].tolist())),
             wall_seconds=time.perf_counter() - wall0,
             cpu_seconds=time.process_time() - cpu0,
             peak_rss_bytes=peak_rss_bytes(),
