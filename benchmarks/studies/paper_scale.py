@@ -8,8 +8,9 @@ a row too, with status ``stopped`` and its certified bound; ``--retry-stopped`` 
 (with a longer ``--time-limit``), and the table takes the newer row. ``table.md`` and ``table.csv`` hold
 minutes per object and method, plus created/visited states, b*, whether A* matched ES, and
 for a search not proven optimal its status and the gap to its bound. Every row records the
-search's status, bound, peak memory (summed over its processes) and processes
-(``--search-jobs``: one search dealt to that many, see :mod:`planner.search.parts`); a
+search's status, bound, peak memory (summed over its processes), processes
+(``--search-jobs``: one search dealt to that many, see :mod:`planner.search.parts`) and the
+states it forgot at its memory limit (``--memory-limit``, see :mod:`planner.search.memory`); a
 ``runs.csv`` written before those columns existed is rewritten with them empty.
 """
 
@@ -22,7 +23,7 @@ from pathlib import Path
 
 from planner import GraspPlanner, sample_contacts
 from planner.baselines.es import ExhaustiveSearch
-from planner.config.options import MAX_TIME_LIMIT
+from planner.config.options import MAX_TIME_LIMIT, MEMORY_LIMIT
 from planner.grasp.reach import default_tip_radius
 from planner.objects.resolve import resolve_object
 from planner.search.result import UNFINISHED
@@ -44,6 +45,7 @@ FIELDS = (
     "bound",
     "peak_mib",
     "jobs",
+    "forgotten",
 )
 
 
@@ -115,13 +117,23 @@ def main(argv: list[str] | None = None) -> int:
         "--time-limit", type=float, default=None, help="wall seconds per A* / WA* search; a stopped search is a row too"
     )
     parser.add_argument(
-        "--retry-stopped", action="store_true", help="run again the searches recorded as stopped (the last row counts)"
+        "--memory-limit",
+        type=float,
+        default=MEMORY_LIMIT.default,
+        help=f"GiB per A* / WA* search, all its processes (default {MEMORY_LIMIT.default:g})",
+    )
+    parser.add_argument(
+        "--retry-stopped",
+        action="store_true",
+        help="run again the searches recorded as stopped or past their memory limit (the last row counts)",
     )
     args = parser.parse_args(argv)
     if args.search_jobs < 1:
         parser.error(f"--search-jobs must be >= 1, got {args.search_jobs}")
     if args.time_limit is not None and not 0 < args.time_limit <= MAX_TIME_LIMIT:
         parser.error(f"--time-limit must be in (0, {MAX_TIME_LIMIT:g}] seconds, got {args.time_limit:g}")
+    if not args.memory_limit > 0:
+        parser.error(f"--memory-limit must be > 0 GiB, got {args.memory_limit:g}")
     args.out.mkdir(parents=True, exist_ok=True)
     log = args.out / "runs.csv"
     unfinished = UNFINISHED if args.retry_stopped else ()
@@ -141,7 +153,7 @@ def main(argv: list[str] | None = None) -> int:
             es = ExhaustiveSearch(jobs=args.jobs, checkpoint=args.out / f"es_{name}_{args.n}", progress=True)
             r = es.run(contacts, m)
             row = {"created": "", "visited": "", "b_star": "", "wall_s": r.wall_seconds, "cpu_s": r.cpu_seconds}
-            row.update({"status": "optimal", "bound": r.q1, "peak_mib": "", "jobs": args.jobs})  # its own bound
+            row.update({"status": "optimal", "bound": r.q1, "peak_mib": "", "jobs": args.jobs, "forgotten": ""})
         else:
             planner = GraspPlanner(
                 method=method,
@@ -149,6 +161,7 @@ def main(argv: list[str] | None = None) -> int:
                 seed=args.seed,
                 time_limit=args.time_limit,
                 jobs=args.search_jobs,
+                memory_limit=args.memory_limit,
             )
             r = planner.plan(contacts, m)
             s = r.stats
@@ -162,6 +175,7 @@ def main(argv: list[str] | None = None) -> int:
                 "bound": r.bound,
                 "peak_mib": round(s.peak_rss_bytes / 2**20),
                 "jobs": args.search_jobs,
+                "forgotten": s.forgotten,
             }
         row.update(
             {
