@@ -97,4 +97,4 @@ def test_memory_limit_prints_the_best_grasp_with_its_bound_and_exits_4(monkeypat
 def test_a_memory_limit_too_small_for_the_processes_is_one_line(tmp_path):
     status, _, err = _run(["plan", "box", "-n", "20", "--memory-limit", "0.5", "--jobs", "2"])
     assert status == 2 and err.count("\n") == 1
-    assert "memory_limit 0.5 GiB is too small for a search in 2 process(es): give at least 0.875 GiB" in err
+    assert "memory_limit 0.5 GiB is too small for a search in 2 process(es): give at least 1 GiB" in err
