@@ -37,7 +37,7 @@ FORGET_BINS = 1 << 14
 #: [bytes] What a search process holds beside its open states: the interpreter and its
 #: libraries (about 270 MiB), the tree's support vectors, the table of children's bounds, the
 #: Q1 cache and the heap's slack. At 1.5 GiB for amphora m = 6 in two processes (1000 contacts)
-#: 384 MiB left the peak at 1551 MiB, 1 % over the limit.
+#: 384 MiB left the peak at 1551 MiB, 1 % over the limit; 448 MiB at 1450 MiB.
 PROCESS_BYTES = 448 * 2**20
 #: [bytes] The least memory a search (or part) may give its open states.
 MIN_STATES_BYTES = 64 * 2**20

@@ -19,8 +19,9 @@ from planner.infra.arrays import grow_rows
 #: A state's waiting children: one packed record (the compiled branch and bound) or a tuple of
 #: arrays (the Python one); see :data:`planner.search.refine.Waiting`.
 Waiting = NDArray[np.uint8] | tuple[NDArray[Any], ...]
-#: [bytes] What a waiting record costs beside its arrays' data: its dictionary slot and each
-#: array's object (measured with ``tracemalloc``: 100-120 bytes an array).
+#: [bytes] What a waiting record costs beside its arrays' data, per array: its object and a
+#: share of the dictionary slot (200 k records of one 768-byte array each took 228 bytes a
+#: record of resident memory beyond their data).
 WAITING_OVERHEAD = 120
 
 
