@@ -49,9 +49,6 @@ class WaitingStore:
     def __bool__(self) -> bool:
         return bool(self._records)
 
-    def __contains__(self, ident: int) -> bool:
-        return ident in self._records
-
     def items(self) -> Iterator[tuple[int, Waiting]]:
         return iter(self._records.items())
 
