@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from benchmarks.cli.options import number, positive_int, typed, valid
-from planner.config.options import JOBS, TIME_LIMIT
+from planner.config.options import JOBS, MEMORY_LIMIT, TIME_LIMIT
 from planner.infra.parallel import BACKENDS
 
 
@@ -70,6 +70,14 @@ def register(commands: Any) -> None:
         help=f"wall-clock budget per search cell (astar, wastar, dijkstra), {TIME_LIMIT.bounds()}; a cell past it is "
         "recorded as stopped, with its best grasp, certified bound and gap (rerun it with "
         "--resume --retry-errors and a larger budget)",
+    )
+    suite.add_argument(
+        "--memory-limit",
+        type=typed(MEMORY_LIMIT),
+        default=MEMORY_LIMIT.default,
+        metavar="GIB",
+        help=f"most memory of each search cell, all its processes (default {MEMORY_LIMIT.default:g}); a cell "
+        "past it is recorded as stopped, with status 'memory', its best grasp and certified bound",
     )
     suite.add_argument(
         "--no-simulation",
@@ -154,6 +162,7 @@ def run_suite(args: argparse.Namespace) -> int:
         max_cells=args.max_cells,
         only=args.only,
         time_limit=args.time_limit,
+        memory_limit=args.memory_limit,
         progress=terminal and not args.quiet,
         lines=lines,
     )

@@ -21,6 +21,7 @@ from typing import Any
 
 from benchmarks.suite.config import EXTERNAL_METHOD, Cell, best_grasp
 from benchmarks.suite.record import CellError, CellRecord
+from planner.config.options import MEMORY_LIMIT
 from planner.grasp.contact_set import ContactSet, sample_contacts
 from planner.grasp.quality import q1_certificate
 from planner.grasp.reach import default_tip_radius
@@ -39,7 +40,12 @@ SIMULATION_ARGUMENTS = ("decomposition", "max_grasps")
 EXTERNAL_STATUS = "external"
 
 
-def run_cell(cell: Cell, simulation: dict[str, Any] | None = None, time_limit: float | None = None) -> dict[str, Any]:
+def run_cell(
+    cell: Cell,
+    simulation: dict[str, Any] | None = None,
+    time_limit: float | None = None,
+    memory_limit: float | None = MEMORY_LIMIT.default,
+) -> dict[str, Any]:
     """Run one cell and return its JSON-ready record.
 
     Args:
@@ -50,6 +56,9 @@ def run_cell(cell: Cell, simulation: dict[str, Any] | None = None, time_limit: f
             it the cell is recorded with status ``stopped`` and the best grasp found, its
             certified bound and gap (a ``SearchTimeout`` error when it had found none).
             None: unlimited.
+        memory_limit: Most memory of a search cell, all its processes [GiB]; past it the
+            cell is recorded like one past its time limit, with status ``memory``
+            (:mod:`planner.search.memory`). None: unlimited.
 
     Returns:
         The JSON form of its :class:`~benchmarks.suite.record.CellRecord` (schema ``ogcp.cell/1``).
@@ -60,7 +69,7 @@ def run_cell(cell: Cell, simulation: dict[str, Any] | None = None, time_limit: f
         if cell.method == EXTERNAL_METHOD:
             plan, sim, sim_seconds = run_external(cell, simulation)
         else:
-            plan = plan_record(cell, contact_set(cell), time_limit)
+            plan = plan_record(cell, contact_set(cell), time_limit, memory_limit)
         if simulation is not None and sim is None:
             sim0 = time.perf_counter()
             sim = simulate(plan, simulation)
@@ -118,14 +127,19 @@ def _contacts(
     return sample_contacts(mesh, n, seed, mu, cone_edges, source, tip_radius=radius, torsional_friction=torsion)
 
 
-def plan_record(cell: Cell, contacts: ContactSet, time_limit: float | None = None) -> dict[str, Any]:
+def plan_record(
+    cell: Cell,
+    contacts: ContactSet,
+    time_limit: float | None = None,
+    memory_limit: float | None = MEMORY_LIMIT.default,
+) -> dict[str, Any]:
     """Run the cell's method and return its ``ogcp.plan/1`` record (the same record ``ogcp plan`` writes).
 
     Raises:
         OgcpError: For parameters the installed planner does not support.
     """
     spec = method_spec(cell.method)
-    options = RunOptions(time_limit=time_limit, contact_seed=cell.contact_seed)
+    options = RunOptions(time_limit=time_limit, memory_limit=memory_limit, contact_seed=cell.contact_seed)
     return spec.run(spec.config(**dict(cell.variant)), contacts, cell.m, options).record
 
 

@@ -121,6 +121,7 @@ def session_record(
     max_cells: int | None,
     only: Sequence[str],
     time_limit: float | None,
+    memory_limit: float | None = None,
 ) -> dict[str, Any]:
     """One session of a run: when it started, the code and how it ran (the runner's options)."""
     info = provenance()
@@ -136,6 +137,7 @@ def session_record(
         "max_cells": max_cells,
         "only": list(only),
         "time_limit": time_limit,
+        "memory_limit": memory_limit,
     }
 
 

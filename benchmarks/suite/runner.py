@@ -40,7 +40,7 @@ from benchmarks.suite.manifest import (
 from benchmarks.suite.record import CellRecord
 from benchmarks.suite.select import Selection, is_selected, parse_selection
 from benchmarks.suite.store import LOCK, ResultStore
-from planner.config.options import JOBS, TIME_LIMIT
+from planner.config.options import JOBS, MEMORY_LIMIT, TIME_LIMIT
 from planner.infra.errors import OgcpError
 from planner.infra.parallel import run_tasks, validate_backend
 
@@ -111,6 +111,9 @@ class SuiteRunner:
         time_limit: Wall-clock budget of each search cell [s] (an execution policy, not part
             of the suite: a cell past it is recorded as an error, to rerun with
             ``retry_errors`` and a larger limit). None: unlimited.
+        memory_limit: Most memory of each search cell, all its processes [GiB]
+            (:mod:`planner.search.memory`); a cell past it is recorded like one past its time
+            limit. None: unlimited.
         only: Run only the cells matching these ``KEY=VALUE[,VALUE...]`` items
             (:mod:`benchmarks.suite.select`); the others stay for a later ``resume``.
         progress: Show a progress bar on stderr (for a terminal).
@@ -134,6 +137,7 @@ class SuiteRunner:
         max_cells: int | None = None,
         only: Sequence[str] = (),
         time_limit: float | None = None,
+        memory_limit: float | None = MEMORY_LIMIT.default,
         progress: bool = False,
         lines: str = "none",
         interval: float = 10.0,
@@ -149,6 +153,7 @@ class SuiteRunner:
         self.max_cells = max_cells
         self.only = tuple(only)
         self.time_limit = time_limit
+        self.memory_limit = memory_limit
         self.progress = progress
         self.lines = lines
         self.interval = interval
@@ -178,6 +183,8 @@ class SuiteRunner:
                 raise OgcpError(
                     f"time_limit must be a number of seconds {TIME_LIMIT.bounds()}, got {self.time_limit!r}"
                 ) from None
+        if self.memory_limit is not None:
+            MEMORY_LIMIT.check("memory_limit", self.memory_limit)
         store = ResultStore(self.out)
         fresh = _is_fresh(self.out)
         if not fresh and not self.resume:
@@ -207,6 +214,7 @@ class SuiteRunner:
             self.max_cells,
             self.only,
             self.time_limit,
+            self.memory_limit,
         )
         if manifest is None:
             manifest = new_manifest(self.suite, session)
@@ -256,7 +264,8 @@ class SuiteRunner:
         meter = _Meter(self.suite.name, len(self.suite.cells), skipped, len(todo), self.lines, self.interval, say)
         warmups: dict[int, float] = {}
         try:
-            tasks = [(cell, settings if cell.simulate else None, self.time_limit) for cell in todo]
+            limits = (self.time_limit, self.memory_limit)
+            tasks = [(cell, settings if cell.simulate else None, *limits) for cell in todo]
             finished = run_tasks(_run_warm_cell, tasks, self.jobs, self.backend, self.address) if tasks else iter(())
             for line, pid, warmup in finished:
                 # A process already warm from an earlier run in it (loky reuses its workers) compiled nothing.

@@ -42,7 +42,7 @@ def stub(monkeypatch: pytest.MonkeyPatch) -> list[float]:
     """Cells that only record their parameters; a kernel warm-up that counts its calls."""
     calls: list[float] = []
 
-    def run_cell(cell: Any, settings: Any, time_limit: Any) -> dict[str, Any]:
+    def run_cell(cell: Any, settings: Any, time_limit: Any, memory_limit: Any) -> dict[str, Any]:
         plan = {"method": "astar", "q1": 0.07, "q_ows": 0.1, "bound": 0.07, "stats": {"cpu_seconds": 0.1}}
         return CellRecord(cell.id, cell.params(), plan=plan, wall_seconds=0.5).to_dict()
 

@@ -551,3 +551,29 @@ def test_time_limit_records_search_cells_as_stopped_and_retry_completes(tiny_fil
     assert [s["time_limit"] for s in ResultStore(out).read_manifest()["sessions"]] == [1e-9, None]
     with pytest.raises(OgcpError, match="time_limit must be a number of seconds > 0"):
         SuiteRunner(load_suite(tiny_file), tmp_path / "bad", time_limit=-1).run()
+
+
+def test_memory_limit_records_search_cells_as_stopped_with_status_memory(tmp_path, monkeypatch):
+    """The process allowance shrunk so that a few kilobytes of open states reach the limit."""
+    from planner.search import memory
+
+    suite = tmp_path / "forty.toml"
+    suite.write_text(
+        'schema_version = 1\nname = "forty"\nobjects = ["sphere"]\ncontacts = 40\ncontact_seeds = [0]\n'
+        'm = [4]\n\n[[methods]]\nmethod = "astar"\n'
+    )
+    monkeypatch.setattr(memory, "PROCESS_BYTES", 2**30 - 8 * 1024)
+    monkeypatch.setattr(memory, "MIN_STATES_BYTES", 1024)
+    out = tmp_path / "out"
+    limited = SuiteRunner(load_suite(suite), out, memory_limit=1.0).run()
+    (record,) = limited.records.values()
+    plan = record["plan"]
+    assert record["status"] == "stopped" and plan["status"] == "memory" and plan["stats"]["forgotten"] > 0
+    assert 0 <= plan["q1"] < plan["bound"] <= plan["q_ows"]
+    monkeypatch.undo()  # the real allowance: the cell ends within it
+    retried = SuiteRunner(load_suite(suite), out, resume=True, retry_errors=True).run()
+    assert retried.ran == 1 and retried.errors == 0
+    assert ResultStore(out).read().latest()[record["id"]]["plan"]["status"] == "optimal"
+    assert [s["memory_limit"] for s in ResultStore(out).read_manifest()["sessions"]] == [1.0, 4.0]
+    with pytest.raises(OgcpError, match="memory_limit"):
+        SuiteRunner(load_suite(suite), tmp_path / "bad", memory_limit=0).run()
