@@ -43,6 +43,7 @@ from benchmarks.suite.store import LOCK, ResultStore
 from planner.config.options import JOBS, MEMORY_LIMIT, TIME_LIMIT
 from planner.infra.errors import OgcpError
 from planner.infra.parallel import run_tasks, validate_backend
+from planner.search.memory import states_budget
 
 #: Progress line modes: none, one line per finished cell at most every ``interval`` s, every cell.
 PROGRESS_LINES = ("none", "periodic", "each")
@@ -183,8 +184,8 @@ class SuiteRunner:
                 raise OgcpError(
                     f"time_limit must be a number of seconds {TIME_LIMIT.bounds()}, got {self.time_limit!r}"
                 ) from None
-        if self.memory_limit is not None:
-            MEMORY_LIMIT.check("memory_limit", self.memory_limit)
+        if self.memory_limit is not None:  # each cell's search runs in one process
+            states_budget(MEMORY_LIMIT.check("memory_limit", self.memory_limit), 1)
         store = ResultStore(self.out)
         fresh = _is_fresh(self.out)
         if not fresh and not self.resume:

@@ -577,3 +577,5 @@ def test_memory_limit_records_search_cells_as_stopped_with_status_memory(tmp_pat
     assert [s["memory_limit"] for s in ResultStore(out).read_manifest()["sessions"]] == [1.0, 4.0]
     with pytest.raises(OgcpError, match="memory_limit"):
         SuiteRunner(load_suite(suite), tmp_path / "bad", memory_limit=0).run()
+    with pytest.raises(OgcpError, match="memory_limit 0.1 GiB is too small for a search in 1 process"):
+        SuiteRunner(load_suite(suite), tmp_path / "bad", memory_limit=0.1).run()
