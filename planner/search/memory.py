@@ -27,7 +27,7 @@ from planner.search.storage import IdPool, WaitingStore
 #: Bytes of one open-list entry (:class:`planner.search.open_list.OpenList`).
 ENTRY_BYTES = 48
 #: Share of the limit a search keeps once it has forgotten states: room to grow before the
-#: next forgetting, which sorts every open key.
+#: next forgetting, which passes over every open entry twice.
 FORGET_TO = 0.75
 #: [s] Least time between two purges of the open list (each costs O(open states)).
 PURGE_SECONDS = 10.0
