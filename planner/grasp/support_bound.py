@@ -90,14 +90,14 @@ class SupportBound:
 
         length = min(len(v) for v in vectors)
         rows = np.stack([v[:length] for v in vectors])
-        return float(union_facet_bound(self._wrenches, union, rows, self.directions, length, first, last))
+        return float(union_facet_bound(self._wrenches, union, rows, self.directions, length, first, last)[0])
 
     def facet_bound_along(self, union: NDArray[np.uint8], start: int) -> float:
         """The facet bound of Q1 of a union of contacts from direction ``start`` of D [-]
         (:func:`~planner.grasp.kernel.ray_bound.union_facet_bound_along`)."""
         from planner.grasp.kernel.ray_bound import union_facet_bound_along
 
-        return float(union_facet_bound_along(self._wrenches, union, self.directions[start]))
+        return float(union_facet_bound_along(self._wrenches, union, self.directions[start])[0])
 
     def lowest_directions(self, vectors: Sequence[Vector], count: int) -> NDArray[np.float64]:
         """The ``count`` directions along which the union's support is smallest, shape (count, 6)."""

@@ -79,11 +79,16 @@ class ChildRefinement(SearchSpace):
         q0: Q1 of all contacts [-].
         eps: WA*'s eps (0 for A*).
         children_can_win: Whether a grasp child may become the incumbent.
+        share_normals: Whether the compiled branch and bound lowers the other children's
+            bounds along each new facet bound's normal
+            (:func:`planner.search.refine_kernel.share_normal`); the Python loop does not,
+            so tests that compare the two loops step for step turn it off.
     """
 
     q0: float
     eps: float
     children_can_win: bool
+    share_normals: bool = True
     part: Part | None
     forgotten_key: float
     _pending: WaitingStore
@@ -283,6 +288,7 @@ class ChildRefinement(SearchSpace):
             first_key,
             eps,
             report_grasps,
+            self.share_normals,
             self.contacts.wrenches,
             bounds.directions,
             bounds.count,

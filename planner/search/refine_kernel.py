@@ -55,8 +55,9 @@ class ChildBounds:
         self.keys = np.empty((slots, m), dtype=np.int32)
         self.values = np.empty(slots)
         self.levels = np.full(slots, -1, dtype=np.int8)  # -1: empty
-        #: (entries in use, facet bounds computed, children settled as zero)
-        self.counters = np.zeros(3, dtype=np.int64)
+        #: (entries in use, facet bounds computed, children settled as zero, facet normals
+        #: shared with siblings, siblings' bounds they lowered)
+        self.counters = np.zeros(5, dtype=np.int64)
 
     @property
     def facet_bounds(self) -> int:
@@ -65,6 +66,11 @@ class ChildBounds:
     @property
     def rejections(self) -> int:
         return int(self.counters[2])
+
+    @property
+    def lowered(self) -> int:
+        """Children's bounds lowered by a sibling's facet normal (:func:`share_normal`)."""
+        return int(self.counters[4])
 
     def get(self, key: NDArray[np.int32]) -> tuple[float, int] | None:
         """A child's remembered (bound [-], level), or None."""
@@ -130,6 +136,7 @@ def branch_and_bound(
     first_key: float,
     eps: float,
     report_grasps: bool,
+    share: bool,
     wrenches: np.ndarray,
     directions: np.ndarray,
     count: int,
@@ -164,6 +171,8 @@ def branch_and_bound(
         first_key: The open list's first key (inf when empty).
         eps: WA*'s eps (0 for A*).
         report_grasps: Return when a grasp child becomes exact here.
+        share: Lower the other children's bounds along each new facet bound's normal
+            (:func:`share_normal`).
         wrenches: Cone-edge wrenches of every contact, shape (n, k_edges, 6).
         directions: Unit directions of D, shape (>= count, 6).
         count: |D|; every child node's support vector holds that many entries.
@@ -217,7 +226,7 @@ def branch_and_bound(
             for b in range(union.shape[0]):
                 union[b] |= node_masks[key[j], b]
         if level == 0 and starts[i] >= 0:
-            raw = union_facet_bound_along(wrenches, union, directions[starts[i]])
+            raw, normal = union_facet_bound_along(wrenches, union, directions[starts[i]])
             counters[1] += 1
         else:
             for j in range(m):
@@ -226,8 +235,10 @@ def branch_and_bound(
             for j in range(m):
                 rows[j] = node_vectors[key[j], :count]
             first, last = (0, 1) if level == 0 else (1, FACET_STARTS)
-            raw = union_facet_bound(wrenches, union, rows, directions, count, first, last)
+            raw, normal = union_facet_bound(wrenches, union, rows, directions, count, first, last)
             counters[1] += last - first
+        if share and FC_TOL < raw < np.inf:
+            share_normal(normal, state, table, widths, codes, bounds, levels, i, wrenches, node_masks, counters)
         if known_level >= 0:
             raw = min(raw, table_values[s] - CUT_MARGIN)
         if raw <= FC_TOL:
@@ -242,6 +253,72 @@ def branch_and_bound(
         _store(table_keys, table_values, table_levels, counters, key, value, level + 1)
         bounds[i] = min(value, bound)
         levels[i] = level + 1
+
+
+@cached_njit()
+def share_normal(
+    u: np.ndarray,
+    state: np.ndarray,
+    table: np.ndarray,
+    widths: np.ndarray,
+    codes: np.ndarray,
+    bounds: np.ndarray,
+    levels: np.ndarray,
+    source: int,
+    wrenches: np.ndarray,
+    node_masks: np.ndarray,
+    counters: np.ndarray,
+) -> None:
+    """Lower the children's bounds to their support along a sibling's facet normal.
+
+    Q1 <= h(u) for every unit u, and the facet normal that settled one child is where the
+    union of the state's super-contacts is weak, so most siblings, which share most of
+    their nodes, are weak there too. Their support along u costs one pass over the
+    state's child nodes (m b supports) and a max of m of them per child, where a facet
+    bound of each costs a walk over its whole union (amphora, 1000 contacts, m = 4: 0.71 M
+    facet bounds instead of 1.01 M for the proof).
+
+    Args:
+        u: Unit direction, shape (6,): the facet normal of child ``source``.
+        state: See :func:`branch_and_bound`; so are ``table``, ``widths``, ``codes``,
+            ``bounds`` (updated in place), ``levels``, ``wrenches``, ``node_masks`` and ``counters``.
+        source: The child whose bound u came from (left as it is).
+    """
+    m = state.shape[0]
+    edges = wrenches.shape[1]
+    support = np.empty((m, table.shape[1]))
+    for j in range(m):
+        for c in range(widths[state[j]]):
+            row = node_masks[table[state[j], c]]
+            best = -np.inf
+            for byte in range(row.shape[0]):
+                bits = row[byte]
+                if bits == 0:
+                    continue
+                for bit in range(8):
+                    if bits & (128 >> bit):  # packbits order: the first contact in the high bit
+                        contact = 8 * byte + bit
+                        for e in range(edges):
+                            s = 0.0
+                            for d in range(6):
+                                s += wrenches[contact, e, d] * u[d]
+                            best = max(best, s)
+            support[j, c] = best
+    counters[3] += 1
+    for r in range(bounds.shape[0]):
+        if r == source or levels[r] == EXACT:
+            continue
+        code = codes[r]
+        h = -np.inf
+        for j in range(m - 1, -1, -1):  # decode_child's order: the last node varies fastest
+            width = widths[state[j]]
+            h = max(h, support[j, code % width])
+            code //= width
+        # The margin facet bounds carry: canonical Q1 may sit a rounding error above the true value.
+        h += CUT_MARGIN
+        if h < bounds[r]:
+            bounds[r] = h
+            counters[4] += 1
 
 
 @cached_njit(inline="always")
@@ -304,7 +381,7 @@ def state_bound(
     for j in range(m):
         for b in range(union.shape[0]):
             union[b] |= node_masks[state[j], b]
-    raw = union_facet_bound_along(wrenches, union, directions[start])
+    raw = union_facet_bound_along(wrenches, union, directions[start])[0]
     counters[1] += 1
     if raw <= FC_TOL:
         counters[2] += 1

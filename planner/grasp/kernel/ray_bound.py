@@ -227,8 +227,8 @@ def _union_points(wrenches: np.ndarray, union: np.ndarray) -> np.ndarray:
 
 
 @cached_njit()
-def union_facet_bound_along(wrenches: np.ndarray, union: np.ndarray, direction: np.ndarray) -> float:
-    """:func:`facet_bound` of a union of contacts from one start direction [-].
+def union_facet_bound_along(wrenches: np.ndarray, union: np.ndarray, direction: np.ndarray) -> tuple[float, np.ndarray]:
+    """:func:`facet_bound` of a union of contacts from one start direction: ([-], u).
 
     :func:`union_facet_bound` with ``first, last = 0, 1`` when ``direction`` is the one of
     lowest support, for callers that know it already (members x |D| work saved).
@@ -237,8 +237,11 @@ def union_facet_bound_along(wrenches: np.ndarray, union: np.ndarray, direction: 
         wrenches: Cone-edge wrenches of every contact, shape (n, k, 6).
         union: The union's membership flags, packed (``numpy.packbits``), shape (ceil(n / 8),).
         direction: Unit start direction, shape (6,).
+
+    Returns:
+        The bound and the unit direction whose support it is, shape (6,).
     """
-    return facet_bound(_union_points(wrenches, union), direction)[0]
+    return facet_bound(_union_points(wrenches, union), direction)
 
 
 @cached_njit()
@@ -250,7 +253,7 @@ def union_facet_bound(
     count: int,
     first: int,
     last: int,
-) -> float:
+) -> tuple[float, np.ndarray]:
     """The best :func:`facet_bound` of a union of contacts from its directions of lowest support [-].
 
     The directions of D are ranked by the union's support along them (lowest first; ties
@@ -269,7 +272,8 @@ def union_facet_bound(
         last: One past the rank of the last.
 
     Returns:
-        The smallest bound found (inf when no direction is ranked there).
+        (bound, u): the smallest bound found (inf when no direction is ranked there) and
+        the unit direction whose support it is, shape (6,) (zero when none is ranked).
     """
     P = _union_points(wrenches, union)
     joint = np.full(count, -np.inf)
@@ -278,6 +282,7 @@ def union_facet_bound(
             joint[j] = max(joint[j], rows[r, j])
     taken = np.zeros(count, dtype=np.bool_)
     best = np.inf
+    best_u = np.zeros(DIM)
     for rank in range(min(last, count)):
         arg = -1
         for j in range(count):
@@ -285,5 +290,8 @@ def union_facet_bound(
                 arg = j
         taken[arg] = True
         if rank >= first:
-            best = min(best, facet_bound(P, directions[arg])[0])
-    return best
+            value, u = facet_bound(P, directions[arg])
+            if value < best:
+                best = value
+                best_u = u
+    return best, best_u

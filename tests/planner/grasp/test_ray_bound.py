@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.optimize import linprog
 
-from planner.grasp.kernel.ray_bound import facet_bound, union_facet_bound
+from planner.grasp.kernel.ray_bound import facet_bound, union_facet_bound, union_facet_bound_along
 from planner.grasp.quality import q1_certificate
 from planner.grasp.subset_quality import EXACT, GraspQuality
 from planner.infra.tolerance import TOL
@@ -90,13 +90,18 @@ def test_union_facet_bound_starts_from_the_lowest_support_directions():
     order = np.argsort(np.max(support[members], axis=0), kind="stable")
     for first, last in ((0, 1), (1, 4), (0, 8)):
         expected = min(facet_bound(points, directions[j])[0] for j in order[first:last])
-        assert union_facet_bound(wrenches, union, support[members], directions, 50, first, last) == pytest.approx(
-            expected
-        )
+        bound, normal = union_facet_bound(wrenches, union, support[members], directions, 50, first, last)
+        assert bound == pytest.approx(expected)
+        # The direction returned is the one whose support the bound is.
+        assert np.linalg.norm(normal) == pytest.approx(1.0)
+        assert np.max(points @ normal) == pytest.approx(bound, abs=1e-12)
         # Super-contacts' vectors (maxima over their members) rank the same directions.
         rows = np.stack([support[members[:2]].max(axis=0), support[members[2:]].max(axis=0)])
-        assert union_facet_bound(wrenches, union, rows, directions, 50, first, last) == pytest.approx(expected)
-    assert union_facet_bound(wrenches, union, support[members], directions, 50, 60, 70) == np.inf
+        assert union_facet_bound(wrenches, union, rows, directions, 50, first, last)[0] == pytest.approx(expected)
+    along, normal = union_facet_bound_along(wrenches, union, directions[order[0]])
+    assert along == pytest.approx(union_facet_bound(wrenches, union, support[members], directions, 50, 0, 1)[0])
+    assert np.max(points @ normal) == pytest.approx(along, abs=1e-12)
+    assert union_facet_bound(wrenches, union, support[members], directions, 50, 60, 70)[0] == np.inf
 
 
 def test_tighten_climbs_to_the_exact_value(object_contacts):

@@ -8,9 +8,11 @@ import numpy as np
 import pytest
 
 from planner.grasp import subset_quality
+from planner.grasp.kernel.geometry import CUT_MARGIN
+from planner.grasp.subset_quality import EXACT
 from planner.search import GraspPlanner, search_space
 from planner.search import best_first as search_run
-from planner.search.refine_kernel import ChildBounds
+from planner.search.refine_kernel import ChildBounds, share_normal
 from tests.conftest import exhaustive_best
 
 
@@ -25,6 +27,7 @@ def _summary(result):
 )
 def test_compiled_branch_and_bound_is_the_python_loop(object_contacts, monkeypatch, name, method, eps):
     contacts = object_contacts(name, 150, 0)
+    monkeypatch.setattr(search_run.Search, "share_normals", False)  # the Python loop has no siblings' normals
     compiled = GraspPlanner(method=method, eps=eps).plan(contacts, 3)
     monkeypatch.setattr(search_space, "ChildBounds", lambda m: None)  # the Python loop
     python = GraspPlanner(method=method, eps=eps).plan(contacts, 3)
@@ -94,3 +97,49 @@ def test_child_bounds_remember_by_node_tuple_and_start_afresh_when_half_full():
     assert table.get(keys[0]) is None and table.get(np.array([6, 6, 6], dtype=np.int32)) == (0.5, 1)
     with pytest.raises(ValueError, match="power of two"):
         ChildBounds(m=3, slots=12)
+
+
+def test_a_shared_normal_lowers_each_child_to_its_own_support_along_it():
+    # State (node 0, node 1); node 0 splits into nodes 2, 3 and node 1 into 4, 5, so the
+    # children in product order are (2, 4), (2, 5), (3, 4), (3, 5).
+    rng = np.random.default_rng(3)
+    wrenches = rng.normal(size=(12, 4, 6))
+    members = {2: [0, 1, 2], 3: [3, 4], 4: [5, 6, 7, 8], 5: [9, 10, 11]}
+    masks = np.zeros((6, 2), dtype=np.uint8)
+    for node, contacts in members.items():
+        flags = np.zeros(12, dtype=bool)
+        flags[contacts] = True
+        masks[node] = np.packbits(flags)
+    table = np.full((6, 2), -1, dtype=np.int64)
+    table[0], table[1] = (2, 3), (4, 5)
+    widths = np.array([2, 2, 0, 0, 0, 0])
+    codes = np.arange(4, dtype=np.uint8)
+    bounds = np.array([9.0, 9.0, -5.0, 9.0])
+    levels = np.array([0, 1, 0, EXACT], dtype=np.int8)
+    u = rng.normal(size=6)
+    u /= np.linalg.norm(u)
+    counters = np.zeros(5, dtype=np.int64)
+    share_normal(u, np.array([0, 1]), table, widths, codes, bounds, levels, 0, wrenches, masks, counters)
+
+    def support(nodes):
+        return max(float(np.max(wrenches[members[n]] @ u)) for n in nodes) + CUT_MARGIN
+
+    assert bounds[1] == pytest.approx(support((2, 5)), abs=1e-15)  # lowered, whatever its level
+    assert bounds[0] == 9.0 and bounds[3] == 9.0  # the source child and an exact value stay
+    assert bounds[2] == -5.0 < support((3, 4))  # a bound already lower stays
+    assert counters[3] == 1 and counters[4] == 1
+
+
+@pytest.mark.parametrize(("name", "n", "seed"), [("amphora", 40, 0), ("box", 36, 1), ("donut", 40, 2)])
+def test_sharing_normals_keeps_astar_optimal_with_fewer_facet_bounds(object_contacts, monkeypatch, name, n, seed):
+    contacts = object_contacts(name, n, seed)
+    shared = GraspPlanner(seed=seed).plan(contacts, 3)
+    monkeypatch.setattr(search_run.Search, "share_normals", False)
+    alone = GraspPlanner(seed=seed).plan(contacts, 3)
+    best = exhaustive_best(contacts, 3)
+    for result in (shared, alone):
+        assert result.q1 == pytest.approx(best, abs=1e-9)
+        assert result.bound == result.q1 and result.status == "optimal"
+    f = [value for _, value in shared.stats.trace]
+    assert all(b >= a - 1e-12 for a, b in itertools.pairwise(f))
+    assert shared.stats.facet_bounds < alone.stats.facet_bounds
