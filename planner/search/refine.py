@@ -132,7 +132,8 @@ class ChildRefinement(SearchSpace):
         WA*'s terminal children skip the facet bounds: an exact value makes each one it
         reaches a candidate for the grasp it returns. A state with no valid child below it
         is dropped. Where the children come from the compiled listing, the loop runs compiled
-        (:meth:`compiled_refine`), step for step the same.
+        (:meth:`compiled_refine`), step for step the same, except that it also lowers the
+        other children's bounds along each new facet bound's normal (:attr:`share_normals`).
         """
         q0 = self.q0
         if self.is_terminal(state) or self.heuristic_kind == "none":

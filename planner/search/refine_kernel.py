@@ -11,7 +11,8 @@ f settle on the facet bound instead.
 
 Facet bounds are remembered per child (its sorted node tuple) in :class:`ChildBounds`, an
 open-addressing table, the compiled counterpart of the oracle's store of facet bounds:
-a child of one state is often a child of the next.
+a child of one state is often a child of the next. Each new facet bound's normal also
+lowers the other children's bounds (:func:`share_normal`), which the Python loop does not do.
 """
 
 from __future__ import annotations
