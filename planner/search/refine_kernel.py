@@ -272,9 +272,9 @@ def share_normal(
 ) -> None:
     """Lower the children's bounds to their support along a sibling's facet normal.
 
-    Q1 <= h(u) for every unit u, and the facet normal that settled one child is where the
-    union of the state's super-contacts is weak, so most siblings, which share most of
-    their nodes, are weak there too. Their support along u costs one pass over the
+    Q1 <= h(u) for every unit u, and the facet normal found for one child is a direction
+    along which that child's union is weak; its siblings share most of their nodes with it,
+    so most are weak there too. Their support along u costs one pass over the
     state's child nodes (m b supports) and a max of m of them per child, where a facet
     bound of each costs a walk over its whole union (amphora, 1000 contacts, m = 4: 0.71 M
     facet bounds instead of 1.01 M for the proof).
