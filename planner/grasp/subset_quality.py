@@ -77,6 +77,9 @@ class GraspQuality:
         self.cache_hits = 0
         self.hull_calls = 0
         self.facet_bounds = 0
+        #: The unit normal of the facet bound the last :meth:`tighten` computed, shape (6,)
+        #: (None when it computed none, or one that proves Q1 = 0).
+        self.last_normal: NDArray[np.float64] | None = None
         #: (facet bound, level) per union key of the unions not evaluated exactly (:meth:`tighten`).
         self._upper: dict[bytes, tuple[float, int]] = {}
 
@@ -150,6 +153,7 @@ class GraspQuality:
                 learned since may rank lower; any direction gives a valid bound). None:
                 rank D now.
         """
+        self.last_normal = None
         union = functools.reduce(np.bitwise_or, masks)
         key = union.tobytes()
         cached = self._cache.get(key)
@@ -163,11 +167,13 @@ class GraspQuality:
             return self._evaluate(union, key, vectors), EXACT
         first, last = (0, 1) if level == 0 else (1, FACET_STARTS)
         if level == 0 and start is not None:
-            raw = self.bounds.facet_bound_along(union, start)
+            raw, normal = self.bounds.facet_bound_along(union, start)
         else:
             if vectors is None:
                 raise ValueError("tighten needs the support vectors from level 1 on")
-            raw = self.bounds.facet_bound(union, vectors, first, last)
+            raw, normal = self.bounds.facet_bound(union, vectors, first, last)
+        if TOL.force_closure < raw < np.inf:
+            self.last_normal = normal
         if known is not None:
             raw = min(raw, known[0] - CUT_MARGIN)
         self.facet_bounds += last - first

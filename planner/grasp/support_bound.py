@@ -76,8 +76,11 @@ class SupportBound:
         into ``row[done:count]`` (the directions before are the caller's, already there)."""
         row[done : self.count] = self._support[members, done : self.count].max(axis=0)
 
-    def facet_bound(self, union: NDArray[np.uint8], vectors: Sequence[Vector], first: int, last: int) -> float:
-        """The best facet bound of Q1 of a union of contacts (:func:`~planner.grasp.kernel.ray_bound.union_facet_bound`) [-].
+    def facet_bound(
+        self, union: NDArray[np.uint8], vectors: Sequence[Vector], first: int, last: int
+    ) -> tuple[float, NDArray[np.float64]]:
+        """The best facet bound of Q1 of a union of contacts and the unit direction whose
+        support it is (:func:`~planner.grasp.kernel.ray_bound.union_facet_bound`): ([-], shape (6,)).
 
         Args:
             union: The union's membership flags, packed (``numpy.packbits``).
@@ -90,14 +93,17 @@ class SupportBound:
 
         length = min(len(v) for v in vectors)
         rows = np.stack([v[:length] for v in vectors])
-        return float(union_facet_bound(self._wrenches, union, rows, self.directions, length, first, last)[0])
+        bound, normal = union_facet_bound(self._wrenches, union, rows, self.directions, length, first, last)
+        return float(bound), normal
 
-    def facet_bound_along(self, union: NDArray[np.uint8], start: int) -> float:
-        """The facet bound of Q1 of a union of contacts from direction ``start`` of D [-]
-        (:func:`~planner.grasp.kernel.ray_bound.union_facet_bound_along`)."""
+    def facet_bound_along(self, union: NDArray[np.uint8], start: int) -> tuple[float, NDArray[np.float64]]:
+        """The facet bound of Q1 of a union of contacts from direction ``start`` of D and the unit
+        direction whose support it is (:func:`~planner.grasp.kernel.ray_bound.union_facet_bound_along`):
+        ([-], shape (6,))."""
         from planner.grasp.kernel.ray_bound import union_facet_bound_along
 
-        return float(union_facet_bound_along(self._wrenches, union, self.directions[start])[0])
+        bound, normal = union_facet_bound_along(self._wrenches, union, self.directions[start])
+        return float(bound), normal
 
     def lowest_directions(self, vectors: Sequence[Vector], count: int) -> NDArray[np.float64]:
         """The ``count`` directions along which the union's support is smallest, shape (count, 6)."""

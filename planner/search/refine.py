@@ -9,17 +9,19 @@ where the children are listed by the compiled listing, the loop itself is compil
 
 from __future__ import annotations
 
+import math
 from typing import TypeGuard, cast
 
 import numpy as np
 from numpy.typing import NDArray
 
+from planner.grasp.kernel.geometry import CUT_MARGIN
 from planner.grasp.subset_quality import EXACT as EXACT_Q1
 from planner.grasp.subset_quality import MAX_DIRECTIONS
 from planner.infra.tolerance import TOL
 from planner.search.deal import Part
 from planner.search.open_list import OpenList
-from planner.search.refine_kernel import NEEDS_EXACT, NEEDS_ROWS, SETTLED, YIELD
+from planner.search.refine_kernel import NEEDS_EXACT, NEEDS_ROWS, SETTLED, YIELD, mask_support
 from planner.search.refine_kernel import branch_and_bound as compiled_branch_and_bound
 from planner.search.search_space import SearchSpace, State
 from planner.search.storage import IdPool, WaitingStore
@@ -79,10 +81,9 @@ class ChildRefinement(SearchSpace):
         q0: Q1 of all contacts [-].
         eps: WA*'s eps (0 for A*).
         children_can_win: Whether a grasp child may become the incumbent.
-        share_normals: Whether the compiled branch and bound lowers the other children's
-            bounds along each new facet bound's normal
-            (:func:`planner.search.refine_kernel.share_normal`); the Python loop does not,
-            so tests that compare the two loops step for step turn it off.
+        share_normals: Whether the branch and bound lowers the other children's bounds
+            along each new facet bound's normal
+            (:func:`planner.search.refine_kernel.share_normal`).
     """
 
     q0: float
@@ -132,8 +133,8 @@ class ChildRefinement(SearchSpace):
         WA*'s terminal children skip the facet bounds: an exact value makes each one it
         reaches a candidate for the grasp it returns. A state with no valid child below it
         is dropped. Where the children come from the compiled listing, the loop runs compiled
-        (:meth:`compiled_refine`), step for step the same, except that it also lowers the
-        other children's bounds along each new facet bound's normal (:attr:`share_normals`).
+        (:meth:`compiled_refine`), step for step the same. Each new facet bound's normal also
+        lowers the other children's bounds (:meth:`share_normal`, :attr:`share_normals`).
         """
         q0 = self.q0
         if self.is_terminal(state) or self.heuristic_kind == "none":
@@ -175,6 +176,9 @@ class ChildRefinement(SearchSpace):
             needed = start is None or bound <= TOL.force_closure
             vectors = self.child_vectors(child_key) if needed else None
             value, level = self.oracle.tighten(self.child_masks(child_key), vectors, level, bound, start)
+            normal = self.oracle.last_normal
+            if normal is not None and self.share_normals:
+                self.share_normal(normal, children, bounds, levels, i)
             if level == EXACT_Q1:
                 if self.wins(child):
                     self.offer(value, child, state, ident)
@@ -235,6 +239,31 @@ class ChildRefinement(SearchSpace):
         f = max(lower, q0 - float(bounds[i]))
         key = f if self.eps == 0 else g + (1.0 + self.eps) * (f - g)
         self.push(open_list, f, depth, EXACT, g, ident, key=key)
+
+    def share_normal(
+        self,
+        u: NDArray[np.float64],
+        children: Children,
+        bounds: NDArray[np.float64],
+        levels: NDArray[np.int8],
+        source: int,
+    ) -> None:
+        """The Python loop's :func:`planner.search.refine_kernel.share_normal`: lower every
+        child's bound but ``source``'s and the exact ones to its support along u (shape (6,)),
+        plus the facet bounds' margin; the same values, bit for bit."""
+        wrenches = self.contacts.wrenches
+        supports: dict[int, float] = {}
+        for r, row in enumerate(children.tolist()):
+            if r == source or levels[r] == EXACT_Q1:
+                continue
+            h = -math.inf
+            for part, mask in zip(row, self.child_masks(tuple(row)), strict=True):
+                support = supports.get(part)
+                if support is None:
+                    support = supports[part] = float(mask_support(u, mask, wrenches))
+                h = max(h, support)
+            h += CUT_MARGIN
+            bounds[r] = min(bounds[r], h)
 
     def waiting(self, ident: int) -> Pending | None:
         """The children waiting in a state's branch and bound as :data:`Pending` rows (either

@@ -12,7 +12,7 @@ f settle on the facet bound instead.
 Facet bounds are remembered per child (its sorted node tuple) in :class:`ChildBounds`, an
 open-addressing table, the compiled counterpart of the oracle's store of facet bounds:
 a child of one state is often a child of the next. Each new facet bound's normal also
-lowers the other children's bounds (:func:`share_normal`), which the Python loop does not do.
+lowers the other children's bounds (:func:`share_normal`), as the Python loop does.
 """
 
 from __future__ import annotations
@@ -286,25 +286,10 @@ def share_normal(
         source: The child whose bound u came from (left as it is).
     """
     m = state.shape[0]
-    edges = wrenches.shape[1]
     support = np.empty((m, table.shape[1]))
     for j in range(m):
         for c in range(widths[state[j]]):
-            row = node_masks[table[state[j], c]]
-            best = -np.inf
-            for byte in range(row.shape[0]):
-                bits = row[byte]
-                if bits == 0:
-                    continue
-                for bit in range(8):
-                    if bits & (128 >> bit):  # packbits order: the first contact in the high bit
-                        contact = 8 * byte + bit
-                        for e in range(edges):
-                            s = 0.0
-                            for d in range(6):
-                                s += wrenches[contact, e, d] * u[d]
-                            best = max(best, s)
-            support[j, c] = best
+            support[j, c] = mask_support(u, node_masks[table[state[j], c]], wrenches)
     counters[3] += 1
     for r in range(bounds.shape[0]):
         if r == source or levels[r] == EXACT:
@@ -320,6 +305,32 @@ def share_normal(
         if h < bounds[r]:
             bounds[r] = h
             counters[4] += 1
+
+
+@cached_njit(inline="always")
+def mask_support(u: np.ndarray, mask: np.ndarray, wrenches: np.ndarray) -> float:
+    """Support along the unit direction u of the contacts in a packed mask [-]: the largest
+    ``w . u`` over their cone-edge wrenches (-inf for no contact).
+
+    Args:
+        u: Unit direction, shape (6,).
+        mask: Packed membership flags (``numpy.packbits``), shape (ceil(n / 8),).
+        wrenches: Cone-edge wrenches of every contact, shape (n, k, 6).
+    """
+    best = -np.inf
+    for byte in range(mask.shape[0]):
+        bits = mask[byte]
+        if bits == 0:
+            continue
+        for bit in range(8):
+            if bits & (128 >> bit):  # packbits order: the first contact in the high bit
+                contact = 8 * byte + bit
+                for e in range(wrenches.shape[1]):
+                    s = 0.0
+                    for d in range(6):
+                        s += wrenches[contact, e, d] * u[d]
+                    best = max(best, s)
+    return best
 
 
 @cached_njit(inline="always")

@@ -164,4 +164,4 @@ def test_facet_bound_along_the_lowest_direction_is_the_first_facet_bound(object_
         union = oracle.mask_of(np.concatenate(members))
         bound, start = oracle.bounds.lowest(vectors)
         assert bound == oracle.bounds.bound(vectors)
-        assert oracle.bounds.facet_bound_along(union, start) == oracle.bounds.facet_bound(union, vectors, 0, 1)
+        assert oracle.bounds.facet_bound_along(union, start)[0] == oracle.bounds.facet_bound(union, vectors, 0, 1)[0]

@@ -27,7 +27,6 @@ def _summary(result):
 )
 def test_compiled_branch_and_bound_is_the_python_loop(object_contacts, monkeypatch, name, method, eps):
     contacts = object_contacts(name, 150, 0)
-    monkeypatch.setattr(search_run.Search, "share_normals", False)  # the Python loop has no siblings' normals
     compiled = GraspPlanner(method=method, eps=eps).plan(contacts, 3)
     monkeypatch.setattr(search_space, "ChildBounds", lambda m: None)  # the Python loop
     python = GraspPlanner(method=method, eps=eps).plan(contacts, 3)
@@ -130,8 +129,13 @@ def test_a_shared_normal_lowers_each_child_to_its_own_support_along_it():
     assert counters[3] == 1 and counters[4] == 1
 
 
+@pytest.mark.parametrize("compiled", [True, False])
 @pytest.mark.parametrize(("name", "n", "seed"), [("amphora", 40, 0), ("box", 36, 1), ("donut", 40, 2)])
-def test_sharing_normals_keeps_astar_optimal_with_fewer_facet_bounds(object_contacts, monkeypatch, name, n, seed):
+def test_sharing_normals_keeps_astar_optimal_with_fewer_facet_bounds(
+    object_contacts, monkeypatch, compiled, name, n, seed
+):
+    if not compiled:
+        monkeypatch.setattr(search_space, "ChildBounds", lambda m: None)  # the Python loop
     contacts = object_contacts(name, n, seed)
     shared = GraspPlanner(seed=seed).plan(contacts, 3)
     monkeypatch.setattr(search_run.Search, "share_normals", False)
