@@ -364,7 +364,9 @@ class Search(SearchOutcome):
         inherited = lower if self.heuristic_shares_tree else g
         q0 = self.q0
         part = self.part
-        for child, upper in zip(*self.successors_with_bounds(state), strict=True):
+        settled = self.settled_successors(ident, state)
+        children, uppers, levels = settled or (*self.successors_with_bounds(state), None)
+        for k, (child, upper) in enumerate(zip(children, uppers, strict=True)):
             child_depth = self.depth(child)
             if part is not None and child_depth == part.depth and not part.owns(self.first_contacts(child)):
                 continue
@@ -381,7 +383,13 @@ class Search(SearchOutcome):
                 self._level.append(child_depth)
                 self._visited.append(False)
                 self._f.append(0.0)
-            self.push(open_list, child_lower, child_depth, BOUND, math.nan, child_id)
+            if levels is not None and levels[k] > 0 and not self.is_terminal(child):
+                # A facet bound or the exact value: the g its first pop would compute (grasps,
+                # whose levels WA* may start higher, are scored there as ever).
+                g_child = q0 - min(q0, max(0.0, upper))
+                self.push(open_list, child_lower, child_depth, EXACT_G, g_child, child_id)
+            else:
+                self.push(open_list, child_lower, child_depth, BOUND, math.nan, child_id)
         inc = self.incumbent
         if inc is not None and inc.parent == state:
             # The incumbent is a created state now (first ordering of its contacts); its lower

@@ -131,7 +131,7 @@ class Forgetting(ChildRefinement):
         self._purged = (self.cutoff, now)
         idents, stages = open_list.purge(self.cutoff)
         self.dropped += len(idents)
-        for ident in idents[stages == PARTIAL].tolist():
+        for ident in idents[stages >= PARTIAL].tolist():
             self._pending.take(ident)
         self._ids.give_many(idents)
 
@@ -159,7 +159,7 @@ class Forgetting(ChildRefinement):
         edges, weights = open_list.key_weights(FORGET_BINS, GROWTH * ENTRY_BYTES, PARTIAL, extra)
         threshold = forget_threshold(edges, weights, reserved - FORGET_TO * limit)
         idents, stages, key, lowest = open_list.forget(threshold, keep)
-        for ident in idents[stages == PARTIAL].tolist():
+        for ident in idents[stages >= PARTIAL].tolist():
             waiting.take(ident)
         self._ids.give_many(idents)
         self.forgotten += len(idents)

@@ -19,6 +19,7 @@ from planner.grasp.kernel.geometry import CUT_MARGIN
 from planner.grasp.subset_quality import EXACT as EXACT_Q1
 from planner.grasp.subset_quality import MAX_DIRECTIONS
 from planner.infra.tolerance import TOL
+from planner.search.children_kernel import decode_children
 from planner.search.deal import Part
 from planner.search.open_list import OpenList
 from planner.search.refine_kernel import NEEDS_EXACT, NEEDS_ROWS, SETTLED, YIELD, mask_support
@@ -84,12 +85,15 @@ class ChildRefinement(SearchSpace):
         share_normals: Whether the branch and bound lowers the other children's bounds
             along each new facet bound's normal
             (:func:`planner.search.refine_kernel.share_normal`).
+        keep_settled: Whether a compiled branch and bound that settles a state about to be
+            expanded keeps its children's bounds for the expansion (:meth:`settled_successors`).
     """
 
     q0: float
     eps: float
     children_can_win: bool
     share_normals: bool = True
+    keep_settled: bool = True
     part: Part | None
     forgotten_key: float
     _pending: WaitingStore
@@ -238,7 +242,30 @@ class ChildRefinement(SearchSpace):
                 self.offer(float(bounds[i]), child, state, ident)
         f = max(lower, q0 - float(bounds[i]))
         key = f if self.eps == 0 else g + (1.0 + self.eps) * (f - g)
+        if self.keep_settled and key <= open_list.first_key():
+            # Expanded next: its children enter with these bounds (:meth:`settled_successors`);
+            # a state that waits keeps nothing, like a finished branch and bound always did.
+            self._pending.put(ident, record)
         self.push(open_list, f, depth, EXACT, g, ident, key=key)
+
+    def settled_successors(self, ident: int, state: State) -> tuple[list[State], list[float], list[int]] | None:
+        """The successors of a state about to be expanded, with what its settled branch and
+        bound knows of them: upper bounds of their Q1 [-] and the level of each (None: it kept
+        no record, see :meth:`compiled_refine`).
+
+        Γh is the expansion tree where the compiled loop runs, so the children it bounded are
+        the successors, in the same order: a child whose bound is a facet bound or exact enters
+        with its g, sparing the facet bound that its first pop would compute.
+        """
+        record = self._pending.take(ident)
+        if record is None or self.symmetry is not None or self.config["ordered"]:
+            return None  # the successors are filtered or ordered: not the listed children
+        assert isinstance(record, np.ndarray)
+        bounds, levels, _, numbers = unpack_waiting(record)
+        nodes = np.array(state, dtype=np.int64)
+        keys, _, rejected = decode_children(nodes, numbers.astype(np.int64), self._table, self._widths, self._sizes)
+        self.pruned += rejected
+        return [tuple(key) for key in keys.tolist()], bounds.tolist(), levels.tolist()
 
     def share_normal(
         self,

@@ -24,7 +24,7 @@ from planner.grasp.kernel.geometry import CUT_MARGIN, FC_TOL
 from planner.grasp.kernel.jit import cached_njit
 from planner.grasp.kernel.ray_bound import union_facet_bound, union_facet_bound_along
 from planner.grasp.subset_quality import EXACT, FACET_STARTS
-from planner.search.children_kernel import decode_child, row_equals
+from planner.search.children_kernel import decode_child, first_lowest, row_equals
 
 #: Outcomes of :func:`branch_and_bound`: the largest bound is exact (the state's f is
 #: known); the state's lower bound of f passed the open list's first key (it goes back);
@@ -375,12 +375,7 @@ def state_bound(
         row = node_vectors[state[j]]
         for d in range(count):
             joint[d] = max(joint[d], row[d])
-    support = np.inf
-    start = 0
-    for d in range(count):
-        if joint[d] < support:
-            support = joint[d]
-            start = d
+    support, start = first_lowest(joint, count)
     s = _slot(table_keys, table_levels, state)
     known_level = table_levels[s]
     if known_level == EXACT:

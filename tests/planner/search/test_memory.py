@@ -15,7 +15,7 @@ from planner.search.best_first import Search
 from planner.search.memory import PROCESS_BYTES, forget_threshold, states_budget
 from planner.search.open_list import OpenList
 from planner.search.parts import PartOutcome, merge, search_in_parts
-from planner.search.refine import pack_waiting
+from planner.search.refine import BOUND, EXACT, EXACT_G, PARTIAL, pack_waiting
 from planner.search.storage import IdPool, WaitingStore, waiting_bytes
 from tests.conftest import exhaustive_best
 
@@ -182,3 +182,22 @@ def test_merge_says_memory_only_when_no_part_stopped_otherwise(object_contacts):
     assert merge([done, forgot, timed], config, 1.0, 1.0, 5.0).status == "stopped"
     with pytest.raises(SearchTimeout, match="at its memory limit"):
         merge([_outcome(None, 0.2, "memory", object_contacts)] * 2, config, 1.0, 1.0, None)
+
+
+@pytest.mark.parametrize("how", ["forget", "purge"])
+def test_a_state_forgotten_or_purged_leaves_no_waiting_record(object_contacts, how):
+    """A record held by a state in a branch and bound (PARTIAL) or about to be expanded
+    (EXACT) goes with the state: its id serves a new state next, which must start afresh."""
+    search = _search(object_contacts("box", 12, 0), 3, limit=1.0)
+    open_list = OpenList()
+    record = pack_waiting(np.arange(3), np.array([0.3, 0.2, 0.1]), np.zeros(3, np.int8), np.zeros(3, np.int32))
+    for ident, stage in enumerate((PARTIAL, EXACT, BOUND, EXACT_G), start=1):
+        if stage >= PARTIAL:
+            search._pending.put(ident, record.copy())
+        open_list.push(0.1 * ident, -1, 0.1 * ident, stage, 0.0, ident)
+    if how == "forget":
+        search.forget(open_list, -1)
+    else:
+        search.lower_cutoff(0.0)
+        search.purge(open_list, 1e9)
+    assert len(open_list) == 0 and len(search._pending) == 0 and search._pending.nbytes == 0

@@ -147,3 +147,35 @@ def test_sharing_normals_keeps_astar_optimal_with_fewer_facet_bounds(
     f = [value for _, value in shared.stats.trace]
     assert all(b >= a - 1e-12 for a, b in itertools.pairwise(f))
     assert shared.stats.facet_bounds < alone.stats.facet_bounds
+
+
+@pytest.mark.parametrize(("name", "n", "seed", "m"), [("amphora", 40, 0, 3), ("box", 30, 1, 4), ("donut", 40, 2, 3)])
+def test_children_entering_with_their_parents_bounds_keep_astar_optimal(object_contacts, monkeypatch, name, n, seed, m):
+    contacts = object_contacts(name, n, seed)
+    entered = []  # (upper bound the child entered with, its contacts)
+    original = search_run.Search.settled_successors
+
+    def recording(self, ident, state):
+        settled = original(self, ident, state)
+        if settled is not None:
+            for child, bound, level in zip(*settled, strict=True):
+                if level > 0 and not self.is_terminal(child):
+                    entered.append((bound, np.concatenate(self.members(child))))
+        return settled
+
+    monkeypatch.setattr(search_run.Search, "settled_successors", recording)
+    kept = GraspPlanner(seed=seed).plan(contacts, m)
+    monkeypatch.setattr(search_run.Search, "keep_settled", False)
+    fresh = GraspPlanner(seed=seed).plan(contacts, m)
+    best = exhaustive_best(contacts, m)
+    for result in (kept, fresh):
+        assert result.q1 == pytest.approx(best, abs=1e-9)
+        assert result.bound == result.q1 and result.status == "optimal"
+    f = [value for _, value in kept.stats.trace]
+    assert all(b >= a - 1e-12 for a, b in itertools.pairwise(f))
+    # Each child that skipped its first pop's facet bound entered with an upper bound of its Q1.
+    oracle = subset_quality.GraspQuality(contacts, seed)
+    assert len(entered) > 10
+    for bound, members in entered:
+        assert bound >= oracle.of_masks([oracle.mask_of(np.unique(members))]) - 1e-12
+    assert kept.stats.facet_bounds < fresh.stats.facet_bounds

@@ -10,6 +10,7 @@ import pytest
 from planner.grasp.constraints import DistinctContacts, MaxFingerSpread
 from planner.search import GraspPlanner
 from planner.search.best_first import Search
+from planner.search.children_kernel import decode_children, first_lowest
 from planner.search.search_space import SearchSpace
 
 
@@ -157,3 +158,41 @@ def test_successors_from_the_compiled_listing_are_the_python_successors(object_c
         checked += len(children)
         states.extend(child for child in children if not compiled.is_terminal(child))
     assert checked >= 100 and compiled.pruned > 0
+
+
+@pytest.mark.parametrize("m", [3, 5])
+def test_decoded_children_are_the_listed_ones(object_contacts, m):
+    """An expansion decodes its children from the numbers its branch and bound kept: the
+    listing's children, grasp flags and count of combinations distinct contacts ruled out."""
+    contacts = object_contacts("box", 40, 1)
+    config = GraspPlanner(method="astar").resolved_config()
+    config["m"] = m
+    space = SearchSpace(contacts, m, config, [DistinctContacts()])
+    rng = np.random.default_rng(m)
+    states = [(0,) * m]
+    checked = rejected = 0
+    while states and checked < 300:
+        state = states.pop(int(rng.integers(len(states))))
+        keys, _, _, terminal, listed_rejected, codes = space._listing(state)
+        nodes = np.array(state, dtype=np.int64)
+        decoded, grasps, count = decode_children(nodes, codes, space._table, space._widths, space._sizes)
+        assert np.array_equal(decoded, keys) and np.array_equal(grasps, terminal)
+        assert count == listed_rejected
+        checked += len(keys)
+        rejected += count
+        states.extend(tuple(key) for key, leaf in zip(keys.tolist(), terminal, strict=True) if not leaf)
+    assert checked >= 100 and rejected > 0
+
+
+@pytest.mark.parametrize("count", [0, 1, 7, 8, 9, 17, 2000])
+def test_first_lowest_is_the_first_smallest_value(count):
+    rng = np.random.default_rng(count)
+    for _ in range(20):
+        values = np.round(rng.random(count + 5), 1)  # many ties
+        values[rng.random(count + 5) < 0.1] = np.inf
+        lowest, index = first_lowest(values, count)
+        head = values[:count]
+        if not count or np.isinf(head).all():
+            assert (lowest, index) == (np.inf, 0)
+            continue
+        assert lowest == head.min() and index == int(np.argmin(head))
