@@ -14,7 +14,9 @@ Design points:
 * Exact values are computed lazily (:mod:`planner.search.best_first`). A successor enters the
   open list keyed by a lower bound of its f: q(s0) - U(s'), where U is a cheap
   support-function upper bound of q (:mod:`planner.grasp.support_bound`), raised to its parent's f
-  when Γh = Γ (the heuristic is then consistent, Thm. III.2b). Each time a state
+  when Γh = Γ (the heuristic is then consistent, Thm. III.2b); where its parent's branch and
+  bound already tightened that bound (Γh = Γ: the children it bounded are the successors), it
+  enters with that facet bound or exact value as its g instead. Each time a state
   reaches the front its bound is tightened one step: its exact g (one Q1 evaluation),
   then branch and bound over Γh(s'), children in order of decreasing U, one exact value
   at a time, the state going back to the list whenever its bound
