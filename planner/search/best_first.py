@@ -42,11 +42,11 @@ import numpy as np
 
 from planner.grasp.constraints import Constraint
 from planner.grasp.contact_set import ContactSet
-from planner.infra.arrays import grow_rows
 from planner.infra.errors import OgcpError, SearchTimeout
 from planner.search.deal import Board, Part, PartDone
+from planner.search.expansion import Expansion
 from planner.search.open_list import OpenList
-from planner.search.outcome import Incumbent, SearchOutcome
+from planner.search.outcome import Incumbent
 from planner.search.polish import Polisher
 from planner.search.refine import BOUND, EXACT, EXACT_G
 from planner.search.result import SearchResult
@@ -77,7 +77,7 @@ POLISH_SECONDS = 30.0
 POLISH_SLICE = 2.0
 
 
-class Search(SearchOutcome):
+class Search(Expansion):
     """One search run: the open list, the incumbent, the statistics and the tree record.
 
     Args:
@@ -178,19 +178,6 @@ class Search(SearchOutcome):
             self._f[ident] = lower
         key = (1.0 + self.eps) * lower if key is None else key
         open_list.push(key, -depth, lower, stage, g, ident)
-
-    def record_expansion(self, f: float) -> None:
-        """Add an expansion's f [-] to the trace."""
-        if self.expansions == len(self.trace):
-            grow_rows(self.trace, self.expansions + 1)
-        self.trace[self.expansions] = f
-        self.expansions += 1
-
-    def remember(self, ident: int, state: State) -> None:
-        """Store a created state under its id."""
-        if ident >= len(self._states):
-            grow_rows(self._states, ident + 1)
-        self._states[ident] = state
 
     def state_of(self, ident: int) -> State:
         """The state stored under an id."""
@@ -346,57 +333,6 @@ class Search(SearchOutcome):
         if result.bound <= result.q1:
             return result  # the incumbent already beats every open bound: proven, as if finished
         return dataclasses.replace(result, status=status)
-
-    def expand(
-        self, open_list: OpenList, state: State, depth: int, key: float, lower: float, g: float, ident: int
-    ) -> dict[State, int]:
-        """Count the expansion and create the successors; returns their ids."""
-        self.visited[depth] = self.visited.get(depth, 0) + 1
-        self.record_expansion(key)
-        self.on_expand(key)
-        if self.record_tree:
-            self._visited[ident] = True
-        ids: dict[State, int] = {}
-        if self.is_terminal(state):
-            return ids
-        # Every child's f is at least the parent's g (Q1 is monotone), and at least its
-        # f when the heuristic uses the expansion tree (consistency, Thm. III.2b).
-        inherited = lower if self.heuristic_shares_tree else g
-        q0 = self.q0
-        part = self.part
-        settled = self.settled_successors(ident, state)
-        children, uppers, levels = settled or (*self.successors_with_bounds(state), None)
-        for k, (child, upper) in enumerate(zip(children, uppers, strict=True)):
-            child_depth = self.depth(child)
-            if part is not None and child_depth == part.depth and not part.owns(self.first_contacts(child)):
-                continue
-            self.created[child_depth] = self.created.get(child_depth, 0) + 1
-            # U may be negative (then q = 0): clip so the bound never exceeds the true f.
-            child_lower = max(q0 - min(q0, max(0.0, upper)), inherited)
-            if child_lower > self.cutoff and not self.record_tree:
-                self.dropped += 1  # as push would, without taking an id and a row
-                continue
-            child_id = ids[child] = self._ids.take()
-            self.remember(child_id, child)
-            if self.record_tree:
-                self._parent.append(ident)
-                self._level.append(child_depth)
-                self._visited.append(False)
-                self._f.append(0.0)
-            if levels is not None and levels[k] > 0 and not self.is_terminal(child):
-                # A facet bound or the exact value: the g its first pop would compute (grasps,
-                # whose levels WA* may start higher, are scored there as ever).
-                g_child = q0 - min(q0, max(0.0, upper))
-                self.push(open_list, child_lower, child_depth, EXACT_G, g_child, child_id)
-            else:
-                self.push(open_list, child_lower, child_depth, BOUND, math.nan, child_id)
-        inc = self.incumbent
-        if inc is not None and inc.parent == state:
-            # The incumbent is a created state now (first ordering of its contacts); its lower
-            # bound is at most its cost, below the cutoff, so it was not dropped (-1 if it were).
-            child_id = next((i for c, i in ids.items() if tuple(sorted(c)) == inc.state), -1)
-            self.incumbent = Incumbent(inc.q, inc.state, None, child_id)
-        return ids
 
     def finish(self, open_list: OpenList) -> SearchResult:
         """Return the incumbent, expanding the state that found it if it is not created yet."""

@@ -191,8 +191,8 @@ def decode_child(state: np.ndarray, table: np.ndarray, widths: np.ndarray, code:
 
 @cached_njit()
 def decode_children(
-    state: np.ndarray, codes: np.ndarray, table: np.ndarray, widths: np.ndarray, sizes: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, int]:
+    state: np.ndarray, codes: np.ndarray, table: np.ndarray, widths: np.ndarray, sizes: np.ndarray, depths: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
     """The children of a state numbered ``codes`` by :func:`shared_tree_children`, without
     listing them again.
 
@@ -202,15 +202,18 @@ def decode_children(
         table: Child nodes of each node, padded, shape (nodes, b).
         widths: Number of children of each node, shape (nodes,).
         sizes: Number of contacts in each node, shape (nodes,).
+        depths: Depth of each node in the partition tree, shape (nodes,).
 
     Returns:
-        (keys, terminal, rejected): the children's sorted nodes, shape (k, m), int32; whether
-        each is a grasp (every node one contact), shape (k,); how many distinct combinations
-        distinct contacts ruled out (the listing's count).
+        (keys, terminal, depth, rejected): the children's sorted nodes, shape (k, m), int32;
+        whether each is a grasp (every node one contact), shape (k,); each one's depth (its
+        deepest node's), shape (k,); how many distinct combinations distinct contacts ruled
+        out (the listing's count).
     """
     m = state.shape[0]
     keys = np.empty((codes.shape[0], m), dtype=np.int32)
     terminal = np.empty(codes.shape[0], dtype=np.bool_)
+    deepest = np.zeros(codes.shape[0], dtype=np.int64)
     key = np.empty(m, dtype=np.int64)
     for k in range(codes.shape[0]):
         decode_child(state, table, widths, codes[k], key)
@@ -218,6 +221,7 @@ def decode_children(
         for j in range(m):
             keys[k, j] = key[j]
             leaf = leaf and sizes[key[j]] == 1
+            deepest[k] = max(deepest[k], depths[key[j]])
         terminal[k] = leaf
     total = 1
     for j in range(m):
@@ -235,7 +239,7 @@ def decode_children(
                     rejected[nrejected] = key
                     nrejected += 1
                 break
-    return keys, terminal, nrejected
+    return keys, terminal, deepest, nrejected
 
 
 @cached_njit()

@@ -248,14 +248,20 @@ class ChildRefinement(SearchSpace):
             self._pending.put(ident, record)
         self.push(open_list, f, depth, EXACT, g, ident, key=key)
 
-    def settled_successors(self, ident: int, state: State) -> tuple[list[State], list[float], list[int]] | None:
+    def settled_successors(
+        self, ident: int, state: State
+    ) -> tuple[NDArray[np.int32], NDArray[np.bool_], NDArray[np.int64], NDArray[np.float64], NDArray[np.int8]] | None:
         """The successors of a state about to be expanded, with what its settled branch and
-        bound knows of them: upper bounds of their Q1 [-] and the level of each (None: it kept
-        no record, see :meth:`compiled_refine`).
+        bound knows of them (None: it kept no record, see :meth:`compiled_refine`).
 
         Γh is the expansion tree where the compiled loop runs, so the children it bounded are
         the successors, in the same order: a child whose bound is a facet bound or exact enters
         with its g, sparing the facet bound that its first pop would compute.
+
+        Returns:
+            (keys, terminal, depths, bounds, levels): the children's sorted nodes, shape (k, m);
+            whether each is a grasp; its depth; its upper bound of Q1 [-] and that bound's level,
+            each of shape (k,).
         """
         record = self._pending.take(ident)
         if record is None or self.symmetry is not None or self.config["ordered"]:
@@ -263,9 +269,12 @@ class ChildRefinement(SearchSpace):
         assert isinstance(record, np.ndarray)
         bounds, levels, _, numbers = unpack_waiting(record)
         nodes = np.array(state, dtype=np.int64)
-        keys, _, rejected = decode_children(nodes, numbers.astype(np.int64), self._table, self._widths, self._sizes)
+        codes = numbers.astype(np.int64)
+        keys, terminal, depths, rejected = decode_children(
+            nodes, codes, self._table, self._widths, self._sizes, self._depths
+        )
         self.pruned += rejected
-        return [tuple(key) for key in keys.tolist()], bounds.tolist(), levels.tolist()
+        return keys, terminal, depths, bounds, levels
 
     def share_normal(
         self,

@@ -70,6 +70,7 @@ class SearchSpace:
         self._node_vectors = np.zeros((0, self.oracle.bounds.capacity))
         self._filled = np.zeros(0, dtype=np.int64)
         self._sizes = np.zeros(0, dtype=np.int64)
+        self._depths = np.zeros(0, dtype=np.int64)
         self._table = np.zeros((0, branching), dtype=np.int64)
         self._widths = np.zeros(0, dtype=np.int64)
         self._masks = np.zeros((0, (len(contacts) + 7) // 8), dtype=np.uint8)
@@ -167,6 +168,7 @@ class SearchSpace:
         members = self.tree.members[node]
         if done == 0:
             self._sizes[node] = len(members)
+            self._depths[node] = self.tree.depth[node]
             self._masks[node] = self.tree.masks[node]
         bounds.extend(members, self._node_vectors[node], done)
         self._filled[node] = bounds.count
@@ -184,6 +186,7 @@ class SearchSpace:
         self._node_vectors = grown(self._node_vectors, 0)
         self._filled = grown(self._filled, 0)
         self._sizes = grown(self._sizes, 0)
+        self._depths = grown(self._depths, 0)
         self._table = grown(self._table, -1)
         self._widths = grown(self._widths, 0)
         self._masks = grown(self._masks, 0)

@@ -98,6 +98,16 @@ class IdPool:
         self.high += 1
         return ident
 
+    def take_many(self, count: int) -> NDArray[np.int64]:
+        """Ids for ``count`` new states: those ``count`` calls of :meth:`take` would give, in order."""
+        reused = min(count, self._count)
+        ids = np.empty(count, dtype=np.int64)
+        ids[:reused] = self._free[self._count - reused : self._count][::-1]
+        self._count -= reused
+        ids[reused:] = np.arange(self.high, self.high + count - reused)
+        self.high += count - reused
+        return ids
+
     def give(self, ident: int) -> None:
         """Return a dead state's id."""
         if not self.recycle:

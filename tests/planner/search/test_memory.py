@@ -68,6 +68,15 @@ def test_id_pool_hands_out_dead_ids_first_only_when_recycling():
     assert kept.take() == 2
 
 
+def test_taking_many_ids_is_taking_each_in_turn():
+    one, many = IdPool(recycle=True), IdPool(recycle=True)
+    for pool in (one, many):
+        pool.give_many(np.array([7, 3, 9]))
+    assert [one.take() for _ in range(5)] == many.take_many(5).tolist() == [9, 3, 7, 1, 2]
+    assert one.high == many.high == 3 and many.take_many(0).tolist() == []
+    assert many.take_many(2).tolist() == [3, 4]
+
+
 def test_waiting_store_counts_the_bytes_it_holds():
     store = WaitingStore()
     small = pack_waiting(np.arange(4), np.linspace(0, 1, 4), np.zeros(4, np.int8), np.full(4, -1, np.int32))

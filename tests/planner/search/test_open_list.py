@@ -82,3 +82,24 @@ def test_a_purge_removes_the_entries_past_the_cutoff_and_keeps_the_order_of_the_
     while theirs:
         assert _same(ours.pop(), heapq.heappop(theirs))
     assert [len(a) for a in ours.purge(0.0)] == [0, 0]
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_pushing_many_at_once_is_pushing_each_in_turn(seed):
+    rng = np.random.default_rng(seed)
+    one, many = OpenList(capacity=4), OpenList(capacity=4)
+    for batch in range(40):
+        k = int(rng.integers(0, 9))
+        keys = rng.integers(0, 5, size=k) / 7  # ties settled by depth, then by the tie number
+        neg_depths = -rng.integers(0, 3, size=k)
+        lowers, gs = keys / 2, np.where(rng.random(k) < 0.5, np.nan, keys / 3)
+        stages, idents = rng.integers(0, 4, size=k), np.arange(k) + 100 * batch
+        for row in zip(keys, neg_depths, lowers, stages, gs, idents, strict=True):
+            one.push(float(row[0]), int(row[1]), float(row[2]), int(row[3]), float(row[4]), int(row[5]))
+        many.push_many(keys, neg_depths, lowers, stages, gs, idents)
+        for _ in range(int(rng.integers(0, 4))):
+            if len(one):
+                assert _same(one.pop(), many.pop())
+    assert len(one) == len(many) > 0
+    while len(one):
+        assert _same(one.pop(), many.pop())

@@ -158,9 +158,11 @@ def test_children_entering_with_their_parents_bounds_keep_astar_optimal(object_c
     def recording(self, ident, state):
         settled = original(self, ident, state)
         if settled is not None:
-            for child, bound, level in zip(*settled, strict=True):
-                if level > 0 and not self.is_terminal(child):
-                    entered.append((bound, np.concatenate(self.members(child))))
+            keys, terminal, _, bounds, levels = settled
+            for key, grasp, bound, level in zip(keys.tolist(), terminal, bounds, levels, strict=True):
+                assert grasp == self.is_terminal(tuple(key))
+                if level > 0 and not grasp:
+                    entered.append((bound, np.concatenate(self.members(tuple(key)))))
         return settled
 
     monkeypatch.setattr(search_run.Search, "settled_successors", recording)

@@ -163,7 +163,7 @@ def test_successors_from_the_compiled_listing_are_the_python_successors(object_c
 @pytest.mark.parametrize("m", [3, 5])
 def test_decoded_children_are_the_listed_ones(object_contacts, m):
     """An expansion decodes its children from the numbers its branch and bound kept: the
-    listing's children, grasp flags and count of combinations distinct contacts ruled out."""
+    listing's children, grasp flags, depths and count of combinations distinct contacts ruled out."""
     contacts = object_contacts("box", 40, 1)
     config = GraspPlanner(method="astar").resolved_config()
     config["m"] = m
@@ -175,8 +175,11 @@ def test_decoded_children_are_the_listed_ones(object_contacts, m):
         state = states.pop(int(rng.integers(len(states))))
         keys, _, _, terminal, listed_rejected, codes = space._listing(state)
         nodes = np.array(state, dtype=np.int64)
-        decoded, grasps, count = decode_children(nodes, codes, space._table, space._widths, space._sizes)
+        decoded, grasps, depths, count = decode_children(
+            nodes, codes, space._table, space._widths, space._sizes, space._depths
+        )
         assert np.array_equal(decoded, keys) and np.array_equal(grasps, terminal)
+        assert depths.tolist() == [space.depth(tuple(key)) for key in keys.tolist()]
         assert count == listed_rejected
         checked += len(keys)
         rejected += count
