@@ -20,11 +20,8 @@ from planner.grasp.kernel.jit import cached_njit
 from planner.infra.arrays import grow_rows
 from planner.search.open_list import OpenList
 from planner.search.outcome import Incumbent, SearchOutcome
-from planner.search.refine import BOUND, EXACT_G
+from planner.search.refine import BOUND, EXACT_G, Settled
 from planner.search.search_space import State
-
-#: A settled record's successors (:meth:`planner.search.refine.ChildRefinement.settled_successors`).
-Settled = tuple[NDArray[np.int32], NDArray[np.bool_], NDArray[np.int64], NDArray[np.float64], NDArray[np.int8]]
 
 
 @cached_njit()

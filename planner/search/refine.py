@@ -48,6 +48,9 @@ CHILD_BYTES = 12
 #: What waits of a state's branch and bound: :data:`Pending` rows (the Python loop) or a
 #: :func:`pack_waiting` record (the compiled one).
 Waiting = Pending | NDArray[np.uint8]
+#: A settled record's successors (:meth:`ChildRefinement.settled_successors`): their sorted nodes,
+#: shape (k, m); whether each is a grasp; depths; upper bounds of Q1 [-]; the levels of those bounds.
+Settled = tuple[NDArray[np.int32], NDArray[np.bool_], NDArray[np.int64], NDArray[np.float64], NDArray[np.int8]]
 assert MAX_DIRECTIONS < 2**15, "directions of D are numbered in int16"
 
 
@@ -248,9 +251,7 @@ class ChildRefinement(SearchSpace):
             self._pending.put(ident, record)
         self.push(open_list, f, depth, EXACT, g, ident, key=key)
 
-    def settled_successors(
-        self, ident: int, state: State
-    ) -> tuple[NDArray[np.int32], NDArray[np.bool_], NDArray[np.int64], NDArray[np.float64], NDArray[np.int8]] | None:
+    def settled_successors(self, ident: int, state: State) -> Settled | None:
         """The successors of a state about to be expanded, with what its settled branch and
         bound knows of them (None: it kept no record, see :meth:`compiled_refine`).
 
