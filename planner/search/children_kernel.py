@@ -50,6 +50,18 @@ def first_lowest(values: np.ndarray, count: int) -> tuple[float, int]:
 
 
 @cached_njit(inline="always")
+def _repeats_fit(combo: np.ndarray, sizes: np.ndarray) -> bool:
+    """Whether distinct contacts are possible in a sorted combination of nodes: the nodes of a
+    state are equal or disjoint, so a node may be repeated at most as often as it has contacts."""
+    run = 1
+    for j in range(1, combo.shape[0]):
+        run = run + 1 if combo[j] == combo[j - 1] else 1
+        if run > sizes[combo[j]]:
+            return False
+    return True
+
+
+@cached_njit(inline="always")
 def _listed(rows: np.ndarray, count: int, combo: np.ndarray) -> bool:
     """Whether ``combo`` equals one of the first ``count`` rows."""
     for r in range(count):
@@ -120,16 +132,7 @@ def shared_tree_children(
             combo[j] = table[state[j], index[j]]
         combo.sort()
         fresh = not _listed(keys, k, combo)
-        # Distinct contacts: the nodes of a state are equal or disjoint, so a node may be
-        # repeated at most as often as it has contacts.
-        valid = fresh
-        run = 1
-        for j in range(1, m):
-            if not valid:
-                break
-            run = run + 1 if combo[j] == combo[j - 1] else 1
-            if run > sizes[combo[j]]:
-                valid = False
+        valid = fresh and _repeats_fit(combo, sizes)
         if fresh and not valid and not _listed(rejected, nrejected, combo):
             rejected[nrejected] = combo
             nrejected += 1
@@ -231,14 +234,9 @@ def decode_children(
     nrejected = 0
     for code in range(total):
         decode_child(state, table, widths, code, key)
-        run = 1
-        for j in range(1, m):
-            run = run + 1 if key[j] == key[j - 1] else 1
-            if run > sizes[key[j]]:
-                if not _listed(rejected, nrejected, key):
-                    rejected[nrejected] = key
-                    nrejected += 1
-                break
+        if not _repeats_fit(key, sizes) and not _listed(rejected, nrejected, key):
+            rejected[nrejected] = key
+            nrejected += 1
     return keys, terminal, deepest, nrejected
 
 
