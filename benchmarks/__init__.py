@@ -2,7 +2,7 @@
 
 Typical use::
 
-    from benchmarks import SuiteRunner, compare_dirs, export_run, load_suite, plot_run
+    from ogcp.benchmarks import SuiteRunner, compare_dirs, export_run, load_suite, plot_run
 
     summary = SuiteRunner(load_suite("quick"), "results/quick", jobs=2).run()
     plot_run("results/quick")                      # figures into results/quick/figures
@@ -16,25 +16,25 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from planner.infra.lazy import lazy_exports
+from ogcp.planner.infra.lazy import lazy_exports
 
 if TYPE_CHECKING:
-    from benchmarks.compare import compare_dirs
-    from benchmarks.export import export_run
-    from benchmarks.plots.report import plot_run
-    from benchmarks.suite.parse import load_suite, parse_suite
-    from benchmarks.suite.runner import SuiteRunner
-    from benchmarks.suite.store import ResultStore
+    from ogcp.benchmarks.compare import compare_dirs
+    from ogcp.benchmarks.export import export_run
+    from ogcp.benchmarks.plots.report import plot_run
+    from ogcp.benchmarks.suite.parse import load_suite, parse_suite
+    from ogcp.benchmarks.suite.runner import SuiteRunner
+    from ogcp.benchmarks.suite.store import ResultStore
 
 #: Public name -> the module that defines it.
 _EXPORTS = {
-    "ResultStore": "benchmarks.suite.store",
-    "SuiteRunner": "benchmarks.suite.runner",
-    "compare_dirs": "benchmarks.compare",
-    "export_run": "benchmarks.export",
-    "load_suite": "benchmarks.suite.parse",
-    "parse_suite": "benchmarks.suite.parse",
-    "plot_run": "benchmarks.plots.report",
+    "ResultStore": "ogcp.benchmarks.suite.store",
+    "SuiteRunner": "ogcp.benchmarks.suite.runner",
+    "compare_dirs": "ogcp.benchmarks.compare",
+    "export_run": "ogcp.benchmarks.export",
+    "load_suite": "ogcp.benchmarks.suite.parse",
+    "parse_suite": "ogcp.benchmarks.suite.parse",
+    "plot_run": "ogcp.benchmarks.plots.report",
 }
 
 __all__ = [

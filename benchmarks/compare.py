@@ -30,12 +30,12 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from benchmarks.suite.manifest import kernel_warmups, suite_hash
-from benchmarks.suite.params import EXHAUSTIVE_METHODS, OPTIMAL_METHODS
-from benchmarks.suite.record import CellRecord
-from benchmarks.suite.store import ResultStore
-from planner.infra.errors import OgcpError, choice_error
-from sim_eval.result import SimGraspRecord, SimRecord
+from ogcp.benchmarks.suite.manifest import kernel_warmups, suite_hash
+from ogcp.benchmarks.suite.params import EXHAUSTIVE_METHODS, OPTIMAL_METHODS
+from ogcp.benchmarks.suite.record import CellRecord
+from ogcp.benchmarks.suite.store import ResultStore
+from ogcp.planner.infra.errors import OgcpError, choice_error
+from ogcp.sim_eval.result import SimGraspRecord, SimRecord
 
 TIME_KEYS = ("cpu", "plan", "wall")
 CONSTRAINT_KEYS = ("max_spread", "hand", "hand_threshold")

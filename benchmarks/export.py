@@ -11,8 +11,8 @@ From the ``--out`` folder of ``ogcp suite`` (the latest record of each cell in
   direction and its measured and predicted resistance;
 * ``columns.md``: the column dictionary (unit and meaning of every column).
 
-Records are read through :class:`benchmarks.suite.record.CellRecord`,
-:class:`planner.records.plan.PlanView` and :class:`sim_eval.result.SimRecord`; every file is
+Records are read through :class:`ogcp.benchmarks.suite.record.CellRecord`,
+:class:`ogcp.planner.records.plan.PlanView` and :class:`ogcp.sim_eval.result.SimRecord`; every file is
 written atomically. ``fmt="parquet"`` writes ``.parquet`` tables instead, with pyarrow (not a
 dependency of ogcp).
 """
@@ -27,11 +27,11 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
-from benchmarks.suite.record import CellRecord
-from benchmarks.suite.store import ResultStore
-from planner.infra.atomic import write_bytes_atomic, write_text_atomic
-from planner.infra.errors import OgcpError, choice_error
-from sim_eval.result import SimGraspRecord, SimRecord
+from ogcp.benchmarks.suite.record import CellRecord
+from ogcp.benchmarks.suite.store import ResultStore
+from ogcp.planner.infra.atomic import write_bytes_atomic, write_text_atomic
+from ogcp.planner.infra.errors import OgcpError, choice_error
+from ogcp.sim_eval.result import SimGraspRecord, SimRecord
 
 FORMATS = ("csv", "parquet")
 

@@ -2,7 +2,7 @@
 
 Typical use::
 
-    from planner import GraspPlanner, builtin_mesh, sample_contacts
+    from ogcp.planner import GraspPlanner, builtin_mesh, sample_contacts
 
     contacts = sample_contacts(builtin_mesh("box"), n=100, seed=0)
     result = GraspPlanner(method="astar").plan(contacts, m=3)
@@ -17,58 +17,46 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from planner.infra.lazy import lazy_exports
+from ogcp import __version__ as __version__  # the distribution's version, re-exported as before
+from ogcp.planner.infra.lazy import lazy_exports
 
 if TYPE_CHECKING:
-    from planner.baselines.es import ESResult, ExhaustiveSearch
-    from planner.baselines.hfts import HFTS, HFTSResult
-    from planner.grasp.constraints import DistinctContacts, MaxFingerSpread
-    from planner.grasp.contact_set import ContactSet, sample_contacts
-    from planner.grasp.quality import Q1Certificate, q1, q1_certificate
-    from planner.hands.reachability import SDHReachability
-    from planner.infra.errors import OgcpError, SearchTimeout
-    from planner.infra.tolerance import TOL
-    from planner.objects import BUILTIN_OBJECTS, builtin_mesh, load_mesh, resolve_object
-    from planner.search.grasp_planner import GraspPlanner
-    from planner.search.result import SearchResult, SearchStats
-
-
-def _installed_version() -> str:
-    """ogcp's version as installed (from git by setuptools-scm at install time)."""
-    from importlib.metadata import PackageNotFoundError, version
-
-    try:
-        return version("ogcp")
-    except PackageNotFoundError:  # a checkout used without installing it
-        return "0+unknown"
-
-
-__version__ = _installed_version()
+    from ogcp.planner.baselines.es import ESResult, ExhaustiveSearch
+    from ogcp.planner.baselines.hfts import HFTS, HFTSResult
+    from ogcp.planner.grasp.constraints import DistinctContacts, MaxFingerSpread
+    from ogcp.planner.grasp.contact_set import ContactSet, sample_contacts
+    from ogcp.planner.grasp.quality import Q1Certificate, q1, q1_certificate
+    from ogcp.planner.hands.reachability import SDHReachability
+    from ogcp.planner.infra.errors import OgcpError, SearchTimeout
+    from ogcp.planner.infra.tolerance import TOL
+    from ogcp.planner.objects import BUILTIN_OBJECTS, builtin_mesh, load_mesh, resolve_object
+    from ogcp.planner.search.grasp_planner import GraspPlanner
+    from ogcp.planner.search.result import SearchResult, SearchStats
 
 #: Public name -> the module that defines it.
 _EXPORTS = {
-    "BUILTIN_OBJECTS": "planner.objects",
-    "TOL": "planner.infra.tolerance",
-    "ContactSet": "planner.grasp.contact_set",
-    "DistinctContacts": "planner.grasp.constraints",
-    "ESResult": "planner.baselines.es",
-    "ExhaustiveSearch": "planner.baselines.es",
-    "GraspPlanner": "planner.search.grasp_planner",
-    "HFTS": "planner.baselines.hfts",
-    "HFTSResult": "planner.baselines.hfts",
-    "MaxFingerSpread": "planner.grasp.constraints",
-    "OgcpError": "planner.infra.errors",
-    "Q1Certificate": "planner.grasp.quality",
-    "SDHReachability": "planner.hands.reachability",
-    "SearchResult": "planner.search.result",
-    "SearchStats": "planner.search.result",
-    "SearchTimeout": "planner.infra.errors",
-    "builtin_mesh": "planner.objects",
-    "load_mesh": "planner.objects",
-    "q1": "planner.grasp.quality",
-    "q1_certificate": "planner.grasp.quality",
-    "resolve_object": "planner.objects",
-    "sample_contacts": "planner.grasp.contact_set",
+    "BUILTIN_OBJECTS": "ogcp.planner.objects",
+    "TOL": "ogcp.planner.infra.tolerance",
+    "ContactSet": "ogcp.planner.grasp.contact_set",
+    "DistinctContacts": "ogcp.planner.grasp.constraints",
+    "ESResult": "ogcp.planner.baselines.es",
+    "ExhaustiveSearch": "ogcp.planner.baselines.es",
+    "GraspPlanner": "ogcp.planner.search.grasp_planner",
+    "HFTS": "ogcp.planner.baselines.hfts",
+    "HFTSResult": "ogcp.planner.baselines.hfts",
+    "MaxFingerSpread": "ogcp.planner.grasp.constraints",
+    "OgcpError": "ogcp.planner.infra.errors",
+    "Q1Certificate": "ogcp.planner.grasp.quality",
+    "SDHReachability": "ogcp.planner.hands.reachability",
+    "SearchResult": "ogcp.planner.search.result",
+    "SearchStats": "ogcp.planner.search.result",
+    "SearchTimeout": "ogcp.planner.infra.errors",
+    "builtin_mesh": "ogcp.planner.objects",
+    "load_mesh": "ogcp.planner.objects",
+    "q1": "ogcp.planner.grasp.quality",
+    "q1_certificate": "ogcp.planner.grasp.quality",
+    "resolve_object": "ogcp.planner.objects",
+    "sample_contacts": "ogcp.planner.grasp.contact_set",
 }
 
 __all__ = [

@@ -8,40 +8,40 @@ model. The package consumes plan results (schema ``ogcp.plan/1``), grasps from a
 runs a search and never imports matplotlib.
 
 The names below load their modules on first use, so that reading a setting or a result
-record (``sim_eval.settings``, ``sim_eval.result``) never pays for importing MuJoCo.
+record (``ogcp.sim_eval.settings``, ``ogcp.sim_eval.result``) never pays for importing MuJoCo.
 """
 
 from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from planner.infra.lazy import lazy_exports
+from ogcp.planner.infra.lazy import lazy_exports
 
 if TYPE_CHECKING:
-    from planner.records.grasps import ExternalGrasps, load_grasps
-    from sim_eval.decomposition import Decomposition, DecompositionSettings
-    from sim_eval.evaluate import GraspEvaluator, evaluate_plan
-    from sim_eval.external import evaluate_grasps
-    from sim_eval.external_export import export_grasps
-    from sim_eval.result import SIM_SCHEMA, GraspSimResult, SimGraspRecord, SimRecord, SimResult
-    from sim_eval.settings import SimSettings
+    from ogcp.planner.records.grasps import ExternalGrasps, load_grasps
+    from ogcp.sim_eval.decomposition import Decomposition, DecompositionSettings
+    from ogcp.sim_eval.evaluate import GraspEvaluator, evaluate_plan
+    from ogcp.sim_eval.external import evaluate_grasps
+    from ogcp.sim_eval.external_export import export_grasps
+    from ogcp.sim_eval.result import SIM_SCHEMA, GraspSimResult, SimGraspRecord, SimRecord, SimResult
+    from ogcp.sim_eval.settings import SimSettings
 
 #: Public name -> the module that defines it.
 _EXPORTS = {
-    "SIM_SCHEMA": "sim_eval.result",
-    "Decomposition": "sim_eval.decomposition",
-    "DecompositionSettings": "sim_eval.decomposition",
-    "ExternalGrasps": "planner.records.grasps",
-    "GraspEvaluator": "sim_eval.evaluate",
-    "GraspSimResult": "sim_eval.result",
-    "SimGraspRecord": "sim_eval.result",
-    "SimRecord": "sim_eval.result",
-    "SimResult": "sim_eval.result",
-    "SimSettings": "sim_eval.settings",
-    "evaluate_grasps": "sim_eval.external",
-    "evaluate_plan": "sim_eval.evaluate",
-    "export_grasps": "sim_eval.external_export",
-    "load_grasps": "planner.records.grasps",
+    "SIM_SCHEMA": "ogcp.sim_eval.result",
+    "Decomposition": "ogcp.sim_eval.decomposition",
+    "DecompositionSettings": "ogcp.sim_eval.decomposition",
+    "ExternalGrasps": "ogcp.planner.records.grasps",
+    "GraspEvaluator": "ogcp.sim_eval.evaluate",
+    "GraspSimResult": "ogcp.sim_eval.result",
+    "SimGraspRecord": "ogcp.sim_eval.result",
+    "SimRecord": "ogcp.sim_eval.result",
+    "SimResult": "ogcp.sim_eval.result",
+    "SimSettings": "ogcp.sim_eval.settings",
+    "evaluate_grasps": "ogcp.sim_eval.external",
+    "evaluate_plan": "ogcp.sim_eval.evaluate",
+    "export_grasps": "ogcp.sim_eval.external_export",
+    "load_grasps": "ogcp.planner.records.grasps",
 }
 
 __all__ = [

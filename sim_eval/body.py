@@ -1,7 +1,7 @@
 """The object as a rigid body for simulation: convex parts and mass properties.
 
 Mass and inertia come from the watertight mesh, never from the union of convex parts, whose
-overlaps would count some volume twice. Distances to the parts live in :mod:`sim_eval.collision`.
+overlaps would count some volume twice. Distances to the parts live in :mod:`ogcp.sim_eval.collision`.
 """
 
 from __future__ import annotations
@@ -13,8 +13,8 @@ import trimesh
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import QhullError
 
-from planner.grasp.contact_set import NonWatertightWarning, mass_properties
-from planner.infra.errors import OgcpError
+from ogcp.planner.grasp.contact_set import NonWatertightWarning, mass_properties
+from ogcp.planner.infra.errors import OgcpError
 
 Part = tuple[NDArray[np.float64], NDArray[np.int64]]
 
@@ -64,7 +64,7 @@ def object_inertia(mesh: trimesh.Trimesh, mass: float = 0.1) -> tuple[NDArray[np
 
     A closed, consistently oriented mesh gives exact values. For an open mesh the volume is
     undefined: the COM is then the planner's (area-weighted surface centroid, see
-    :func:`planner.grasp.contact_set.mass_properties`), so that simulated torques act about the same
+    :func:`ogcp.planner.grasp.contact_set.mass_properties`), so that simulated torques act about the same
     point as the planned wrenches, and the inertia tensor is that of the mesh's convex hull
     about the hull's own centroid; a :class:`NonWatertightWarning` says so.
 

@@ -25,8 +25,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from planner.grasp.mesh_distance import nearest_on_triangles, triangle_distances
-from planner.infra.errors import OgcpError
+from ogcp.planner.grasp.mesh_distance import nearest_on_triangles, triangle_distances
+from ogcp.planner.infra.errors import OgcpError
 
 Part = tuple[NDArray[np.float64], NDArray[np.int64]]
 PLACEMENT_ITERATIONS = 200  # conservative-advancement steps; a few suffice unless the normal grazes the part

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from planner.infra.errors import OgcpError
+from ogcp.planner.infra.errors import OgcpError
 
 DIM = 6
 AXIS_NAMES = ("fx", "fy", "fz", "tx", "ty", "tz")

@@ -2,8 +2,8 @@
 
 Typical use::
 
-    from planner import builtin_mesh, sample_contacts
-    from sim_eval import GraspEvaluator
+    from ogcp.planner import builtin_mesh, sample_contacts
+    from ogcp.sim_eval import GraspEvaluator
 
     mesh = builtin_mesh("box")
     contacts = sample_contacts(mesh, 200, seed=0)
@@ -25,18 +25,18 @@ import numpy as np
 import trimesh
 from tqdm.auto import tqdm
 
-from planner.grasp.contact_set import ContactSet
-from planner.grasp.reach import REACH_TOLERANCE, default_tip_radius, reachable
-from planner.infra.errors import OgcpError
-from planner.infra.provenance import provenance
-from sim_eval.body import object_inertia
-from sim_eval.collision_fit import DecompositionLadder
-from sim_eval.decomposition.decompose import Decomposition, DecompositionSettings, decompose
-from sim_eval.dexgraspbench import set_summary
-from sim_eval.metrics import set_metrics
-from sim_eval.result import GraspSimResult, SimResult
-from sim_eval.settings import SimSettings, scaled_lengths
-from sim_eval.trial import ObjectBody, contact_torsion, failed_result, simulate_grasp
+from ogcp.planner.grasp.contact_set import ContactSet
+from ogcp.planner.grasp.reach import REACH_TOLERANCE, default_tip_radius, reachable
+from ogcp.planner.infra.errors import OgcpError
+from ogcp.planner.infra.provenance import provenance
+from ogcp.sim_eval.body import object_inertia
+from ogcp.sim_eval.collision_fit import DecompositionLadder
+from ogcp.sim_eval.decomposition.decompose import Decomposition, DecompositionSettings, decompose
+from ogcp.sim_eval.dexgraspbench import set_summary
+from ogcp.sim_eval.metrics import set_metrics
+from ogcp.sim_eval.result import GraspSimResult, SimResult
+from ogcp.sim_eval.settings import SimSettings, scaled_lengths
+from ogcp.sim_eval.trial import ObjectBody, contact_torsion, failed_result, simulate_grasp
 
 
 class GraspEvaluator:
@@ -265,7 +265,7 @@ def evaluate_plan(
     Returns:
         The simulation result.
     """
-    from sim_eval.plan_input import plan_input
+    from ogcp.sim_eval.plan_input import plan_input
 
     if max_grasps is not None and (isinstance(max_grasps, bool) or not isinstance(max_grasps, int) or max_grasps < 1):
         raise OgcpError(f"max_grasps must be an integer >= 1 or None, got {max_grasps!r}")

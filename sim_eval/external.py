@@ -1,12 +1,12 @@
 """Evaluate grasps from any planner (``ogcp.grasps/1``) with ogcp's Q1, physics and metrics.
 
-The grasps' contacts become one :class:`~planner.grasp.contact_set.ContactSet` (the union of
+The grasps' contacts become one :class:`~ogcp.planner.grasp.contact_set.ContactSet` (the union of
 every grasp's contacts, in the record's order) with ogcp's conventions: the COM and the torque
-scale rho of :func:`~planner.grasp.contact_set.mass_properties` (as
-:func:`~planner.grasp.contact_set.sample_contacts` sets them), the record's mu and cone edges.
-Each grasp indexes its own contacts there, and :class:`~sim_eval.evaluate.GraspEvaluator`
+scale rho of :func:`~ogcp.planner.grasp.contact_set.mass_properties` (as
+:func:`~ogcp.planner.grasp.contact_set.sample_contacts` sets them), the record's mu and cone edges.
+Each grasp indexes its own contacts there, and :class:`~ogcp.sim_eval.evaluate.GraspEvaluator`
 simulates them exactly as it simulates a plan's, so an ogcp plan exported with
-:func:`~sim_eval.external_export.export_grasps` and evaluated here gives the plan's own numbers.
+:func:`~ogcp.sim_eval.external_export.export_grasps` and evaluated here gives the plan's own numbers.
 
 Contacts need not lie on the mesh exactly. Each one's signed distance from the surface and the
 angle of its normal from the surface's inward normal there are measured and recorded; one
@@ -17,7 +17,7 @@ or sign error, not a rounding.
 
 Typical use::
 
-    from sim_eval import evaluate_grasps, load_grasps
+    from ogcp.sim_eval import evaluate_grasps, load_grasps
 
     result = evaluate_grasps(None, load_grasps("mine.json"))  # the object named in the file
     print(result.to_dict()["object"]["external"]["grasps"][0])
@@ -36,16 +36,16 @@ import numpy as np
 import trimesh
 from numpy.typing import ArrayLike, NDArray
 
-from planner.grasp.contact_set import DEFAULT_CONE_EDGES, DEFAULT_MU, ContactSet, mass_properties
-from planner.grasp.mesh_distance import SurfaceIndex
-from planner.grasp.quality import q1_certificate
-from planner.grasp.reach import REACH_TOLERANCE
-from planner.infra.errors import OgcpError, choice_error
-from planner.records.grasps import GRASPS_SCHEMA, ExternalGrasps
-from sim_eval.decomposition.decompose import DecompositionSettings
-from sim_eval.evaluate import GraspEvaluator, object_diagonal, tip_radius
-from sim_eval.result import SimResult
-from sim_eval.settings import SimSettings
+from ogcp.planner.grasp.contact_set import DEFAULT_CONE_EDGES, DEFAULT_MU, ContactSet, mass_properties
+from ogcp.planner.grasp.mesh_distance import SurfaceIndex
+from ogcp.planner.grasp.quality import q1_certificate
+from ogcp.planner.grasp.reach import REACH_TOLERANCE
+from ogcp.planner.infra.errors import OgcpError, choice_error
+from ogcp.planner.records.grasps import GRASPS_SCHEMA, ExternalGrasps
+from ogcp.sim_eval.decomposition.decompose import DecompositionSettings
+from ogcp.sim_eval.evaluate import GraspEvaluator, object_diagonal, tip_radius
+from ogcp.sim_eval.result import SimResult
+from ogcp.sim_eval.settings import SimSettings
 
 #: ``on_surface`` choices: what happens to a contact off the mesh's surface.
 ON_SURFACE = ("project", "refuse")

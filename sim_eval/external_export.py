@@ -1,7 +1,7 @@
 """Write an ogcp plan's grasps as ``ogcp.grasps/1``: the form any planner's grasps take.
 
-An exported plan evaluated with :func:`~sim_eval.external.evaluate_grasps` reproduces the
-plan's own evaluation (``sim_eval.evaluate_plan``) exactly: the same contacts bit for bit
+An exported plan evaluated with :func:`~ogcp.sim_eval.external.evaluate_grasps` reproduces the
+plan's own evaluation (``ogcp.sim_eval.evaluate_plan``) exactly: the same contacts bit for bit
 (floats are written in full), the same COM and rho (the same mesh), the same mu and k. This is
 the check that the external path adds nothing of its own (benchmarks/studies/external_roundtrip.py),
 and a ready example of the format for other planners.
@@ -16,11 +16,11 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from planner.grasp.contact_set import ContactSet
-from planner.grasp.quality import q1_certificate
-from planner.infra.errors import OgcpError
-from planner.records.grasps import ExternalGrasp, ExternalGrasps, load_grasps, save_grasps
-from planner.records.plan import PlanView, contact_set_record, plan_grasps
+from ogcp.planner.grasp.contact_set import ContactSet
+from ogcp.planner.grasp.quality import q1_certificate
+from ogcp.planner.infra.errors import OgcpError
+from ogcp.planner.records.grasps import ExternalGrasp, ExternalGrasps, load_grasps, save_grasps
+from ogcp.planner.records.plan import PlanView, contact_set_record, plan_grasps
 
 
 class PlanResult(Protocol):
@@ -63,7 +63,7 @@ def export_grasps(
             ``HFTSResult``) together with ``contacts``.
         path: The file to write; a mesh path is written relative to its folder.
         contacts: The contact set the plan indexes. None for a record: it is re-sampled and
-            checked against the record (:func:`sim_eval.plan_input.plan_input`).
+            checked against the record (:func:`ogcp.sim_eval.plan_input.plan_input`).
         max_grasps: Export at most this many grasps, best first.
 
     Returns:
@@ -78,7 +78,7 @@ def export_grasps(
     if isinstance(plan, Mapping):
         record = dict(plan)
         if contacts is None:
-            from sim_eval.plan_input import plan_input
+            from ogcp.sim_eval.plan_input import plan_input
 
             rebuilt = plan_input(record)
             contacts, grasps, labels = rebuilt.contacts, rebuilt.grasps, rebuilt.labels

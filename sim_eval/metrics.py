@@ -18,7 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import stats
 
-from planner.infra.errors import OgcpError
+from ogcp.planner.infra.errors import OgcpError
 
 #: Fewer finite pairs than this make a rank correlation meaningless (NaN).
 MIN_PAIRS = 3

@@ -1,6 +1,6 @@
 """Helpers for plans that carry their contacts: where their mesh is, whether contacts lie on it, versions.
 
-A plan records its full contact set (:func:`planner.records.plan.contact_set_record`), so
+A plan records its full contact set (:func:`ogcp.planner.records.plan.contact_set_record`), so
 the set is not sampled again: it is checked against the object instead. This module finds
 the object's mesh file from a plan written anywhere, measures how far each recorded contact
 lies from the mesh surface (and whether its normal is its face's), and compares the library
@@ -17,7 +17,7 @@ import numpy as np
 import trimesh
 from numpy.typing import NDArray
 
-from planner.infra.provenance import provenance
+from ogcp.planner.infra.provenance import provenance
 
 #: [m] how far a recorded contact may lie from the mesh surface. Sampled points are convex
 #: combinations of a face's vertices, off its plane by rounding only (~1e-17 m at ogcp's

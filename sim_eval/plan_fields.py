@@ -1,6 +1,6 @@
 """Type and range checks of the ``ogcp.plan/1`` fields the simulation reads (:func:`check_plan_fields`).
 
-A plan is user input: every field ``sim_eval.plan_input`` reads is checked here first, so a
+A plan is user input: every field ``ogcp.sim_eval.plan_input`` reads is checked here first, so a
 malformed file ends in one line naming the field's key path, never in a traceback deeper in.
 """
 
@@ -10,9 +10,9 @@ from typing import Any
 
 import numpy as np
 
-from planner.config.options import Option
-from planner.grasp.defaults import CONE_EDGES, CONTACT_SEED, CONTACTS, DIAGONAL, MU, TIP_RADIUS, TORSIONAL_FRICTION
-from planner.infra.errors import OgcpError
+from ogcp.planner.config.options import Option
+from ogcp.planner.grasp.defaults import CONE_EDGES, CONTACT_SEED, CONTACTS, DIAGONAL, MU, TIP_RADIUS, TORSIONAL_FRICTION
+from ogcp.planner.infra.errors import OgcpError
 
 #: The plan's fields that the simulation reads, by key path, with their valid values (a
 #: missing or null field is allowed where older plans or other methods lack it).

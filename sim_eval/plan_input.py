@@ -14,7 +14,7 @@ Older plans, which record only how their set was sampled, are re-sampled as befo
 checked the same way against the re-sampled set. A plan that disagrees anywhere is refused
 with the field, its recorded and its rebuilt value (and the recorded vs running library
 versions where they differ), never simulated as if it were the original. Reading the record
-itself (file, schema, grasps, sampling) is :mod:`planner.records.plan`'s job.
+itself (file, schema, grasps, sampling) is :mod:`ogcp.planner.records.plan`'s job.
 """
 
 from __future__ import annotations
@@ -28,7 +28,7 @@ import numpy as np
 import trimesh
 from numpy.typing import NDArray
 
-from planner.grasp.contact_set import (
+from ogcp.planner.grasp.contact_set import (
     DEFAULT_CONE_EDGES,
     DEFAULT_MU,
     EVEN_SAMPLING,
@@ -36,11 +36,11 @@ from planner.grasp.contact_set import (
     mass_properties,
     sample_contacts,
 )
-from planner.grasp.quality import q1
-from planner.infra.errors import OgcpError
-from planner.infra.tolerance import TOL
-from planner.objects import DEFAULT_DIAGONAL, file_sha256, resolve_object
-from planner.records.plan import (
+from ogcp.planner.grasp.quality import q1
+from ogcp.planner.infra.errors import OgcpError
+from ogcp.planner.infra.tolerance import TOL
+from ogcp.planner.objects import DEFAULT_DIAGONAL, file_sha256, resolve_object
+from ogcp.planner.records.plan import (
     SAMPLING_KEYS,
     ContactSampling,
     contact_sampling,
@@ -48,7 +48,7 @@ from planner.records.plan import (
     recorded_contacts,
     recorded_positions,
 )
-from sim_eval.plan_contacts import (
+from ogcp.sim_eval.plan_contacts import (
     FACE_NORMAL_TOLERANCE,
     SURFACE_TOLERANCE,
     mesh_candidates,
@@ -56,7 +56,7 @@ from sim_eval.plan_contacts import (
     surface_misfit,
     versions_note,
 )
-from sim_eval.plan_fields import check_plan_fields
+from ogcp.sim_eval.plan_fields import check_plan_fields
 
 POSITION_TOLERANCE = 1e-9  # [m] recorded vs re-sampled contact positions, COM and rho
 NORMAL_TOLERANCE = 1e-9  # recorded vs re-sampled unit normals (per component)
@@ -126,7 +126,7 @@ def _mesh(source: dict[str, Any], candidates: Sequence[Path]) -> trimesh.Trimesh
 
     Args:
         source: The object's description as recorded.
-        candidates: Where a mesh file may be, tried in order (:func:`sim_eval.plan_contacts.mesh_candidates`).
+        candidates: Where a mesh file may be, tried in order (:func:`ogcp.sim_eval.plan_contacts.mesh_candidates`).
     """
     kind = source.get("kind")
     if kind in ("builtin", "fetched"):

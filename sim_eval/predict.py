@@ -2,7 +2,7 @@
 
 The simulated hand presses m point fingertips on the object, each with a normal force of at
 most ``F_max`` (the grip budget) and Coulomb friction ``mu`` linearised by the same cone edges
-as the planner (:func:`planner.grasp.wrench.contact_wrenches`, normal component 1, so the weights of
+as the planner (:func:`ogcp.planner.grasp.wrench.contact_wrenches`, normal component 1, so the weights of
 one finger's edges sum to its normal force). A disturbance ``s d`` (``d`` a unit 6-vector in
 the planner's scaled wrench space ``[force, torque / rho]``) is resisted when contact forces
 ``lambda_ij >= 0`` exist with::
@@ -26,8 +26,8 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.optimize import linprog
 
-from planner.grasp.wrench import contact_wrenches
-from planner.infra.errors import OgcpError
+from ogcp.planner.grasp.wrench import contact_wrenches
+from ogcp.planner.infra.errors import OgcpError
 
 DIM = 6
 #: Allowed deviation of a normal or direction norm from 1.
@@ -126,7 +126,7 @@ class ResistanceLP:
         cone_edges: Number of friction-cone edges k (>= 3).
         max_normal_force: Per-finger normal-force cap F_max [N].
         torsion: Torsional friction coefficient of soft fingers [m] (0 = hard fingers); their
-            elliptic set is linearised densely (:func:`planner.grasp.wrench.soft_directions`,
+            elliptic set is linearised densely (:func:`ogcp.planner.grasp.wrench.soft_directions`,
             inradius 0.993 at k = 32).
 
     Raises:

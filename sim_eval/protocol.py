@@ -16,8 +16,8 @@ import numpy as np
 from mujoco import rollout
 from numpy.typing import NDArray
 
-from sim_eval.scene import GraspScene
-from sim_eval.settings import SimSettings
+from ogcp.sim_eval.scene import GraspScene
+from ogcp.sim_eval.settings import SimSettings
 
 FULL_STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
 CONTROL_SPEC = mujoco.mjtState.mjSTATE_CTRL | mujoco.mjtState.mjSTATE_XFRC_APPLIED

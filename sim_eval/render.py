@@ -6,15 +6,15 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from planner.infra.errors import OgcpError
-from sim_eval.body import object_inertia
-from sim_eval.collision import place_tips
-from sim_eval.collision_fit import DecompositionLadder
-from sim_eval.decomposition.decompose import DecompositionSettings
-from sim_eval.evaluate import object_diagonal, tip_radius
-from sim_eval.protocol import FULL_STATE, Settled, settle
-from sim_eval.scene import GraspScene, build_scene
-from sim_eval.settings import SimSettings
+from ogcp.planner.infra.errors import OgcpError
+from ogcp.sim_eval.body import object_inertia
+from ogcp.sim_eval.collision import place_tips
+from ogcp.sim_eval.collision_fit import DecompositionLadder
+from ogcp.sim_eval.decomposition.decompose import DecompositionSettings
+from ogcp.sim_eval.evaluate import object_diagonal, tip_radius
+from ogcp.sim_eval.protocol import FULL_STATE, Settled, settle
+from ogcp.sim_eval.scene import GraspScene, build_scene
+from ogcp.sim_eval.settings import SimSettings
 
 
 def render_grasp(
@@ -80,7 +80,7 @@ def render_plan(
     The grasp is the one ``evaluate`` simulates: on the decomposition the grasp's contacts call
     for, with the tips started on its surface.
     """
-    from sim_eval.plan_input import plan_input
+    from ogcp.sim_eval.plan_input import plan_input
 
     plan = plan_input(record)
     settings = (settings or SimSettings()).scaled(object_diagonal(plan.mesh))

@@ -16,8 +16,8 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from planner.grasp.wrench import tangent_basis
-from sim_eval.settings import SimSettings
+from ogcp.planner.grasp.wrench import tangent_basis
+from ogcp.sim_eval.settings import SimSettings
 
 _INTEGRATORS = {
     "implicitfast": mujoco.mjtIntegrator.mjINT_IMPLICITFAST,

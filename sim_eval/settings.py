@@ -6,16 +6,16 @@ import math
 from dataclasses import asdict, dataclass, fields, replace
 from typing import Any
 
-from planner.config.options import MAX_SEED, Option
-from planner.grasp.defaults import (
+from ogcp.planner.config.options import MAX_SEED, Option
+from ogcp.planner.grasp.defaults import (
     DEFAULT_TIP_RADIUS_RATIO,
     MAX_DIAGONAL,
     MAX_MU,
     MAX_TORSIONAL_FRICTION,
     MIN_DIAGONAL,
 )
-from planner.infra.errors import OgcpError, choice_error
-from planner.objects.builtin import DEFAULT_DIAGONAL
+from ogcp.planner.infra.errors import OgcpError, choice_error
+from ogcp.planner.objects.builtin import DEFAULT_DIAGONAL
 
 #: The bounding-box diagonal [m] at which the length settings are given (the built-ins' size, so
 #: 0.2 m objects are simulated with exactly these values).

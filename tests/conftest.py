@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 import trimesh
 
-from planner import builtin_mesh
-from planner.grasp import ContactSet, SupportBound, q1, sample_contacts
-from planner.infra import TOL
+from ogcp.planner import builtin_mesh
+from ogcp.planner.grasp import ContactSet, SupportBound, q1, sample_contacts
+from ogcp.planner.infra import TOL
 
 
 def q1_by_facet_enumeration(wrenches: np.ndarray, tol: float = 1e-10) -> float:

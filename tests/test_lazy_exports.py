@@ -14,14 +14,14 @@ import pickle
 import pytest
 
 LAZY_PACKAGES = (
-    "benchmarks",
-    "planner",
-    "planner.grasp",
-    "planner.methods",
-    "planner.objects",
-    "sim_eval",
-    "sim_eval.decomposition",
-    "benchmarks.plots",
+    "ogcp.benchmarks",
+    "ogcp.planner",
+    "ogcp.planner.grasp",
+    "ogcp.planner.methods",
+    "ogcp.planner.objects",
+    "ogcp.sim_eval",
+    "ogcp.sim_eval.decomposition",
+    "ogcp.benchmarks.plots",
 )
 
 
@@ -43,15 +43,15 @@ def test_unknown_name_is_an_attribute_error(name):
 
 
 def test_a_submodule_never_hides_the_function_of_its_name():
-    import sim_eval.decomposition
+    import ogcp.sim_eval.decomposition
 
-    module = importlib.import_module("sim_eval.decomposition.decompose")  # binds the submodule, once
-    assert sim_eval.decomposition.decompose is module.decompose
-    assert callable(sim_eval.decomposition.decompose)
+    module = importlib.import_module("ogcp.sim_eval.decomposition.decompose")  # binds the submodule, once
+    assert ogcp.sim_eval.decomposition.decompose is module.decompose
+    assert callable(ogcp.sim_eval.decomposition.decompose)
 
 
 def test_method_specs_pickle_with_their_deferred_runners():
-    from planner.methods.registry import METHODS
+    from ogcp.planner.methods.registry import METHODS
 
     for spec in METHODS.values():
         assert pickle.loads(pickle.dumps(spec)) == spec

@@ -1,5 +1,5 @@
 """The ``ogcp`` command line: one module per command group, all thin over the Python API."""
 
-from benchmarks.cli.app import build_parser, main
+from ogcp.benchmarks.cli.app import build_parser, main
 
 __all__ = ["build_parser", "main"]

@@ -1,7 +1,7 @@
-"""``python -m benchmarks.cli``: the ``ogcp`` command without the console script."""
+"""``python -m ogcp.benchmarks.cli``: the ``ogcp`` command without the console script."""
 
 import sys
 
-from benchmarks.cli.app import main
+from ogcp.benchmarks.cli.app import main
 
 sys.exit(main())

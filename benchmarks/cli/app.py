@@ -16,9 +16,9 @@ import warnings
 from collections.abc import Sequence
 from typing import NoReturn
 
-from benchmarks.cli import assets, export, plan, plot, report, simulate, suite
-from planner import __version__
-from planner.infra.errors import OgcpError
+from ogcp import __version__
+from ogcp.benchmarks.cli import assets, export, plan, plot, report, simulate, suite
+from ogcp.planner.infra.errors import OgcpError
 
 #: The command modules, in the order ``ogcp --help`` lists their commands.
 COMMAND_MODULES = (plan, simulate, assets, suite, plot, report, export)

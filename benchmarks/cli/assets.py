@@ -10,13 +10,13 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-# The manifest of fetchable objects is plain TOML; planner.objects.fetch (numpy, trimesh) is
+# The manifest of fetchable objects is plain TOML; ogcp.planner.objects.fetch (numpy, trimesh) is
 # imported by the handlers, so that ``--help`` does not load it.
-from benchmarks.cli.options import check_folder
-from planner.objects.fetchable import FETCH_GROUPS
+from ogcp.benchmarks.cli.options import check_folder
+from ogcp.planner.objects.fetchable import FETCH_GROUPS
 
 if TYPE_CHECKING:
-    from planner.objects.fetch import ObjectStatus
+    from ogcp.planner.objects.fetch import ObjectStatus
 
 _CACHE_HELP = "cache root, as $OGCP_CACHE (default $OGCP_CACHE or ~/.cache/ogcp); meshes go to DIR/meshes"
 
@@ -45,7 +45,7 @@ def register(commands: Any) -> None:
 
 
 def format_table(rows: list[ObjectStatus]) -> str:
-    """Fixed-width table of :func:`planner.objects.fetch.list_objects` rows."""
+    """Fixed-width table of :func:`ogcp.planner.objects.fetch.list_objects` rows."""
     header = ("name", "kind", "source", "license", "cached", "vertices", "watertight", "note")
     cells = [header] + [
         (
@@ -66,7 +66,7 @@ def format_table(rows: list[ObjectStatus]) -> str:
 
 def run_list(args: argparse.Namespace) -> int:
     """Print every object and where the fetched ones are cached."""
-    from planner.objects.fetch import list_objects, meshes_dir
+    from ogcp.planner.objects.fetch import list_objects, meshes_dir
 
     rows = list_objects(args.cache)
     print(format_table(rows))
@@ -79,7 +79,7 @@ def run_list(args: argparse.Namespace) -> int:
 
 def run_fetch(args: argparse.Namespace) -> int:
     """Fetch the named objects; built-in names are accepted and need nothing."""
-    from planner.objects.fetch import expand_names, fetch_objects, meshes_dir
+    from ogcp.planner.objects.fetch import expand_names, fetch_objects, meshes_dir
 
     fetchable, builtin = expand_names(args.names)
     for name in builtin:

@@ -1,4 +1,4 @@
-"""The ``ogcp export`` command (registered by :mod:`benchmarks.cli.app`).
+"""The ``ogcp export`` command (registered by :mod:`ogcp.benchmarks.cli.app`).
 
 Exit status: 0 when the tables are written, 2 on invalid input.
 """
@@ -20,7 +20,7 @@ def register(commands: Any) -> None:
         "export", help="write tidy tables (grasps, directions) and their column dictionary from a suite run"
     )
     export.add_argument("run", type=Path, metavar="RUN", help="results folder of ogcp suite")
-    # The choices are spelled out here rather than imported: benchmarks.export loads the record readers.
+    # The choices are spelled out here rather than imported: ogcp.benchmarks.export loads the record readers.
     export.add_argument(
         "--format", default="csv", choices=("csv", "parquet"), help="table format (parquet needs pyarrow; default csv)"
     )
@@ -30,7 +30,7 @@ def register(commands: Any) -> None:
 
 def run_export(args: argparse.Namespace) -> int:
     """Handler of ``ogcp export``."""
-    from benchmarks.export import export_run  # lazy: ogcp --help never loads the record readers
+    from ogcp.benchmarks.export import export_run  # lazy: ogcp --help never loads the record readers
 
     for path in export_run(args.run, args.out, args.format):
         print(path)

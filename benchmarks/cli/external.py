@@ -1,6 +1,6 @@
 """``ogcp evaluate GRASPS.json``: simulate grasps from any planner (schema ``ogcp.grasps/1``).
 
-``ogcp evaluate`` takes a plan or a grasps file; :mod:`benchmarks.cli.simulate` hands a file
+``ogcp evaluate`` takes a plan or a grasps file; :mod:`ogcp.benchmarks.cli.simulate` hands a file
 whose schema is ``ogcp.grasps/1`` (:func:`is_external`) to :func:`run_external`, with the
 settings it built from the same flags. This module never imports ``simulate``, so that the
 dispatch does not close an import cycle: the settings and the table come in as arguments.
@@ -16,21 +16,21 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from benchmarks.cli.options import check_output
-from planner.infra.atomic import write_json_atomic
-from planner.infra.errors import OgcpError
+from ogcp.benchmarks.cli.options import check_output
+from ogcp.planner.infra.atomic import write_json_atomic
+from ogcp.planner.infra.errors import OgcpError
 
 if TYPE_CHECKING:
-    from sim_eval.decomposition.settings import DecompositionSettings
-    from sim_eval.settings import SimSettings
+    from ogcp.sim_eval.decomposition.settings import DecompositionSettings
+    from ogcp.sim_eval.settings import SimSettings
 
-#: The ``--on-surface`` choices (see ``sim_eval.external.ON_SURFACE``); the first is the default.
+#: The ``--on-surface`` choices (see ``ogcp.sim_eval.external.ON_SURFACE``); the first is the default.
 ON_SURFACE_CHOICES = ("project", "refuse")
 
 
 def is_external(path: Path) -> bool:
     """Whether ``path`` is an ``ogcp.grasps/1`` file (a plan, or an unreadable file, is not)."""
-    from planner.records.grasps import is_grasps_file
+    from ogcp.planner.records.grasps import is_grasps_file
 
     return is_grasps_file(path)
 
@@ -101,8 +101,8 @@ def run_external(
         OgcpError: For a bad file or field, contacts off the surface with ``--on-surface
             refuse``, ``--render`` (it draws plans only), or an output that cannot be written.
     """
-    from planner.records.grasps import load_grasps
-    from sim_eval.external import evaluate_grasps
+    from ogcp.planner.records.grasps import load_grasps
+    from ogcp.sim_eval.external import evaluate_grasps
 
     check_output(args.output)
     if getattr(args, "render", None) is not None:

@@ -1,6 +1,6 @@
 """``ogcp plan``'s method flags, generated from the methods' declared options.
 
-Every method parameter (:mod:`planner.config.methods`) becomes one flag: ``branching``
+Every method parameter (:mod:`ogcp.planner.config.methods`) becomes one flag: ``branching``
 is ``--branching``, with the option's type, help and default. Flags default to None
 ("not given"), so the configuration fills in its own defaults and a flag given to a method
 that does not take it is an error instead of being silently ignored.
@@ -13,10 +13,10 @@ from collections import Counter
 from collections.abc import Callable
 from typing import Any
 
-from benchmarks.cli.options import integer, number, valid
-from planner.config.options import MethodConfig, Option
-from planner.infra.errors import OgcpError
-from planner.methods.registry import METHODS, MethodSpec
+from ogcp.benchmarks.cli.options import integer, number, valid
+from ogcp.planner.config.options import MethodConfig, Option
+from ogcp.planner.infra.errors import OgcpError
+from ogcp.planner.methods.registry import METHODS, MethodSpec
 
 #: Parameters that the contact options already provide (``--seed`` seeds the contacts and the method).
 SHARED_FIELDS = ("seed",)

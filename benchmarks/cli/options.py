@@ -14,14 +14,14 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from planner.config.options import ConfigError, Option
-from planner.grasp.defaults import (
+from ogcp.planner.config.options import ConfigError, Option
+from ogcp.planner.grasp.defaults import (
     CONTACT_MODELS,
     DEFAULT_TORSIONAL_FRICTION,
     DIAGONAL,
     TORSIONAL_FRICTION,
 )
-from planner.infra.errors import OgcpError
+from ogcp.planner.infra.errors import OgcpError
 
 
 def integer(text: str) -> int:
@@ -135,7 +135,7 @@ def add_diagonal_option(parser: argparse.ArgumentParser, default: float) -> None
 
     Args:
         parser: The sub-command's parser.
-        default: The named objects' diagonal [m] (``planner.objects.DEFAULT_DIAGONAL``), for the help.
+        default: The named objects' diagonal [m] (``ogcp.planner.objects.DEFAULT_DIAGONAL``), for the help.
     """
     parser.add_argument(
         "--diagonal",
@@ -178,6 +178,6 @@ def torsion_from_args(args: argparse.Namespace) -> float:
     Raises:
         OgcpError: For a coefficient with ``--contact-model hard``, or 0 with ``soft``.
     """
-    from planner.grasp.contact_model import torsion_of
+    from ogcp.planner.grasp.contact_model import torsion_of
 
     return torsion_of(args.contact_model, args.torsional_friction, "--contact-model", "--torsional-friction")

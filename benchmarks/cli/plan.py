@@ -1,8 +1,8 @@
 """``ogcp contacts`` and ``ogcp plan``: sample contact sets and plan grasps with any method.
 
 The method flags come from the methods' declared options
-(:mod:`benchmarks.cli.method_options`); running and recording is the registry's
-(:mod:`planner.methods.registry`), the same for the command line and the suites.
+(:mod:`ogcp.benchmarks.cli.method_options`); running and recording is the registry's
+(:mod:`ogcp.planner.methods.registry`), the same for the command line and the suites.
 """
 
 from __future__ import annotations
@@ -18,8 +18,8 @@ from typing import TYPE_CHECKING, Any
 # Only light modules at the top: the parser is built for every command, ``--help`` included.
 # The contact sampling, the engines and the summaries (numpy, trimesh, scipy, numba) are
 # imported by the functions that use them.
-from benchmarks.cli.method_options import GROUPS, add_method_options, config_from_args, not_applicable
-from benchmarks.cli.options import (
+from ogcp.benchmarks.cli.method_options import GROUPS, add_method_options, config_from_args, not_applicable
+from ogcp.benchmarks.cli.options import (
     add_contact_model_options,
     add_diagonal_option,
     check_output,
@@ -30,9 +30,9 @@ from benchmarks.cli.options import (
     typed,
     valid,
 )
-from planner.config.methods import DEFAULT_FINGERS, DEFAULT_METHOD, DEFAULT_SEED
-from planner.config.options import JOBS, MEMORY_LIMIT, TIME_LIMIT
-from planner.grasp.defaults import (
+from ogcp.planner.config.methods import DEFAULT_FINGERS, DEFAULT_METHOD, DEFAULT_SEED
+from ogcp.planner.config.options import JOBS, MEMORY_LIMIT, TIME_LIMIT
+from ogcp.planner.grasp.defaults import (
     CONE_EDGES,
     CONTACT_SEED,
     DEFAULT_CONE_EDGES,
@@ -42,17 +42,17 @@ from planner.grasp.defaults import (
     MU,
     TIP_RADIUS,
 )
-from planner.infra.atomic import write_json_atomic
-from planner.infra.errors import OgcpError
-from planner.infra.parallel import BACKENDS, DEFAULT_BACKEND, DEFAULT_JOBS
-from planner.methods.registry import METHODS, MethodSpec, method_spec
-from planner.objects.builtin import BUILTIN_OBJECTS, DEFAULT_DIAGONAL
+from ogcp.planner.infra.atomic import write_json_atomic
+from ogcp.planner.infra.errors import OgcpError
+from ogcp.planner.infra.parallel import BACKENDS, DEFAULT_BACKEND, DEFAULT_JOBS
+from ogcp.planner.methods.registry import METHODS, MethodSpec, method_spec
+from ogcp.planner.objects.builtin import BUILTIN_OBJECTS, DEFAULT_DIAGONAL
 
 if TYPE_CHECKING:
     import trimesh
 
-    from planner.grasp.contact_set import ContactSet
-    from planner.methods.runners import RunOptions
+    from ogcp.planner.grasp.contact_set import ContactSet
+    from ogcp.planner.methods.runners import RunOptions
 
 #: Run-time flags (destination -> flag); each applies to the methods whose spec lists it.
 RUN_FLAGS = {
@@ -117,8 +117,8 @@ def tip_radius(text: str) -> float:
 
 def sample_from_args(mesh: trimesh.Trimesh, source: dict[str, Any], n: int, args: argparse.Namespace) -> ContactSet:
     """Sample ``n`` contacts with the contact flags; no ``--tip-radius`` means the default fingertip."""
-    from planner.grasp.contact_set import sample_contacts
-    from planner.grasp.reach import default_tip_radius
+    from ogcp.planner.grasp.contact_set import sample_contacts
+    from ogcp.planner.grasp.reach import default_tip_radius
 
     radius = default_tip_radius(mesh) if args.tip_radius is None else args.tip_radius
     mu = DEFAULT_MU if args.mu is None else args.mu
@@ -207,7 +207,7 @@ def register(commands: Any) -> None:
 
 def load_contact_set(spec: str, args: argparse.Namespace) -> ContactSet:
     """Contact set from a contact JSON file, or sampled from a mesh or built-in object."""
-    from planner.grasp.contact_set import ContactSet
+    from ogcp.planner.grasp.contact_set import ContactSet
 
     if spec.lower().endswith(".json"):
         if args.contacts is not None:
@@ -225,7 +225,7 @@ def load_contact_set(spec: str, args: argparse.Namespace) -> ContactSet:
                 "--contact-model and --torsional-friction do not apply to a contact file (its wrenches are fixed)"
             )
         return ContactSet.load(spec)
-    from planner.objects.contact_cache import ContactRequest, cached_contacts
+    from ogcp.planner.objects.contact_cache import ContactRequest, cached_contacts
 
     n = args.contacts if args.contacts is not None else DEFAULT_CONTACTS
     request = ContactRequest(
@@ -240,7 +240,7 @@ def load_contact_set(spec: str, args: argparse.Namespace) -> ContactSet:
     )
 
     def sample() -> ContactSet:
-        from planner.objects.resolve import resolve_object  # trimesh: only when the cache has no entry
+        from ogcp.planner.objects.resolve import resolve_object  # trimesh: only when the cache has no entry
 
         mesh, source = resolve_object(spec, args.diagonal)
         return sample_from_args(mesh, source, n, args)
@@ -254,7 +254,7 @@ def run_options_from_args(spec: MethodSpec, args: argparse.Namespace) -> RunOpti
     Raises:
         OgcpError: For a run-time flag of another method.
     """
-    from planner.methods.runners import RunOptions
+    from ogcp.planner.methods.runners import RunOptions
 
     given = {field: getattr(args, field) for field in RUN_FLAGS if field != "optimum"}
     given["optimum"] = False if args.no_optimum else None
@@ -273,7 +273,7 @@ def run_options_from_args(spec: MethodSpec, args: argparse.Namespace) -> RunOpti
 
 
 def run_contacts(args: argparse.Namespace) -> int:
-    from planner.objects.resolve import resolve_object
+    from ogcp.planner.objects.resolve import resolve_object
 
     mesh, source = resolve_object(args.object, args.diagonal)
     contacts = sample_from_args(mesh, source, args.contacts, args)
@@ -287,8 +287,8 @@ EXIT_STATUS = {"stopped": 3, "memory": 4, "interrupted": 130}
 
 
 def run_plan(args: argparse.Namespace) -> int:
-    from benchmarks.cli.interrupt import stop_on_interrupt
-    from benchmarks.cli.plan_summary import describe
+    from ogcp.benchmarks.cli.interrupt import stop_on_interrupt
+    from ogcp.benchmarks.cli.plan_summary import describe
 
     spec = method_spec(args.method)
     config = config_from_args(spec, args)
@@ -301,7 +301,7 @@ def run_plan(args: argparse.Namespace) -> int:
     else:
         run = spec.run(config, contacts, args.fingers, options)
     if args.output is not None:
-        from planner.records.plan import add_plan_path
+        from ogcp.planner.records.plan import add_plan_path
 
         # Where the plan goes is known only now: its mesh file is found from there when both move.
         write_json_atomic(args.output, add_plan_path(run.record, args.output))

@@ -4,13 +4,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from planner.baselines.es import ESResult
-from planner.baselines.hfts import HFTSResult
-from planner.grasp.contact_set import ContactSet
-from planner.methods.registry import METHODS
-from planner.methods.runners import MethodRun
-from planner.records.plan import PlanHand, PlanOptimum, PlanView
-from planner.search.result import UNFINISHED, SearchResult
+from ogcp.planner.baselines.es import ESResult
+from ogcp.planner.baselines.hfts import HFTSResult
+from ogcp.planner.grasp.contact_set import ContactSet
+from ogcp.planner.methods.registry import METHODS
+from ogcp.planner.methods.runners import MethodRun
+from ogcp.planner.records.plan import PlanHand, PlanOptimum, PlanView
+from ogcp.planner.search.result import UNFINISHED, SearchResult
 
 
 def _soft_text(contacts: ContactSet) -> str:

@@ -13,9 +13,9 @@ from pathlib import Path
 from typing import Any
 
 # The names only: the figure modules (numpy, the records; matplotlib when drawing) load in the handler.
-from benchmarks.cli.options import typed, valid
-from benchmarks.plots.names import NAMES
-from planner.config.options import Option
+from ogcp.benchmarks.cli.options import typed, valid
+from ogcp.benchmarks.plots.names import NAMES
+from ogcp.planner.config.options import Option
 
 #: PNG resolution: 10 dpi is the plots' own floor; 1200 dpi is twice print quality, and a figure
 #: at 10^6 dpi asked matplotlib for more memory than any machine has.
@@ -53,7 +53,7 @@ def run_plot(args: argparse.Namespace) -> int:
 
     matplotlib.use("Agg")  # files only: never open a window, work without a display
 
-    from benchmarks.plots import plot_run
+    from ogcp.benchmarks.plots import plot_run
 
     out = args.out if args.out is not None else args.run / "figures"
     report = plot_run(args.run, out, only=args.only, formats=args.formats, dpi=args.dpi, unit=args.unit)

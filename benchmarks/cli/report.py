@@ -51,12 +51,12 @@ def run_report(args: argparse.Namespace) -> int:
 
         matplotlib.use("Agg")  # files only: never open a window, work without a display
 
-        from benchmarks.plots import plot_run
+        from ogcp.benchmarks.plots import plot_run
 
         # The report inlines PNGs only; PDFs are ogcp plot's job.
         drawn = plot_run(args.run, figures, formats=["png"])
         _notes(drawn.notes)
-    from benchmarks.report import write_report
+    from ogcp.benchmarks.report import write_report
 
     result = write_report(args.run, args.out, figures)
     _notes(result.notes)
@@ -68,7 +68,7 @@ def run_report(args: argparse.Namespace) -> int:
 
 def run_view(args: argparse.Namespace) -> int:
     """Handler of ``ogcp view``."""
-    from benchmarks.report import write_view
+    from ogcp.benchmarks.report import write_view
 
     result = write_view(args.result, args.out)
     _notes(result.notes)

@@ -13,7 +13,7 @@ from typing import Any
 
 # Only light modules at the top (the settings and their defaults): the parser is built for every
 # command, ``--help`` included. numpy, the plan records and MuJoCo load in the handlers.
-from benchmarks.cli.options import (
+from ogcp.benchmarks.cli.options import (
     add_contact_model_options,
     add_diagonal_option,
     check_output,
@@ -23,13 +23,13 @@ from benchmarks.cli.options import (
     typed,
     valid,
 )
-from planner.config.options import ConfigError, Option
-from planner.infra.atomic import write_json_atomic
-from planner.infra.errors import OgcpError
-from planner.objects.builtin import DEFAULT_DIAGONAL
-from sim_eval.decomposition.settings import METHODS as DECOMPOSITION_METHODS
-from sim_eval.decomposition.settings import DecompositionSettings
-from sim_eval.settings import PROTOCOLS, RANGES, SimSettings
+from ogcp.planner.config.options import ConfigError, Option
+from ogcp.planner.infra.atomic import write_json_atomic
+from ogcp.planner.infra.errors import OgcpError
+from ogcp.planner.objects.builtin import DEFAULT_DIAGONAL
+from ogcp.sim_eval.decomposition.settings import METHODS as DECOMPOSITION_METHODS
+from ogcp.sim_eval.decomposition.settings import DecompositionSettings
+from ogcp.sim_eval.settings import PROTOCOLS, RANGES, SimSettings
 
 AXIS_LABELS = ("+fx", "-fx", "+fy", "-fy", "+fz", "-fz", "+tx", "-tx", "+ty", "-ty", "+tz", "-tz", "q1-weakest")
 
@@ -278,7 +278,7 @@ def sim_summary(record: dict[str, Any]) -> str:
     """Human-readable table of an ``ogcp.sim/1`` or ``/2`` record."""
     import numpy as np
 
-    from sim_eval.result import SimRecord
+    from ogcp.sim_eval.result import SimRecord
 
     sim = SimRecord.from_dict(record)
     name = sim.object.get("name") or sim.object.get("path", "?")
@@ -348,9 +348,9 @@ def _dexgraspbench_line(summary: Any) -> list[str]:
 
 
 def run_evaluate(args: argparse.Namespace) -> int:
-    from benchmarks.cli.external import is_external, run_external
-    from planner.records.plan import load_plan
-    from sim_eval.evaluate import evaluate_plan
+    from ogcp.benchmarks.cli.external import is_external, run_external
+    from ogcp.planner.records.plan import load_plan
+    from ogcp.sim_eval.evaluate import evaluate_plan
 
     if is_external(args.plan):
         return run_external(args, _settings(args), _decomposition(args), sim_summary)
@@ -382,7 +382,7 @@ def _render(record: dict[str, Any], args: argparse.Namespace) -> None:
     matplotlib.use("Agg")
     from matplotlib import pyplot as plt
 
-    from sim_eval.render import render_plan
+    from ogcp.sim_eval.render import render_plan
 
     image = render_plan(record, _settings(args), _decomposition(args))
     try:
@@ -393,8 +393,8 @@ def _render(record: dict[str, Any], args: argparse.Namespace) -> None:
 
 
 def run_decompose(args: argparse.Namespace) -> int:
-    from planner.objects import resolve_object
-    from sim_eval.decomposition.decompose import decompose
+    from ogcp.planner.objects import resolve_object
+    from ogcp.sim_eval.decomposition.decompose import decompose
 
     mesh, _ = resolve_object(args.object, args.diagonal)
     settings = _decomposition(args)

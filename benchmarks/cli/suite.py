@@ -1,4 +1,4 @@
-"""The ``ogcp suite`` and ``ogcp compare`` commands (registered by :mod:`benchmarks.cli.app`).
+"""The ``ogcp suite`` and ``ogcp compare`` commands (registered by :mod:`ogcp.benchmarks.cli.app`).
 
 Exit status: ``suite`` 0 when every cell of the suite is recorded without error (or the
 run stopped at ``--max-cells`` without errors), 1 when a cell is recorded as an error or
@@ -13,9 +13,9 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from benchmarks.cli.options import number, positive_int, typed, valid
-from planner.config.options import JOBS, MEMORY_LIMIT, TIME_LIMIT
-from planner.infra.parallel import BACKENDS
+from ogcp.benchmarks.cli.options import number, positive_int, typed, valid
+from ogcp.planner.config.options import JOBS, MEMORY_LIMIT, TIME_LIMIT
+from ogcp.planner.infra.parallel import BACKENDS
 
 
 def register(commands: Any) -> None:
@@ -142,8 +142,8 @@ def register(commands: Any) -> None:
 
 def run_suite(args: argparse.Namespace) -> int:
     """Handler of ``ogcp suite``."""
-    from benchmarks.suite.parse import load_suite
-    from benchmarks.suite.runner import SuiteRunner, summary_table  # lazy: ogcp plan never pays for it
+    from ogcp.benchmarks.suite.parse import load_suite
+    from ogcp.benchmarks.suite.runner import SuiteRunner, summary_table  # lazy: ogcp plan never pays for it
 
     suite = load_suite(args.suite)
     if args.no_simulation:
@@ -179,7 +179,7 @@ def run_suite(args: argparse.Namespace) -> int:
 
 def run_compare(args: argparse.Namespace) -> int:
     """Handler of ``ogcp compare``."""
-    from benchmarks.compare import Tolerances, compare_dirs
+    from ogcp.benchmarks.compare import Tolerances, compare_dirs
 
     tolerances = Tolerances(
         q1=args.q1_tolerance,

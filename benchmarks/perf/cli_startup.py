@@ -1,6 +1,6 @@
 """Start-up time of the ``ogcp`` command: ``--help`` of every command, and a small plan.
 
-Run: ``python -m benchmarks.perf.cli_startup [--runs 7]``. Every case is a fresh process of the
+Run: ``python -m ogcp.benchmarks.perf.cli_startup [--runs 7]``. Every case is a fresh process of the
 ``ogcp`` console script, timed from launch to exit; the rounds interleave the cases with a
 reference process (``python -c pass``), so that a busy machine slows all of them alike. Prints
 per-case medians, their ratio to the reference's median, and the issue's targets (0.3 s for a
@@ -21,7 +21,7 @@ import sys
 import time
 from pathlib import Path
 
-from benchmarks.cli.app import build_parser
+from ogcp.benchmarks.cli.app import build_parser
 
 #: Wall-clock targets of the issue [s]: every ``--help``, and the small plan.
 HELP_TARGET = 0.3
@@ -30,16 +30,16 @@ PLAN_TARGET = 0.8
 PLAN_ARGS = ("plan", "box", "-n", "20")
 #: Label of the second reference: the compiled kernel loaded from numba's cache and called once.
 FLOOR = "kernel alone (numpy, numba, one cached call)"
-_FLOOR_SCRIPT = "import numpy as n; from planner.grasp.kernel import kernel_q1; kernel_q1(n.eye(7, 6) - 0.1)"
+_FLOOR_SCRIPT = "import numpy as n; from ogcp.planner.grasp.kernel import kernel_q1; kernel_q1(n.eye(7, 6) - 0.1)"
 
 
 def ogcp_command() -> list[str]:
-    """The installed ``ogcp`` console script (next to this Python), else ``python -m benchmarks.cli``."""
+    """The installed ``ogcp`` console script (next to this Python), else ``python -m ogcp.benchmarks.cli``."""
     script = Path(sys.executable).parent / "ogcp"
     if script.is_file():
         return [str(script)]
     found = shutil.which("ogcp")
-    return [found] if found else [sys.executable, "-m", "benchmarks.cli"]
+    return [found] if found else [sys.executable, "-m", "ogcp.benchmarks.cli"]
 
 
 def command_paths(parser: argparse.ArgumentParser, prefix: tuple[str, ...] = ()) -> list[tuple[str, ...]]:

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from planner import builtin_mesh, sample_contacts
-from planner.grasp.contact_set import ContactSet
+from ogcp.planner import builtin_mesh, sample_contacts
+from ogcp.planner.grasp.contact_set import ContactSet
 
 
 @pytest.fixture(scope="session")

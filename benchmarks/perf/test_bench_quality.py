@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-from benchmarks.studies.q1_speed import scipy_q1
-from planner.grasp.kernel.ray_bound import facet_bound
-from planner.grasp.quality import q1
+from ogcp.benchmarks.studies.q1_speed import scipy_q1
+from ogcp.planner.grasp.kernel.ray_bound import facet_bound
+from ogcp.planner.grasp.quality import q1
 
 
 def test_small_grasps_ogcp(benchmark, small_grasps):
@@ -31,7 +31,7 @@ def test_super_contact_scipy(benchmark, super_contact):
 def test_small_grasps_batched_kernel(benchmark, box1000):
     import numpy as np
 
-    from planner.grasp.kernel import default_directions, q1_batch, support_table
+    from ogcp.planner.grasp.kernel import default_directions, q1_batch, support_table
 
     benchmark.group = "q1-small"
     rng = np.random.default_rng(0)
@@ -46,8 +46,8 @@ def test_sphere_grasps_es_path(benchmark, sphere1000):
     """What ES does per grasp on the sphere (half the grasps in force closure, canonical refit)."""
     import numpy as np
 
-    from planner.grasp.kernel import default_directions, support_table
-    from planner.grasp.quality import exact_q1_batch
+    from ogcp.planner.grasp.kernel import default_directions, support_table
+    from ogcp.planner.grasp.quality import exact_q1_batch
 
     benchmark.group = "q1-small"
     rng = np.random.default_rng(0)

@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from planner.baselines.es import _chunk_task
-from planner.search.grasp_planner import GraspPlanner
+from ogcp.planner.baselines.es import _chunk_task
+from ogcp.planner.search.grasp_planner import GraspPlanner
 
 
 def test_es_chunk(benchmark, box200):
@@ -26,8 +26,8 @@ def test_wastar_200(benchmark, box200):
 
 def _m5_states(contacts, count: int = 300):
     """A search space at m = 5 and the first ``count`` states of a breadth-first walk of it."""
-    from planner.grasp.constraints import DistinctContacts
-    from planner.search.search_space import SearchSpace
+    from ogcp.planner.grasp.constraints import DistinctContacts
+    from ogcp.planner.search.search_space import SearchSpace
 
     config = GraspPlanner().resolved_config()
     config["m"] = 5

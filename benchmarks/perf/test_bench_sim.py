@@ -1,7 +1,7 @@
 """Simulation throughput: direction-trials per second, rollout over threads vs a serial mj_step loop.
 
 Both benchmarks run the same 16 ramped trials from the same settled pinch grasp, so their
-medians compare directly (``python -m benchmarks.studies.sim_study`` prints the ratio on a real grasp).
+medians compare directly (``python -m ogcp.benchmarks.studies.sim_study`` prints the ratio on a real grasp).
 """
 
 from __future__ import annotations
@@ -10,11 +10,11 @@ import numpy as np
 import pytest
 import trimesh
 
-from sim_eval.body import object_inertia
-from sim_eval.directions import direction_set
-from sim_eval.protocol import ramp_trials, serial_trials, settle
-from sim_eval.scene import build_scene
-from sim_eval.settings import SimSettings
+from ogcp.sim_eval.body import object_inertia
+from ogcp.sim_eval.directions import direction_set
+from ogcp.sim_eval.protocol import ramp_trials, serial_trials, settle
+from ogcp.sim_eval.scene import build_scene
+from ogcp.sim_eval.settings import SimSettings
 
 
 @pytest.fixture(scope="module")

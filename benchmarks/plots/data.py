@@ -15,14 +15,14 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from benchmarks.suite.config import EXTERNAL_METHOD
-from benchmarks.suite.manifest import ManifestSuite
-from benchmarks.suite.record import PROBLEM_FIELDS, CellRecord, Problem
-from benchmarks.suite.store import MANIFEST, RESULTS, read_results
-from planner.infra.errors import OgcpError
-from planner.methods.registry import SEARCH_METHODS
-from planner.records.plan import PlanView
-from sim_eval.result import SimRecord
+from ogcp.benchmarks.suite.config import EXTERNAL_METHOD
+from ogcp.benchmarks.suite.manifest import ManifestSuite
+from ogcp.benchmarks.suite.record import PROBLEM_FIELDS, CellRecord, Problem
+from ogcp.benchmarks.suite.store import MANIFEST, RESULTS, read_results
+from ogcp.planner.infra.errors import OgcpError
+from ogcp.planner.methods.registry import SEARCH_METHODS
+from ogcp.planner.records.plan import PlanView
+from ogcp.sim_eval.result import SimRecord
 
 from .style import METHOD_TITLES
 
@@ -287,7 +287,7 @@ def _missing(manifest: dict[str, Any] | None, recorded: set[str]) -> str | None:
 
 def _suite_cells(suite: ManifestSuite) -> dict[str, str] | None:
     """id -> description of every cell of the manifest's suite, or None when it cannot be re-read."""
-    from benchmarks.suite.parse import parse_suite
+    from ogcp.benchmarks.suite.parse import parse_suite
 
     if suite.content is None:
         return None

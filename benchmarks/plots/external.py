@@ -1,6 +1,6 @@
 """External grasps beside the planners: which planner problem an external cell is drawn with.
 
-An external cell (suite ``method = "external"``, :data:`benchmarks.suite.config.EXTERNAL_METHOD`)
+An external cell (suite ``method = "external"``, :data:`ogcp.benchmarks.suite.config.EXTERNAL_METHOD`)
 brings its own contacts, so its problem (|C|, no contact seed, the file's m) is never a planner
 cell's. Figures that compare methods per problem would draw it alone; these helpers put it with
 the planner problem of the same object at the same size and friction instead (its *host*): the
@@ -10,8 +10,8 @@ host keeps its own problem.
 
 from __future__ import annotations
 
-from benchmarks.suite.config import EXTERNAL_METHOD
-from benchmarks.suite.record import PROBLEM_FIELDS, Problem
+from ogcp.benchmarks.suite.config import EXTERNAL_METHOD
+from ogcp.benchmarks.suite.record import PROBLEM_FIELDS, Problem
 
 from .data import CellData, RunData
 

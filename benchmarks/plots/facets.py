@@ -14,7 +14,7 @@ from __future__ import annotations
 from collections.abc import Hashable, Sequence
 from typing import TYPE_CHECKING
 
-from benchmarks.suite.record import PROBLEM_FIELDS, Problem
+from ogcp.benchmarks.suite.record import PROBLEM_FIELDS, Problem
 
 from .data import RunData, problem_names
 from .style import new_figure
@@ -23,7 +23,7 @@ if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
-#: Position of mu and of the torsional friction coefficient in a :data:`~benchmarks.suite.record.Problem` tuple.
+#: Position of mu and of the torsional friction coefficient in a :data:`~ogcp.benchmarks.suite.record.Problem` tuple.
 MU = PROBLEM_FIELDS.index("mu")
 TORSION = PROBLEM_FIELDS.index("torsional_friction")
 #: A facet's key: mu and the torsional friction coefficient [m] (0 = hard fingers).
@@ -101,7 +101,7 @@ def facet_figure(
         panel_height: Height of one row [in].
 
     Returns:
-        Without faceting, :func:`~benchmarks.plots.style.new_figure` with one panel per key.
+        Without faceting, :func:`~ogcp.benchmarks.plots.style.new_figure` with one panel per key.
         With it, a grid of a row per distinct ``(problem without mu, extra)`` and a column per
         mu value of ``keys``; grid cells no key fills are removed.
     """

@@ -1,7 +1,7 @@
 """The paper's search figures: Fig. 4 (Q1 histograms), 6 (states per level), 7 (f trace), 8 (WA* trade-off).
 
-Every builder takes a :class:`~benchmarks.plots.data.RunData`, returns the figure
-without saving it (tests inspect it), and raises :class:`~benchmarks.plots.data.SkipFigure`
+Every builder takes a :class:`~ogcp.benchmarks.plots.data.RunData`, returns the figure
+without saving it (tests inspect it), and raises :class:`~ogcp.benchmarks.plots.data.SkipFigure`
 with a one-line reason when the run lacks the cells the figure needs.
 """
 
@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any, TypeVar
 
 import numpy as np
 
-from planner.methods.registry import OPTIMAL_METHODS, SEARCH_METHODS
+from ogcp.planner.methods.registry import OPTIMAL_METHODS, SEARCH_METHODS
 
 from .data import CellData, RunData, SkipFigure, frozen, number
 from .facets import facet_figure, facet_names

@@ -1,9 +1,9 @@
 """Fig. 3: the optimal grasp on each object, drawn on the shaded mesh.
 
 One panel per problem (object, m, ...) for its A* cell, or failing that its best cell of a
-certified method (:attr:`planner.methods.registry.MethodSpec.optimal`), each followed by a panel
+certified method (:attr:`ogcp.planner.methods.registry.MethodSpec.optimal`), each followed by a panel
 per external cell on its object (another planner's best grasp, placed by :mod:`.external`): the
-mesh rendered by the z-buffer rasteriser (:mod:`benchmarks.plots.raster`), the contact set as
+mesh rendered by the z-buffer rasteriser (:mod:`ogcp.benchmarks.plots.raster`), the contact set as
 small yellow points and
 the grasp's contacts with force arrows along the inward normals (or friction cones). Marks the
 mesh hides are left out, piece by piece, from the rasteriser's depth buffer. The mesh is a raster
@@ -20,9 +20,9 @@ from typing import TYPE_CHECKING, TypeVar
 import numpy as np
 from numpy.typing import NDArray
 
-from planner.infra.errors import OgcpError
-from planner.methods.registry import METHODS
-from sim_eval.plan_input import PlanInput, plan_input
+from ogcp.planner.infra.errors import OgcpError
+from ogcp.planner.methods.registry import METHODS
+from ogcp.sim_eval.plan_input import PlanInput, plan_input
 
 from .data import CellData, RunData, SkipFigure
 from .external import by_problem_with_external, host_problems, is_external
@@ -167,7 +167,7 @@ def draw_grasp(
 
     Args:
         ax: The panel (its axis frame is switched off).
-        rebuilt: Mesh and contact set of the plan (:func:`sim_eval.plan_input.plan_input`).
+        rebuilt: Mesh and contact set of the plan (:func:`ogcp.sim_eval.plan_input.plan_input`).
         grasp: Contact indices of the grasp, length m.
         colour: Colour of the grasp's contacts and arrows.
         pixels: Side of the square rendered image [px].
@@ -276,7 +276,7 @@ def best_view(
             least of the object wins.
 
     Returns:
-        Camera rotation for :func:`~benchmarks.plots.raster.fit_view`, shape (3, 3).
+        Camera rotation for :func:`~ogcp.benchmarks.plots.raster.fit_view`, shape (3, 3).
     """
     up = upright(vertices, faces)
     diagonal = float(np.linalg.norm(np.ptp(vertices, axis=0)))

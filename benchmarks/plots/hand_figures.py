@@ -1,15 +1,15 @@
 """Fig. 10: the Schunk SDH on the optimal reachable grasp of each object.
 
 The plan record's ``hand`` block holds the joint angles of the reachability model's nearest sample
-and the contact each finger takes (:class:`planner.records.plan.PlanHand`); it holds no hand pose,
+and the contact each finger takes (:class:`ogcp.planner.records.plan.PlanHand`); it holds no hand pose,
 since the model matches the fingertips' *shape* (pairwise distances and normal differences), not
 their place. Placed rigidly (:func:`palm_pose`), those angles leave the fingertips 14-24 mm off
-their contacts. The figure draws the refined pose instead (:func:`planner.hands.fit.fit_hand`):
+their contacts. The figure draws the refined pose instead (:func:`ogcp.planner.hands.fit.fit_hand`):
 joint angles within their limits and the palm pose, solved from the recorded angles so that each
 finger's end sphere touches its contact from outside, pad towards the surface. Each panel's title
 gives the largest distance of a refined fingertip from its contact and the rigid fit's, and
 :data:`HAND_FITS` keeps the last figure's fits with the distance of every finger. Fingers and palm
-are capsules and a cylinder rasterised with the object (:mod:`benchmarks.plots.raster`), so each
+are capsules and a cylinder rasterised with the object (:mod:`ogcp.benchmarks.plots.raster`), so each
 hides the other correctly. The fit has no collision terms: the title says when fingers touch each
 other, and the hand is not kept out of the object.
 """
@@ -23,11 +23,11 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
-from planner.hands.fit import HandFit, fit_hand, rigid_fit
-from planner.hands.reachability import LINK_CLEARANCE, finger_chain, pad_normals
-from planner.hands.sdh import FINGER_BASES, PALM_HEIGHT
-from planner.records.plan import PlanHand
-from sim_eval.plan_input import PlanInput
+from ogcp.planner.hands.fit import HandFit, fit_hand, rigid_fit
+from ogcp.planner.hands.reachability import LINK_CLEARANCE, finger_chain, pad_normals
+from ogcp.planner.hands.sdh import FINGER_BASES, PALM_HEIGHT
+from ogcp.planner.records.plan import PlanHand
+from ogcp.sim_eval.plan_input import PlanInput
 
 from .data import CellData, RunData, SkipFigure
 from .grasp_figures import CONTACT_COLOUR, NoGraspCells, best_view, panel_grid, rebuilt_panels

@@ -1,7 +1,7 @@
 """The names of what ``ogcp plot`` draws, in a module that imports nothing.
 
 ``ogcp plot --help`` lists them without loading numpy and the suite's records;
-:mod:`benchmarks.plots.report` pairs each figure name with its builder.
+:mod:`ogcp.benchmarks.plots.report` pairs each figure name with its builder.
 """
 
 #: File stems of the figures, in the order they are drawn (each builder is named after its stem).

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from planner.infra.errors import OgcpError
+from ogcp.planner.infra.errors import OgcpError
 
 from .data import RunData, SkipFigure, load_run
 from .figures import fig4_q1_histograms, fig6_states_per_level, fig7_iterations_f, fig8_wastar_tradeoff
@@ -27,7 +27,7 @@ if TYPE_CHECKING:
 FigureBuilder = Callable[[RunData, "list[str] | None"], "Figure"]
 
 #: File stem -> builder, in the order they are drawn. The stems are written once, in
-#: :mod:`benchmarks.plots.names`, which ``ogcp plot --help`` reads without these modules.
+#: :mod:`ogcp.benchmarks.plots.names`, which ``ogcp plot --help`` reads without these modules.
 FIGURES: dict[str, FigureBuilder] = dict(
     zip(
         FIGURE_NAMES,

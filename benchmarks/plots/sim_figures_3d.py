@@ -3,7 +3,7 @@
 For each problem, its simulated A* cell (else its first simulated cell) and that cell's grasp
 labelled ``best`` (else its valid grasp of largest measured minimum): the mesh, the fingertips as
 shaded spheres where they sat after preload and settling (``realized.settled_centres`` of an
-``ogcp.sim/2`` record, :class:`sim_eval.result.SimGraspRecord`: the state every disturbance trial
+``ogcp.sim/2`` record, :class:`ogcp.sim_eval.result.SimGraspRecord`: the state every disturbance trial
 starts from), and the disturbance direction of least measured resistance as an arrow from the
 centre of mass: straight for a force, an arc around the axis for a torque. Older records draw what
 they have, and the title says so: records without settled centres put the spheres where the tips
@@ -21,10 +21,10 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
-from planner.grasp.contact_set import ContactSet
-from planner.grasp.reach import default_tip_radius
-from sim_eval.plan_input import PlanInput
-from sim_eval.result import SimGraspRecord
+from ogcp.planner.grasp.contact_set import ContactSet
+from ogcp.planner.grasp.reach import default_tip_radius
+from ogcp.sim_eval.plan_input import PlanInput
+from ogcp.sim_eval.result import SimGraspRecord
 
 from .data import CellData, RunData, SkipFigure
 from .grasp_figures import NoGraspCells, best_view, panel_grid, rebuilt_panels

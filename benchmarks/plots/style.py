@@ -14,8 +14,8 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, ParamSpec, TypeVar
 
-from planner.infra.errors import OgcpError
-from planner.methods.registry import METHODS
+from ogcp.planner.infra.errors import OgcpError
+from ogcp.planner.methods.registry import METHODS
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes

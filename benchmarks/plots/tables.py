@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from planner.infra.errors import OgcpError
+from ogcp.planner.infra.errors import OgcpError
 
 from .data import CellData, RunData, SkipFigure
 from .style import METHOD_TITLES

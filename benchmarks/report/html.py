@@ -2,8 +2,8 @@
 
 Everything a page needs is inside it (styles, the viewer script, the scene data as JSON, the
 figures as base64 ``data:`` URIs), so it opens offline and makes no network request. The run's
-records are read through :class:`benchmarks.suite.record.CellRecord`; the scenes are built by
-:mod:`benchmarks.report.scene`.
+records are read through :class:`ogcp.benchmarks.suite.record.CellRecord`; the scenes are built by
+:mod:`ogcp.benchmarks.report.scene`.
 """
 
 from __future__ import annotations
@@ -16,11 +16,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from benchmarks.report.scene import Scenes
-from benchmarks.report.viewer import VIEWER_JS
-from benchmarks.suite.record import CellRecord
-from benchmarks.suite.store import ResultStore
-from planner.infra.errors import OgcpError
+from ogcp.benchmarks.report.scene import Scenes
+from ogcp.benchmarks.report.viewer import VIEWER_JS
+from ogcp.benchmarks.suite.record import CellRecord
+from ogcp.benchmarks.suite.store import ResultStore
+from ogcp.planner.infra.errors import OgcpError
 
 #: The file ``ogcp report`` writes into the run folder.
 REPORT_NAME = "report.html"

@@ -4,7 +4,7 @@ No library and no WebGL, so that a report opens offline in any browser and in he
 an orthographic projection of the rotated scene, the mesh's triangles drawn back to front
 (painter's algorithm) with flat shading, and the points and arrows sorted into the same
 depth order. Drag rotates, the wheel zooms, a double click resets the view. The page's data
-(:mod:`benchmarks.report.scene`) is read from the ``<script id="ogcp-data">`` JSON block; the
+(:mod:`ogcp.benchmarks.report.scene`) is read from the ``<script id="ogcp-data">`` JSON block; the
 canvas gets ``data-drawn="1"`` after its first frame (what the headless-browser test checks).
 """
 

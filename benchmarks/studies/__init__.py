@@ -1,1 +1,1 @@
-"""Study scripts run from a checkout (``python -m benchmarks.studies.NAME``); not part of the wheel."""
+"""Study scripts run from a checkout (``python -m ogcp.benchmarks.studies.NAME``); not part of the wheel."""

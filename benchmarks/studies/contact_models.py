@@ -1,6 +1,6 @@
 """Contact models against protocols: the quick suite's grasps, hard and soft, under both simulated tests.
 
-Run: ``python -m benchmarks.studies.contact_models --out results/contact_models [--jobs 2]``.
+Run: ``python -m ogcp.benchmarks.studies.contact_models --out results/contact_models [--jobs 2]``.
 It plans the quick suite's ``baselines`` group (box and donut, 200 contacts, m = 3: A*, WA* at
 eps 0.4 and 1.0, HFTS; ES is left out, its grasp is A*'s) with hard fingers and with soft ones
 (torsional friction 0.02 m), simulates every returned grasp with ogcp's resistance protocol
@@ -20,11 +20,11 @@ from typing import Any
 
 import numpy as np
 
-from benchmarks.plots.data import CellData, RunData, load_run
-from benchmarks.suite.parse import parse_suite
-from benchmarks.suite.runner import SuiteRunner
-from benchmarks.suite.store import RESULTS
-from sim_eval.metrics import binned_roc, roc_auc
+from ogcp.benchmarks.plots.data import CellData, RunData, load_run
+from ogcp.benchmarks.suite.parse import parse_suite
+from ogcp.benchmarks.suite.runner import SuiteRunner
+from ogcp.benchmarks.suite.store import RESULTS
+from ogcp.sim_eval.metrics import binned_roc, roc_auc
 
 PROTOCOLS = ("resistance", "dexgraspbench")
 SUITE = """schema_version = 1

@@ -1,6 +1,6 @@
 """Convert Dex-Net parallel-jaw grasps into ``ogcp.grasps/1`` by closing the jaws on the mesh.
 
-Run: ``python -m benchmarks.studies.convert_dexnet IN.npy|IN.txt -o OUT.json --mesh MESH_OR_NAME --mu MU``
+Run: ``python -m ogcp.benchmarks.studies.convert_dexnet IN.npy|IN.txt -o OUT.json --mesh MESH_OR_NAME --mu MU``
 [``--diagonal M``] [``--cone-edges K``] [``--method NAME``] [``--units m|cm|mm``] [``--skip-missed``].
 
 The format (facts read from BerkeleyAutomation/dex-net, commit
@@ -44,12 +44,12 @@ import numpy as np
 import trimesh
 from numpy.typing import NDArray
 
-from benchmarks.studies.convert_grasps import UNITS, converter_parser, record_head, run_converter
-from planner.grasp.defaults import DEFAULT_CONE_EDGES
-from planner.infra.atomic import write_json_atomic
-from planner.infra.errors import OgcpError
-from planner.objects import resolve_object
-from planner.records.grasps import ExternalGrasps, is_object_name, load_grasps
+from ogcp.benchmarks.studies.convert_grasps import UNITS, converter_parser, record_head, run_converter
+from ogcp.planner.grasp.defaults import DEFAULT_CONE_EDGES
+from ogcp.planner.infra.atomic import write_json_atomic
+from ogcp.planner.infra.errors import OgcpError
+from ogcp.planner.objects import resolve_object
+from ogcp.planner.records.grasps import ExternalGrasps, is_object_name, load_grasps
 
 #: Largest deviation from 1 of a configuration's axis length (Dex-Net refuses beyond it).
 AXIS_TOLERANCE = 1e-5

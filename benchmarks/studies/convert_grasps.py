@@ -1,6 +1,6 @@
 """Convert fingertip grasps from a CSV table or a numpy array into ``ogcp.grasps/1``.
 
-Run: ``python -m benchmarks.studies.convert_grasps IN.csv|IN.npy -o OUT.json --mesh MESH_OR_NAME --mu MU``
+Run: ``python -m ogcp.benchmarks.studies.convert_grasps IN.csv|IN.npy -o OUT.json --mesh MESH_OR_NAME --mu MU``
 [``--diagonal M``] [``--cone-edges K``] [``--method NAME``] [``--units m|cm|mm``] [``--outward``].
 
 Two input formats, both one fingertip contact per row (docs/external_grasps.md has examples):
@@ -30,10 +30,10 @@ from typing import Any
 
 import numpy as np
 
-from planner.grasp.defaults import DEFAULT_CONE_EDGES
-from planner.infra.atomic import write_json_atomic
-from planner.infra.errors import OgcpError
-from planner.records.grasps import GRASPS_SCHEMA, ExternalGrasps, is_object_name, load_grasps, mesh_reference
+from ogcp.planner.grasp.defaults import DEFAULT_CONE_EDGES
+from ogcp.planner.infra.atomic import write_json_atomic
+from ogcp.planner.infra.errors import OgcpError
+from ogcp.planner.records.grasps import GRASPS_SCHEMA, ExternalGrasps, is_object_name, load_grasps, mesh_reference
 
 #: Metres per unit of ``--units``.
 UNITS = {"m": 1.0, "cm": 1e-2, "mm": 1e-3}

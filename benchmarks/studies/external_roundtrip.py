@@ -1,10 +1,10 @@
 """An ogcp plan evaluated as a plan and as exported ``ogcp.grasps/1`` grasps gives the same numbers.
 
-Run: ``python -m benchmarks.studies.external_roundtrip [--object box] [--grasps 100] [--contacts 100]
+Run: ``python -m ogcp.benchmarks.studies.external_roundtrip [--object box] [--grasps 100] [--contacts 100]
 [--directions 8] [--decomposition coacd|convex_hull]``. Plans the A* optimum on the object's contacts
 (sampled as ``ogcp plan`` samples them), adds random distinct grasps as the plan's ``top`` list up
-to ``--grasps``, evaluates the plan (``sim_eval.evaluate_plan``), exports it
-(``sim_eval.export_grasps``), evaluates the file (``sim_eval.evaluate_grasps``), and prints the
+to ``--grasps``, evaluates the plan (``ogcp.sim_eval.evaluate_plan``), exports it
+(``ogcp.sim_eval.export_grasps``), evaluates the file (``ogcp.sim_eval.evaluate_grasps``), and prints the
 largest differences of Q1, validity, the predicted and the measured resistance per direction.
 Every one must be 0 (or within 1e-9 relative): the external path adds nothing of its own.
 """
@@ -18,10 +18,10 @@ from pathlib import Path
 
 import numpy as np
 
-from planner import GraspPlanner, resolve_object, sample_contacts
-from planner.grasp.reach import default_tip_radius
-from planner.records.plan import contact_set_record
-from sim_eval import SimResult, evaluate_grasps, evaluate_plan, export_grasps
+from ogcp.planner import GraspPlanner, resolve_object, sample_contacts
+from ogcp.planner.grasp.reach import default_tip_radius
+from ogcp.planner.records.plan import contact_set_record
+from ogcp.sim_eval import SimResult, evaluate_grasps, evaluate_plan, export_grasps
 
 
 def _difference(a: np.ndarray, b: np.ndarray) -> tuple[float, float]:

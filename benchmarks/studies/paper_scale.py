@@ -1,6 +1,6 @@
 """Paper-scale timing table (the paper's Fig. 9): A*, WA*(eps) and ES per object.
 
-Run: ``python -m benchmarks.studies.paper_scale --out results/paper_scale [-n 1000] [--es]``;
+Run: ``python -m ogcp.benchmarks.studies.paper_scale --out results/paper_scale [-n 1000] [--es]``;
 more fingers with ``--more-fingers 4,5,6 --more-fingers-objects bunny,plane [--time-limit S]``.
 Each finished run is appended to ``runs.csv`` at once, so an interrupted invocation resumes
 where it stopped (rows already present are skipped). A search stopped by ``--time-limit`` is
@@ -9,8 +9,8 @@ a row too, with status ``stopped`` and its certified bound; ``--retry-stopped`` 
 minutes per object and method, plus created/visited states, b*, whether A* matched ES, and
 for a search not proven optimal its status and the gap to its bound. Every row records the
 search's status, bound, peak memory (summed over its processes), processes
-(``--search-jobs``: one search dealt to that many, see :mod:`planner.search.parts`) and the
-states it forgot at its memory limit (``--memory-limit``, see :mod:`planner.search.memory`); a
+(``--search-jobs``: one search dealt to that many, see :mod:`ogcp.planner.search.parts`) and the
+states it forgot at its memory limit (``--memory-limit``, see :mod:`ogcp.planner.search.memory`); a
 ``runs.csv`` written before those columns existed is rewritten with them empty.
 """
 
@@ -21,12 +21,12 @@ import csv
 import sys
 from pathlib import Path
 
-from planner import GraspPlanner, sample_contacts
-from planner.baselines.es import ExhaustiveSearch
-from planner.config.options import MAX_TIME_LIMIT, MEMORY_LIMIT
-from planner.grasp.reach import default_tip_radius
-from planner.objects.resolve import resolve_object
-from planner.search.result import UNFINISHED
+from ogcp.planner import GraspPlanner, sample_contacts
+from ogcp.planner.baselines.es import ExhaustiveSearch
+from ogcp.planner.config.options import MAX_TIME_LIMIT, MEMORY_LIMIT
+from ogcp.planner.grasp.reach import default_tip_radius
+from ogcp.planner.objects.resolve import resolve_object
+from ogcp.planner.search.result import UNFINISHED
 
 FIELDS = (
     "object",
@@ -109,7 +109,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--es", action="store_true", help="also run exhaustive search (long)")
     parser.add_argument("--jobs", type=int, default=2, help="processes for ES")
     parser.add_argument(
-        "--search-jobs", type=int, default=1, help="processes for each A* / WA* search (planner.search.parts)"
+        "--search-jobs", type=int, default=1, help="processes for each A* / WA* search (ogcp.planner.search.parts)"
     )
     parser.add_argument("--more-fingers", default="4,5,6", help="m values for the extra A* runs")
     parser.add_argument("--more-fingers-objects", default="", help="objects for the extra m runs")

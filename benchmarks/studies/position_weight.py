@@ -1,6 +1,6 @@
 """A* with Γ^fc's tree built several ways, side by side: states, time and the optimum each reaches.
 
-Run: ``python -m benchmarks.studies.position_weight [--cases bunny:4,plane:5] [--weights 1,2]
+Run: ``python -m ogcp.benchmarks.studies.position_weight [--cases bunny:4,plane:5] [--weights 1,2]
 [--iterations 10,100] [--contacts 1000] [--time-limit 300] [--repeats 1]``. A setting is a
 position weight w and a k-means iteration cap t (the i-th of each list; a list of one serves
 every setting): the default compares the searches' settings before (w = 1, t = 10) and now.
@@ -18,9 +18,9 @@ import statistics
 import sys
 import time
 
-from planner import GraspPlanner, resolve_object, sample_contacts
-from planner.infra.errors import OgcpError
-from planner.search.result import SearchResult
+from ogcp.planner import GraspPlanner, resolve_object, sample_contacts
+from ogcp.planner.infra.errors import OgcpError
+from ogcp.planner.search.result import SearchResult
 
 #: A tree's setting: (position weight w, most k-means iterations t).
 Setting = tuple[float, int]

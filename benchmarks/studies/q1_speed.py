@@ -1,6 +1,6 @@
 """Q1 speed against scipy's ConvexHull, measured in the same run (issue targets 1 and 2).
 
-Run: ``python -m benchmarks.studies.q1_speed [--grasps 300] [--repeats 5]``. Prints per-input medians
+Run: ``python -m ogcp.benchmarks.studies.q1_speed [--grasps 300] [--repeats 5]``. Prints per-input medians
 and the ratio scipy / ogcp; values must agree within 1e-9 (checked). With ``--es-chunks K`` it
 instead times K exhaustive-search chunks spread over all C(1000, 3) grasps per object and
 extrapolates the CPU time of the full search.
@@ -15,12 +15,12 @@ import time
 import numpy as np
 from scipy.spatial import ConvexHull, QhullError
 
-from planner import builtin_mesh, sample_contacts
-from planner.baselines import combinations
-from planner.baselines.es import _chunk_task
-from planner.grasp.contact_set import ContactSet
-from planner.grasp.kernel import FALLBACK, default_directions, support_table
-from planner.grasp.quality import exact_q1_batch, q1, q1_certificate
+from ogcp.planner import builtin_mesh, sample_contacts
+from ogcp.planner.baselines import combinations
+from ogcp.planner.baselines.es import _chunk_task
+from ogcp.planner.grasp.contact_set import ContactSet
+from ogcp.planner.grasp.kernel import FALLBACK, default_directions, support_table
+from ogcp.planner.grasp.quality import exact_q1_batch, q1, q1_certificate
 
 
 def scipy_q1(w: np.ndarray) -> float:

@@ -1,6 +1,6 @@
 """Simulation study: rollout throughput, ramp-rate independence, and Q1 against measured resistance.
 
-Run ``python -m benchmarks.studies.sim_study --out DIR`` (default objects: the four built-ins). For each
+Run ``python -m ogcp.benchmarks.studies.sim_study --out DIR`` (default objects: the four built-ins). For each
 object it simulates a set of grasps spanning the quality range: the A* optimum, the best of a
 seeded random sample ("top"), random force-closure grasps and HFTS runs; then writes
 ``sim_study.json`` and ``sim_study.md`` with the set-level correlations, and prints the
@@ -13,7 +13,7 @@ collision surface's offset from the mesh at the contacts, and the decomposition'
 time. For meshes the project was never tuned on::
 
     ogcp assets fetch all
-    python -m benchmarks.studies.sim_study --objects bunny homer plane cow bone cheetah dragon dog \
+    python -m ogcp.benchmarks.studies.sim_study --objects bunny homer plane cow bone cheetah dragon dog \
         --diagonals 0.05 0.2 2 --top 0 --random-fc 0 --hfts-runs 8 --rate-grasps 0 --no-throughput
 """
 
@@ -29,22 +29,22 @@ from typing import Any
 
 import numpy as np
 
-from planner import GraspPlanner, resolve_object, sample_contacts
-from planner.baselines.hfts import HFTS
-from planner.grasp.contact_set import ContactSet
-from planner.grasp.quality import q1
-from planner.grasp.reach import default_tip_radius
-from planner.infra.atomic import write_json_atomic
-from planner.infra.provenance import provenance
-from sim_eval.body import object_inertia
-from sim_eval.decomposition.decompose import decompose
-from sim_eval.directions import direction_set
-from sim_eval.evaluate import GraspEvaluator, object_diagonal
-from sim_eval.predict import predicted_resistance
-from sim_eval.protocol import ramp_trials, serial_trials, settle
-from sim_eval.result import SimRecord
-from sim_eval.scene import build_scene
-from sim_eval.settings import SimSettings
+from ogcp.planner import GraspPlanner, resolve_object, sample_contacts
+from ogcp.planner.baselines.hfts import HFTS
+from ogcp.planner.grasp.contact_set import ContactSet
+from ogcp.planner.grasp.quality import q1
+from ogcp.planner.grasp.reach import default_tip_radius
+from ogcp.planner.infra.atomic import write_json_atomic
+from ogcp.planner.infra.provenance import provenance
+from ogcp.sim_eval.body import object_inertia
+from ogcp.sim_eval.decomposition.decompose import decompose
+from ogcp.sim_eval.directions import direction_set
+from ogcp.sim_eval.evaluate import GraspEvaluator, object_diagonal
+from ogcp.sim_eval.predict import predicted_resistance
+from ogcp.sim_eval.protocol import ramp_trials, serial_trials, settle
+from ogcp.sim_eval.result import SimRecord
+from ogcp.sim_eval.scene import build_scene
+from ogcp.sim_eval.settings import SimSettings
 
 
 def grasp_pool(

@@ -1,6 +1,6 @@
 """Which of ogcp's dependencies install from wheels on CPython 3.11-3.13, manylinux x86_64.
 
-Run: ``python -m benchmarks.studies.wheels [--python 3.11 3.12 3.13] [--glibc 2.28] [--extras test]``.
+Run: ``python -m ogcp.benchmarks.studies.wheels [--python 3.11 3.12 3.13] [--glibc 2.28] [--extras test]``.
 Asks the package index through pip, for every dependency that ``pyproject.toml`` names (runtime and
 the chosen extras) and every Python version, for the newest release within the declared range that
 has a wheel for that CPython on x86_64 Linux with the given glibc (any manylinux tag up to it, or a

@@ -6,7 +6,7 @@ the traceback's tail) and the suite goes on. Contact sets and hand models are ca
 process, so a worker that runs many cells on one object samples its contacts once.
 
 An external cell (``method = "external"``) plans nothing: its grasps come from an
-``ogcp.grasps/1`` file, scored with ogcp's Q1 and simulated by ``sim_eval.evaluate_grasps``,
+``ogcp.grasps/1`` file, scored with ogcp's Q1 and simulated by ``ogcp.sim_eval.evaluate_grasps``,
 and its plan record (:func:`external_plan`) reports the best of them, so every reader of
 plan records takes it as it takes a planner's.
 """
@@ -19,20 +19,20 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
-from benchmarks.suite.config import EXTERNAL_METHOD, Cell, best_grasp
-from benchmarks.suite.record import CellError, CellRecord
-from planner.config.options import MEMORY_LIMIT
-from planner.grasp.contact_set import ContactSet, sample_contacts
-from planner.grasp.quality import q1_certificate
-from planner.grasp.reach import default_tip_radius
-from planner.infra.errors import OgcpError
-from planner.methods.registry import method_spec
-from planner.methods.runners import RunOptions
-from planner.objects import file_sha256, resolve_object
-from planner.records.grasps import ExternalGrasps, load_grasps
-from planner.records.plan import contact_set_record
-from planner.records.plan import plan_record as build_plan_record
-from planner.search.result import UNFINISHED
+from ogcp.benchmarks.suite.config import EXTERNAL_METHOD, Cell, best_grasp
+from ogcp.benchmarks.suite.record import CellError, CellRecord
+from ogcp.planner.config.options import MEMORY_LIMIT
+from ogcp.planner.grasp.contact_set import ContactSet, sample_contacts
+from ogcp.planner.grasp.quality import q1_certificate
+from ogcp.planner.grasp.reach import default_tip_radius
+from ogcp.planner.infra.errors import OgcpError
+from ogcp.planner.methods.registry import method_spec
+from ogcp.planner.methods.runners import RunOptions
+from ogcp.planner.objects import file_sha256, resolve_object
+from ogcp.planner.records.grasps import ExternalGrasps, load_grasps
+from ogcp.planner.records.plan import contact_set_record
+from ogcp.planner.records.plan import plan_record as build_plan_record
+from ogcp.planner.search.result import UNFINISHED
 
 #: Keys of the [simulation] table that are arguments of evaluate_plan, not simulation settings.
 SIMULATION_ARGUMENTS = ("decomposition", "max_grasps")
@@ -50,7 +50,7 @@ def run_cell(
 
     Args:
         cell: The cell.
-        simulation: Settings passed to ``sim_eval.evaluate_plan`` (the suite's
+        simulation: Settings passed to ``ogcp.sim_eval.evaluate_plan`` (the suite's
             ``[simulation]`` table without ``enabled``); None skips the simulation.
         time_limit: Wall-clock budget of a search cell (astar, wastar, dijkstra) [s]; past
             it the cell is recorded with status ``stopped`` and the best grasp found, its
@@ -58,10 +58,10 @@ def run_cell(
             None: unlimited.
         memory_limit: Most memory of a search cell, all its processes [GiB]; past it the
             cell is recorded like one past its time limit, with status ``memory``
-            (:mod:`planner.search.memory`). None: unlimited.
+            (:mod:`ogcp.planner.search.memory`). None: unlimited.
 
     Returns:
-        The JSON form of its :class:`~benchmarks.suite.record.CellRecord` (schema ``ogcp.cell/1``).
+        The JSON form of its :class:`~ogcp.benchmarks.suite.record.CellRecord` (schema ``ogcp.cell/1``).
     """
     wall0, cpu0 = time.perf_counter(), time.process_time()
     plan = sim = sim_seconds = error = None
@@ -171,9 +171,9 @@ def run_external(
         OgcpError: For a changed or invalid file, or contacts off the object's surface.
     """
     # Lazy: MuJoCo loads only when a suite has external grasps (their Q1 needs the surface checks).
-    from sim_eval.evaluate import object_diagonal, tip_radius
-    from sim_eval.external import evaluate_grasps, external_input
-    from sim_eval.settings import SimSettings
+    from ogcp.sim_eval.evaluate import object_diagonal, tip_radius
+    from ogcp.sim_eval.external import evaluate_grasps, external_input
+    from ogcp.sim_eval.settings import SimSettings
 
     grasps = external_grasps(cell)
     wall0, cpu0 = time.perf_counter(), time.process_time()
@@ -206,7 +206,7 @@ def external_plan(
     Args:
         cell: The external cell.
         grasps: Its grasps file.
-        contacts: Every grasp's contacts in one set (``sim_eval.external.external_input``).
+        contacts: Every grasp's contacts in one set (``ogcp.sim_eval.external.external_input``).
         indices: Each grasp's indices into ``contacts``.
         q1: ogcp's Q1 of each grasp [N].
     """
@@ -236,14 +236,14 @@ def external_plan(
 
 
 def simulate(plan: dict[str, Any], settings: dict[str, Any]) -> dict[str, Any]:
-    """The ``ogcp.sim/1`` record of a plan, from ``sim_eval.evaluate_plan``.
+    """The ``ogcp.sim/1`` record of a plan, from ``ogcp.sim_eval.evaluate_plan``.
 
     Args:
         plan: The ``ogcp.plan/1`` record.
         settings: Simulation settings; ``decomposition`` (a table) and ``max_grasps`` go to
             ``evaluate_plan`` as their own arguments.
     """
-    from sim_eval import evaluate_plan  # lazy: MuJoCo loads only when a suite simulates
+    from ogcp.sim_eval import evaluate_plan  # lazy: MuJoCo loads only when a suite simulates
 
     options = dict(settings)
     extra = {key: options.pop(key) for key in SIMULATION_ARGUMENTS if key in options}

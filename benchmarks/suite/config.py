@@ -1,4 +1,4 @@
-"""Benchmark suites as values: objects, cells (with their ids) and the suite (read by :mod:`benchmarks.suite.parse`).
+"""Benchmark suites as values: objects, cells (with their ids) and the suite (read by :mod:`ogcp.benchmarks.suite.parse`).
 
 A suite names objects, contact counts, contact seeds, m values, friction coefficients and
 method variants, either at the top level or in ``[[group]]`` tables that inherit unset keys
@@ -17,15 +17,15 @@ import hashlib
 import json
 from typing import TYPE_CHECKING, Any
 
-from benchmarks.suite.record import CellParams
-from planner.methods.registry import EXTERNAL
-from planner.objects.fetchable import FETCHABLE_OBJECTS
+from ogcp.benchmarks.suite.record import CellParams
+from ogcp.planner.methods.registry import EXTERNAL
+from ogcp.planner.objects.fetchable import FETCHABLE_OBJECTS
 
 if TYPE_CHECKING:
-    from planner.records.grasps import ExternalGrasps
+    from ogcp.planner.records.grasps import ExternalGrasps
 
 SCHEMA_VERSION = 1
-# Built-in suites: assets/suites/NAME.toml (see planner.infra.assets).
+# Built-in suites: assets/suites/NAME.toml (see ogcp.planner.infra.assets).
 SUITES_FOLDER = "suites"
 GROUP_KEYS = (
     "contact_seeds",
@@ -47,7 +47,7 @@ TOP_KEYS = (*GROUP_KEYS, "group", "schema_version", "simulation")
 #: ``tip_radius`` of a cell's id and params when the contacts are kept for the default fingertip.
 DEFAULT_TIP = "default"
 #: The method name of external grasps in a suite (``method = "external"``, ``grasps = "file.json"``):
-#: not a planner of :mod:`planner.methods`, whose ``method_spec`` refuses it with this hint.
+#: not a planner of :mod:`ogcp.planner.methods`, whose ``method_spec`` refuses it with this hint.
 EXTERNAL_METHOD = EXTERNAL
 #: Version of the canonical cell form; part of every id so a change of form never matches old ids.
 CELL_FORM = 1
@@ -102,7 +102,7 @@ class Cell:
             (not part of the id).
         tip_radius: Fingertip radius the contacts are sampled for [m]: 0 = the paper's plain
             sampling of the whole surface, None = the simulation's default fingertip
-            (:func:`planner.grasp.reach.default_tip_radius` of the object, resolved when sampling).
+            (:func:`ogcp.planner.grasp.reach.default_tip_radius` of the object, resolved when sampling).
         grasps_path: Absolute path of the ``ogcp.grasps/1`` file of an external cell, else None
             (not part of the id: its content hash, in ``variant``, is).
         torsional_friction: Torsional friction coefficient of soft fingers [m]; 0 = hard fingers.
@@ -219,7 +219,7 @@ class Suite:
 
     def unfetched_objects(self) -> list[str]:
         """Fetchable objects the suite uses that are not in the cache yet (``ogcp assets fetch``)."""
-        from planner.objects.fetch import is_cached  # lazy: the asset tools are needed only here
+        from ogcp.planner.objects.fetch import is_cached  # lazy: the asset tools are needed only here
 
         names = {c.object.spec for c in self.cells if c.object.path is None and c.object.spec in FETCHABLE_OBJECTS}
         return sorted(name for name in names if not is_cached(name))

@@ -4,7 +4,7 @@
 the machine and versions, and one session per invocation of ``ogcp suite``. The runner builds
 it with :func:`new_manifest` and :func:`session_record` and extends it on ``--resume`` with
 :func:`with_session`; the runner, ``ogcp compare`` and ``ogcp plot`` read the suite back
-through :class:`ManifestSuite`. :class:`benchmarks.suite.store.ResultStore` reads and writes
+through :class:`ManifestSuite`. :class:`ogcp.benchmarks.suite.store.ResultStore` reads and writes
 the file.
 """
 
@@ -17,10 +17,10 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from planner.infra.provenance import provenance
+from ogcp.planner.infra.provenance import provenance
 
 if TYPE_CHECKING:
-    from benchmarks.suite.config import Suite
+    from ogcp.benchmarks.suite.config import Suite
 
 MANIFEST_SCHEMA = "ogcp.suite-run/1"
 
@@ -32,7 +32,7 @@ class ManifestSuite:
     Attributes:
         name: Suite name.
         source: Where the suite came from (built-in name or file path).
-        hash: Hash of what the suite runs (:attr:`benchmarks.suite.config.Suite.hash`).
+        hash: Hash of what the suite runs (:attr:`ogcp.benchmarks.suite.config.Suite.hash`).
         cells: Number of cells in the suite.
         simulation_enabled: Whether the suite simulates.
         content: The suite file's full text.

@@ -1,7 +1,7 @@
-"""The method parameters a suite may set: a thin adapter over :mod:`planner.methods`.
+"""The method parameters a suite may set: a thin adapter over :mod:`ogcp.planner.methods`.
 
 Each method's parameters, types, ranges and defaults are its configuration's declared
-options (:mod:`planner.config.methods`); here they are read as a suite file's keys. A
+options (:mod:`ogcp.planner.config.methods`); here they are read as a suite file's keys. A
 variant is completed by the configuration itself, and its canonical form (every
 parameter, sorted by name) is what is hashed into the cell id.
 """
@@ -10,12 +10,12 @@ from __future__ import annotations
 
 from typing import Any
 
-from planner.config.methods import DEFAULT_HAND_THRESHOLD
-from planner.config.options import ConfigError, Option
-from planner.grasp.contact_model import torsion_of
-from planner.grasp.defaults import CONTACT_MODEL, CONTACT_SEED, TORSIONAL_FRICTION
-from planner.infra.errors import OgcpError
-from planner.methods.registry import EXHAUSTIVE_METHODS, METHODS, OPTIMAL_METHODS
+from ogcp.planner.config.methods import DEFAULT_HAND_THRESHOLD
+from ogcp.planner.config.options import ConfigError, Option
+from ogcp.planner.grasp.contact_model import torsion_of
+from ogcp.planner.grasp.defaults import CONTACT_MODEL, CONTACT_SEED, TORSIONAL_FRICTION
+from ogcp.planner.infra.errors import OgcpError
+from ogcp.planner.methods.registry import EXHAUSTIVE_METHODS, METHODS, OPTIMAL_METHODS
 
 __all__ = [
     "EXHAUSTIVE_METHODS",

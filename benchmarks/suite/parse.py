@@ -1,4 +1,4 @@
-"""Reading suites: built-in names and TOML files, validated into a :class:`~benchmarks.suite.config.Suite`.
+"""Reading suites: built-in names and TOML files, validated into a :class:`~ogcp.benchmarks.suite.config.Suite`.
 
 Every problem is reported as one ``OgcpError`` naming the suite, the key path and the valid
 values; nothing is run until the whole file is valid.
@@ -15,7 +15,7 @@ import tomllib
 from pathlib import Path
 from typing import Any
 
-from benchmarks.suite.config import (
+from ogcp.benchmarks.suite.config import (
     EXTERNAL_METHOD,
     GROUP_KEYS,
     SCHEMA_VERSION,
@@ -26,7 +26,7 @@ from benchmarks.suite.config import (
     Suite,
     best_grasp,
 )
-from benchmarks.suite.params import (
+from ogcp.benchmarks.suite.params import (
     METHOD_PARAMS,
     UNLABELLED,
     complete,
@@ -35,9 +35,9 @@ from benchmarks.suite.params import (
     seed_values,
     values_of,
 )
-from planner.config.methods import DEFAULT_FINGERS, DEFAULT_SEED, HAND_FINGERS
-from planner.config.options import Option
-from planner.grasp.defaults import (
+from ogcp.planner.config.methods import DEFAULT_FINGERS, DEFAULT_SEED, HAND_FINGERS
+from ogcp.planner.config.options import Option
+from ogcp.planner.grasp.defaults import (
     CONE_EDGES,
     DEFAULT_CONE_EDGES,
     DEFAULT_CONTACTS,
@@ -47,12 +47,12 @@ from planner.grasp.defaults import (
     TIP_RADIUS,
     check_contact_memory,
 )
-from planner.grasp.wrench import primitives_per_contact
-from planner.infra.assets import asset_path, assets_dir
-from planner.infra.errors import OgcpError, choice_error
-from planner.objects import BUILTIN_OBJECTS, DEFAULT_DIAGONAL, MESH_SUFFIXES, file_sha256
-from planner.objects.fetchable import FETCHABLE_OBJECTS
-from planner.records.grasps import ExternalGrasps, is_object_name, load_grasps
+from ogcp.planner.grasp.wrench import primitives_per_contact
+from ogcp.planner.infra.assets import asset_path, assets_dir
+from ogcp.planner.infra.errors import OgcpError, choice_error
+from ogcp.planner.objects import BUILTIN_OBJECTS, DEFAULT_DIAGONAL, MESH_SUFFIXES, file_sha256
+from ogcp.planner.objects.fetchable import FETCHABLE_OBJECTS
+from ogcp.planner.records.grasps import ExternalGrasps, is_object_name, load_grasps
 
 #: Most cells of one suite. Every cell is a planning run of a second or more and a line of
 #: results; a million cells took more than 20 s to list before the first one ran. Split larger
@@ -424,8 +424,8 @@ def _check_simulation_settings(table: dict[str, Any]) -> None:
         Option("int", None, minimum=1).check("simulation.max_grasps", table["max_grasps"])
     try:
         # The settings' own modules, light: MuJoCo loads only when a cell simulates.
-        from sim_eval.decomposition.settings import DecompositionSettings
-        from sim_eval.settings import SimSettings
+        from ogcp.sim_eval.decomposition.settings import DecompositionSettings
+        from ogcp.sim_eval.settings import SimSettings
     except ImportError:
         return  # without the simulation installed every simulated cell records that error
     decomposition = table.get("decomposition", {})

@@ -1,11 +1,11 @@
 """The result record of one suite cell (schema ``ogcp.cell/1``), written and read here.
 
-:func:`benchmarks.suite.cells.run_cell` builds a :class:`CellRecord` and the runner appends its
+:func:`ogcp.benchmarks.suite.cells.run_cell` builds a :class:`CellRecord` and the runner appends its
 :meth:`~CellRecord.to_dict` to ``results.jsonl``; the runner, ``ogcp compare`` and ``ogcp plot``
 read lines back with :meth:`CellRecord.from_dict`. The record holds the cell's ``params`` block
 (built by :class:`CellParams`, read through :class:`CellRecord`'s accessors), its ``ogcp.plan/1``
-record (owned by :mod:`planner.records.plan`, read through :attr:`CellRecord.plan_view`) and its
-``ogcp.sim/1`` record (owned by :mod:`sim_eval.result`) as they were written.
+record (owned by :mod:`ogcp.planner.records.plan`, read through :attr:`CellRecord.plan_view`) and its
+``ogcp.sim/1`` record (owned by :mod:`ogcp.sim_eval.result`) as they were written.
 """
 
 from __future__ import annotations
@@ -15,9 +15,9 @@ from collections.abc import Mapping
 from dataclasses import dataclass, fields
 from typing import Any
 
-from benchmarks.suite.store import jsonable
-from planner.infra.errors import OgcpError
-from planner.records.plan import PlanView
+from ogcp.benchmarks.suite.store import jsonable
+from ogcp.planner.infra.errors import OgcpError
+from ogcp.planner.records.plan import PlanView
 
 CELL_SCHEMA = "ogcp.cell/1"
 #: Lines of a failing cell's traceback kept in its record.

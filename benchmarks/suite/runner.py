@@ -1,6 +1,6 @@
 """Running a suite into an output folder, resumably, serially or in parallel.
 
-Cells are independent: they run through :func:`planner.infra.parallel.run_tasks` (serial,
+Cells are independent: they run through :func:`ogcp.planner.infra.parallel.run_tasks` (serial,
 local processes or a Dask cluster) and the main process appends each finished record
 to ``results.jsonl``, so the folder is the same whatever ran the cells, apart from the
 order of the lines and the timings. ``resume`` skips cells whose id is already recorded
@@ -27,9 +27,9 @@ from typing import Any
 
 from tqdm import tqdm
 
-from benchmarks.suite.cells import run_cell
-from benchmarks.suite.config import Suite
-from benchmarks.suite.manifest import (
+from ogcp.benchmarks.suite.cells import run_cell
+from ogcp.benchmarks.suite.config import Suite
+from ogcp.benchmarks.suite.manifest import (
     ManifestSuite,
     first_commit,
     new_manifest,
@@ -37,13 +37,13 @@ from benchmarks.suite.manifest import (
     with_kernel_warmup,
     with_session,
 )
-from benchmarks.suite.record import CellRecord
-from benchmarks.suite.select import Selection, is_selected, parse_selection
-from benchmarks.suite.store import LOCK, ResultStore
-from planner.config.options import JOBS, MEMORY_LIMIT, TIME_LIMIT
-from planner.infra.errors import OgcpError
-from planner.infra.parallel import run_tasks, validate_backend
-from planner.search.memory import states_budget
+from ogcp.benchmarks.suite.record import CellRecord
+from ogcp.benchmarks.suite.select import Selection, is_selected, parse_selection
+from ogcp.benchmarks.suite.store import LOCK, ResultStore
+from ogcp.planner.config.options import JOBS, MEMORY_LIMIT, TIME_LIMIT
+from ogcp.planner.infra.errors import OgcpError
+from ogcp.planner.infra.parallel import run_tasks, validate_backend
+from ogcp.planner.search.memory import states_budget
 
 #: Progress line modes: none, one line per finished cell at most every ``interval`` s, every cell.
 PROGRESS_LINES = ("none", "periodic", "each")
@@ -59,7 +59,7 @@ def _warm_up_once() -> float | None:
     with _WARM_LOCK:
         if _WARMED:
             return None
-        from planner.grasp.kernel import warm_up  # lazy: the runner module stays importable without numba loaded
+        from ogcp.planner.grasp.kernel import warm_up  # lazy: the runner module stays importable without numba loaded
 
         seconds = warm_up()
         _WARMED = True
@@ -113,10 +113,10 @@ class SuiteRunner:
             of the suite: a cell past it is recorded as an error, to rerun with
             ``retry_errors`` and a larger limit). None: unlimited.
         memory_limit: Most memory of each search cell, all its processes [GiB]
-            (:mod:`planner.search.memory`); a cell past it is recorded like one past its time
+            (:mod:`ogcp.planner.search.memory`); a cell past it is recorded like one past its time
             limit. None: unlimited.
         only: Run only the cells matching these ``KEY=VALUE[,VALUE...]`` items
-            (:mod:`benchmarks.suite.select`); the others stay for a later ``resume``.
+            (:mod:`ogcp.benchmarks.suite.select`); the others stay for a later ``resume``.
         progress: Show a progress bar on stderr (for a terminal).
         lines: Progress lines on stderr, one of :data:`PROGRESS_LINES`: ``none``;
             ``periodic``: done/total, errors, elapsed and ETA after a finished cell, at most

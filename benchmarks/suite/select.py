@@ -9,8 +9,8 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Sequence
 
-from benchmarks.suite.config import Cell
-from planner.infra.errors import OgcpError, choice_error
+from ogcp.benchmarks.suite.config import Cell
+from ogcp.planner.infra.errors import OgcpError, choice_error
 
 #: What a selection can name, and how each key reads a cell's values.
 SELECTORS: dict[str, Callable[[Cell], tuple[str, ...]]] = {

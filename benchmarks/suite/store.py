@@ -25,8 +25,8 @@ from typing import Any
 
 import numpy as np
 
-from planner.infra.atomic import fsync_directory, write_json_atomic
-from planner.infra.errors import OgcpError
+from ogcp.planner.infra.atomic import fsync_directory, write_json_atomic
+from ogcp.planner.infra.errors import OgcpError
 
 RESULTS = "results.jsonl"
 MANIFEST = "manifest.json"

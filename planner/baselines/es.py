@@ -11,7 +11,7 @@ reports no histogram. The two are separate methods and never mixed.
 The argmax is the largest Q1, ties broken by the lexicographically smallest indices.
 With a checkpoint directory every finished chunk is written atomically as it completes,
 and a rerun with the same parameters resumes from them with the identical answer; each
-chunk is checked before it is reused (:mod:`planner.baselines.es_checkpoint`).
+chunk is checked before it is reused (:mod:`ogcp.planner.baselines.es_checkpoint`).
 """
 
 from __future__ import annotations
@@ -27,17 +27,17 @@ import numpy as np
 from numpy.typing import NDArray
 from tqdm import tqdm
 
-from planner.config.methods import ESConfig, ESPrunedConfig
-from planner.config.options import check_values
-from planner.grasp.constraints import Constraint, accepts_many
-from planner.grasp.contact_set import ContactSet
-from planner.grasp.kernel import FALLBACK, OK, default_directions, support_table
-from planner.grasp.kernel.geometry import CUT_MARGIN
-from planner.grasp.quality import exact_q1_batch, q1_certificate
-from planner.infra.errors import OgcpError
-from planner.infra.parallel import DEFAULT_BACKEND, DEFAULT_JOBS, run_tasks, validate_backend
-from planner.infra.provenance import provenance
-from planner.records.plan import check_result, histogram_record, plan_record
+from ogcp.planner.config.methods import ESConfig, ESPrunedConfig
+from ogcp.planner.config.options import check_values
+from ogcp.planner.grasp.constraints import Constraint, accepts_many
+from ogcp.planner.grasp.contact_set import ContactSet
+from ogcp.planner.grasp.kernel import FALLBACK, OK, default_directions, support_table
+from ogcp.planner.grasp.kernel.geometry import CUT_MARGIN
+from ogcp.planner.grasp.quality import exact_q1_batch, q1_certificate
+from ogcp.planner.infra.errors import OgcpError
+from ogcp.planner.infra.parallel import DEFAULT_BACKEND, DEFAULT_JOBS, run_tasks, validate_backend
+from ogcp.planner.infra.provenance import provenance
+from ogcp.planner.records.plan import check_result, histogram_record, plan_record
 
 from . import combinations
 from .es_checkpoint import ChunkResult, ChunkSpace, ChunkStore

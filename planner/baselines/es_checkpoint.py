@@ -45,13 +45,13 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from planner.grasp.constraints import Constraint, accepts_many
-from planner.grasp.contact_set import ContactSet
-from planner.grasp.kernel import default_directions, support_table
-from planner.grasp.quality import exact_q1_batch
-from planner.infra.atomic import write_json_atomic
-from planner.infra.errors import OgcpError
-from planner.records.plan import RESULT_RTOL
+from ogcp.planner.grasp.constraints import Constraint, accepts_many
+from ogcp.planner.grasp.contact_set import ContactSet
+from ogcp.planner.grasp.kernel import default_directions, support_table
+from ogcp.planner.grasp.quality import exact_q1_batch
+from ogcp.planner.infra.atomic import write_json_atomic
+from ogcp.planner.infra.errors import OgcpError
+from ogcp.planner.records.plan import RESULT_RTOL
 
 CHUNK_SCHEMA = "ogcp.es-chunk/1"
 MANIFEST = "manifest.json"

@@ -30,16 +30,16 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from planner.config.methods import HFTSConfig
-from planner.config.options import check_values
-from planner.grasp.contact_set import ContactSet
-from planner.grasp.quality import q1, q1_certificate, signed_q1
-from planner.grasp.wrench import contact_wrenches
-from planner.infra.errors import OgcpError
-from planner.infra.parallel import DEFAULT_BACKEND, DEFAULT_JOBS, run_tasks, validate_backend
-from planner.infra.provenance import provenance
-from planner.records.plan import check_result, plan_record
-from planner.search.partitions import KMeansPartitioner
+from ogcp.planner.config.methods import HFTSConfig
+from ogcp.planner.config.options import check_values
+from ogcp.planner.grasp.contact_set import ContactSet
+from ogcp.planner.grasp.quality import q1, q1_certificate, signed_q1
+from ogcp.planner.grasp.wrench import contact_wrenches
+from ogcp.planner.infra.errors import OgcpError
+from ogcp.planner.infra.parallel import DEFAULT_BACKEND, DEFAULT_JOBS, run_tasks, validate_backend
+from ogcp.planner.infra.provenance import provenance
+from ogcp.planner.records.plan import check_result, plan_record
+from ogcp.planner.search.partitions import KMeansPartitioner
 
 TOP_CLUSTERS = 12
 CHILD_CLUSTERS = 4
@@ -252,7 +252,7 @@ class HFTS:
         hierarchy_seed: Seed of the k-means hierarchy (shared by all runs).
         jobs: Worker processes; ``backend`` / ``address`` as for exhaustive search.
         hand: A hand model with ``residuals(positions, normals)`` (e.g.
-            :class:`planner.hands.reachability.SDHReachability`); its residual is
+            :class:`ogcp.planner.hands.reachability.SDHReachability`); its residual is
             subtracted from the objective with weight ``residual_weight``.
     """
 

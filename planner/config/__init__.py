@@ -1,12 +1,12 @@
 """Validated configurations of the planning methods: every default, range and choice written once.
 
-:mod:`planner.config.options` declares one parameter (:class:`Option`) and the validated base
-class; :mod:`planner.config.methods` holds one frozen configuration per method. The engines
+:mod:`ogcp.planner.config.options` declares one parameter (:class:`Option`) and the validated base
+class; :mod:`ogcp.planner.config.methods` holds one frozen configuration per method. The engines
 (search, baselines, hands) read their defaults here; the CLI's options and the suites'
 parameter table are generated from the same declarations.
 """
 
-from planner.config.methods import (
+from ogcp.planner.config.methods import (
     AStarConfig,
     DijkstraConfig,
     ESConfig,
@@ -14,7 +14,7 @@ from planner.config.methods import (
     HFTSConfig,
     WAStarConfig,
 )
-from planner.config.options import ConfigError, MethodConfig, Option, options_of
+from ogcp.planner.config.options import ConfigError, MethodConfig, Option, options_of
 
 __all__ = [
     "AStarConfig",

@@ -1,8 +1,8 @@
 """The configuration of every planning method: one frozen, validated dataclass each.
 
 Every default, range, choice list and help line of a method parameter is declared here
-once. The engines' constructors (:class:`~planner.search.grasp_planner.GraspPlanner`,
-:class:`~planner.baselines.es.ExhaustiveSearch`, :class:`~planner.baselines.hfts.HFTS`)
+once. The engines' constructors (:class:`~ogcp.planner.search.grasp_planner.GraspPlanner`,
+:class:`~ogcp.planner.baselines.es.ExhaustiveSearch`, :class:`~ogcp.planner.baselines.hfts.HFTS`)
 take their defaults from these classes, and ``ogcp plan``'s flags and the suites'
 parameter tables are generated from them. This module imports nothing but the option
 machinery, so every engine can import it.
@@ -13,7 +13,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import ClassVar
 
-from planner.config.options import ConfigError, MethodConfig, Option, field_of, option
+from ogcp.planner.config.options import ConfigError, MethodConfig, Option, field_of, option
 
 #: Method of ``ogcp plan`` and of :class:`GraspPlanner` when none is named.
 DEFAULT_METHOD = "astar"
@@ -118,7 +118,7 @@ class SearchConfig(MethodConfig):
         "keep the search tree (parent, level, f, visited per state) in the JSON result",
         sweep=False,
     )
-    # Lloyd's loop stops once converged (planner.search.partitions), so t is a cap: 100 costs no more
+    # Lloyd's loop stops once converged (ogcp.planner.search.partitions), so t is a cap: 100 costs no more
     # than 10 did. At w = 2 converged trees took A* from 12 % more (donut m = 3) to 35 % fewer (plane
     # m = 5) expansions than t = 10 (1000 contacts; README, "Position weight and converged k-means").
     kmeans_iterations: int = option("int", 100, "most k-means iterations t for fc", minimum=1)

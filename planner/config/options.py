@@ -18,8 +18,8 @@ import math
 import numbers
 from typing import Any, ClassVar
 
-from planner.infra.errors import OgcpError, choice_error
-from planner.infra.parallel import max_jobs
+from ogcp.planner.infra.errors import OgcpError, choice_error
+from ogcp.planner.infra.parallel import max_jobs
 
 KINDS = ("int", "float", "bool", "choice")
 #: Key of a dataclass field's metadata that holds its Option.
@@ -27,7 +27,7 @@ METADATA_KEY = "ogcp.option"
 #: Largest seed: an unsigned 32-bit integer, the range CoACD's seed and most random-number
 #: libraries take, so a seed recorded by ogcp can be passed on anywhere unchanged.
 MAX_SEED = 2**32 - 1
-#: Upper ends of the method parameters (:mod:`planner.config.methods`), by parameter name.
+#: Upper ends of the method parameters (:mod:`ogcp.planner.config.methods`), by parameter name.
 #: :func:`options_of` gives them to every configuration's options, so the configurations,
 #: ``ogcp plan``'s flags and the suites' tables check them alike. Each keeps a parameter where
 #: its run stays finite in time and memory:
@@ -41,7 +41,7 @@ UPPER_LIMITS: dict[str, float] = {
     # Positions enter the features as w (p - com) / rho, of length <= w: at w = 1000 the unit
     # normals weigh ~10^-6 as much, already ignored; at 10^308 k-means met NaN and failed.
     "position_weight": 1000.0,
-    # Metres, like the largest object diagonal (planner.grasp.defaults.DIAGONAL): a larger
+    # Metres, like the largest object diagonal (ogcp.planner.grasp.defaults.DIAGONAL): a larger
     # spread constrains nothing.
     "max_spread": 100.0,
     # Residuals are distances between codes whose 6 dimensions are normalised by their sampled
@@ -144,7 +144,7 @@ class Option:
 
         Raises:
             OgcpError: Naming ``where`` and the valid values (:class:`ConfigError`, or the
-                :func:`~planner.infra.errors.choice_error` of a choice).
+                :func:`~ogcp.planner.infra.errors.choice_error` of a choice).
         """
         if self.kind == "choice":
             if not isinstance(value, str) or value not in self.choices:
@@ -251,7 +251,7 @@ class MethodConfig:
 #: Wall-clock budget of a search cell or ``ogcp plan``'s search [s]; None: unlimited.
 TIME_LIMIT = Option("float", None, "wall-clock budget [s]", minimum=0, exclusive=True, maximum=MAX_TIME_LIMIT)
 #: Most memory of one search, all its processes together [GiB]: past it the search forgets its
-#: least promising open states (:mod:`planner.search.memory`).
+#: least promising open states (:mod:`ogcp.planner.search.memory`).
 MEMORY_LIMIT = Option("float", 4.0, "memory of one search, all its processes [GiB]", minimum=0, exclusive=True)
 #: Local worker processes (a Dask cluster decides its own).
 JOBS = Option("int", 1, "worker processes", minimum=1, maximum=max_jobs())

@@ -16,8 +16,8 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import NDArray
 
-from planner.grasp.contact_set import ContactSet
-from planner.infra.errors import OgcpError
+from ogcp.planner.grasp.contact_set import ContactSet
+from ogcp.planner.infra.errors import OgcpError
 
 Indices = NDArray[np.intp]
 

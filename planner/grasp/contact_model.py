@@ -2,15 +2,15 @@
 
 One rule for the command line, the suites and the Python API: ``hard`` (the default) takes no
 torsional coefficient; ``soft`` takes one > 0 [m] and defaults to
-:data:`~planner.grasp.defaults.DEFAULT_TORSIONAL_FRICTION`. A contact set stores only the
+:data:`~ogcp.planner.grasp.defaults.DEFAULT_TORSIONAL_FRICTION`. A contact set stores only the
 coefficient (0 = hard), so nothing can record one model and compute with the other.
 Imports nothing heavy: ``--help`` and suite validation use it.
 """
 
 from __future__ import annotations
 
-from planner.grasp.defaults import CONTACT_MODEL, DEFAULT_TORSIONAL_FRICTION, TORSIONAL_FRICTION
-from planner.infra.errors import OgcpError
+from ogcp.planner.grasp.defaults import CONTACT_MODEL, DEFAULT_TORSIONAL_FRICTION, TORSIONAL_FRICTION
+from ogcp.planner.infra.errors import OgcpError
 
 
 def torsion_of(

@@ -4,7 +4,7 @@ A :class:`ContactSet` carries everything Q1 needs, so every method that receives
 set computes the same quality: positions, inward unit normals, the wrench reference
 (centre of mass), the torque scale rho, the friction coefficient mu, the number of
 cone edges k and the contact model (hard fingers, or soft fingers with a torsional
-friction coefficient; see :mod:`planner.grasp.wrench`).
+friction coefficient; see :mod:`ogcp.planner.grasp.wrench`).
 """
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 # The defaults live in a module without numpy and trimesh, for readers that need nothing else.
-from planner.grasp.defaults import (
+from ogcp.planner.grasp.defaults import (
     CONTACT_SEED,
     DEFAULT_CONE_EDGES,
     DEFAULT_MU,
@@ -35,10 +35,10 @@ from planner.grasp.defaults import (
     TORSIONAL_FRICTION,
     check_contact_memory,
 )
-from planner.grasp.wrench import contact_wrenches, primitives_per_contact
-from planner.infra.atomic import write_json_atomic
-from planner.infra.errors import OgcpError
-from planner.infra.tolerance import TOL
+from ogcp.planner.grasp.wrench import contact_wrenches, primitives_per_contact
+from ogcp.planner.infra.atomic import write_json_atomic
+from ogcp.planner.infra.errors import OgcpError
+from ogcp.planner.infra.tolerance import TOL
 
 if TYPE_CHECKING:
     # Sampling imports trimesh where it is used: planning from a contact file needs no mesh library.
@@ -139,7 +139,7 @@ class ContactSet:
     def wrenches(self) -> NDArray[np.float64]:
         """Wrench primitives of every contact, shape (n, K, 6) [N] (torque / rho).
 
-        K = k cone edges for hard fingers, :func:`~planner.grasp.wrench.primitives_per_contact`
+        K = k cone edges for hard fingers, :func:`~ogcp.planner.grasp.wrench.primitives_per_contact`
         for soft ones.
         """
         w = contact_wrenches(
@@ -258,7 +258,7 @@ def _count(value: Any) -> int | None:
 
 
 def _check_friction(mu: Any, cone_edges: Any) -> None:
-    """mu in (0, MAX_MU] and k an integer in [3, MAX_CONE_EDGES] (see planner.grasp.defaults for why).
+    """mu in (0, MAX_MU] and k an integer in [3, MAX_CONE_EDGES] (see ogcp.planner.grasp.defaults for why).
 
     Raises:
         OgcpError: Naming the value and its valid range.
@@ -350,9 +350,9 @@ def sample_contacts(
     result is deterministic and always has ``n`` contacts.
 
     With a tip radius r > 0, only contacts a fingertip sphere of radius r can touch
-    without cutting the object are kept (:func:`planner.grasp.reach.reachable`); the
+    without cutting the object are kept (:func:`ogcp.planner.grasp.reach.reachable`); the
     others are replaced, in order, by reachable area-weighted samples from further seeds
-    derived from ``seed`` (:func:`planner.grasp.reach.fill_reachable`). Where every contact
+    derived from ``seed`` (:func:`ogcp.planner.grasp.reach.fill_reachable`). Where every contact
     is reachable (a convex object) the set equals the one sampled without r.
 
     Args:
@@ -365,7 +365,7 @@ def sample_contacts(
         tip_radius: Fingertip sphere radius r [m]; None or 0 samples the whole surface.
             A positive r is recorded in ``source["tip_radius"]``.
         reach_tolerance: Cut depth a kept contact's sphere may have [m]; None = 1 % of r
-            (:data:`planner.grasp.reach.REACH_TOLERANCE`). Recorded with r.
+            (:data:`ogcp.planner.grasp.reach.REACH_TOLERANCE`). Recorded with r.
         torsional_friction: Torsional friction coefficient [m] of soft fingers; 0 = hard fingers.
 
     Returns:
@@ -373,14 +373,14 @@ def sample_contacts(
 
     Raises:
         OgcpError: For a bad n, seed, mu, cone edges, radius or tolerance (each has a finite
-            range, see :mod:`planner.grasp.defaults`), for n contacts whose estimated memory
+            range, see :mod:`ogcp.planner.grasp.defaults`), for n contacts whose estimated memory
             exceeds this machine's, for an object outside the diagonals ogcp works at, or when
             too little of the surface is reachable by the tip to give n contacts. All are
             checked before anything of size n is allocated.
     """
     import trimesh.sample
 
-    from planner.grasp.reach import fill_reachable, reach_settings
+    from ogcp.planner.grasp.reach import fill_reachable, reach_settings
 
     _check_sampling(mesh, n, seed, mu, cone_edges, tip_radius, torsional_friction)
     n, seed = int(n), int(seed)

@@ -2,8 +2,8 @@
 
 They are read where loading numpy, trimesh and the Q1 kernels would be wasted: the command
 line's ``--help`` and argument checks, the suites' validation and the simulation's settings.
-:mod:`planner.grasp.contact_set` and :mod:`planner.grasp.reach` take them from here, so each
-value is written once. The ranges are :class:`~planner.config.options.Option` declarations
+:mod:`ogcp.planner.grasp.contact_set` and :mod:`ogcp.planner.grasp.reach` take them from here, so each
+value is written once. The ranges are :class:`~ogcp.planner.config.options.Option` declarations
 (the command line shows them in ``--help``); the number of contacts has no fixed maximum but a
 memory estimate (:func:`check_contact_memory`) that is checked before anything is allocated.
 """
@@ -13,8 +13,8 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from planner.config.options import MAX_SEED, Option
-from planner.infra.errors import OgcpError
+from ogcp.planner.config.options import MAX_SEED, Option
+from ogcp.planner.infra.errors import OgcpError
 
 #: Friction coefficient mu of a contact set when none is given.
 DEFAULT_MU = 0.5

@@ -5,11 +5,11 @@ when the origin lies strictly inside, else 0. "Strictly" means Q1 > ``TOL.force_
 (1e-9): smaller values report 0. Degenerate but well-formed sets (fewer than 7 wrenches, none
 at all, wrenches spanning an affine subspace of fewer than 6 dimensions) give 0. An array of
 another shape (such as a contact set's (n, k, 6) wrenches, not stacked) or with NaN or infinite
-entries raises :class:`~planner.infra.errors.OgcpError`: it is a mistake, not a grasp of Q1 0.
+entries raises :class:`~ogcp.planner.infra.errors.OgcpError`: it is a mistake, not a grasp of Q1 0.
 The public functions check their input (one pass over the array, as :func:`q1_certificate` always
 made to find NaNs) and from there run on unchecked internals.
 
-The fast path is the compiled expanding-polytope kernel of :mod:`planner.grasp.kernel`, whose
+The fast path is the compiled expanding-polytope kernel of :mod:`ogcp.planner.grasp.kernel`, whose
 answers carry a certificate (the facet complex it built provably encloses the ball of
 radius Q1). Whatever it cannot certify comes here, to two qhull paths. The full hull of
 a large wrench set is very expensive (800 wrenches: seconds and 100k+ facets), so
@@ -32,10 +32,10 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
-from planner.grasp.kernel import FALLBACK, canonical_plane, evaluate_batch, kernel_q1, last_active
-from planner.grasp.wrench import check_finite, finite_array, shaped_array
-from planner.infra.errors import OgcpError
-from planner.infra.tolerance import TOL
+from ogcp.planner.grasp.kernel import FALLBACK, canonical_plane, evaluate_batch, kernel_q1, last_active
+from ogcp.planner.grasp.wrench import check_finite, finite_array, shaped_array
+from ogcp.planner.infra.errors import OgcpError
+from ogcp.planner.infra.tolerance import TOL
 
 if TYPE_CHECKING:
     from scipy.spatial import ConvexHull
@@ -281,7 +281,7 @@ def _certificate(w: NDArray[np.float64], normal: NDArray[np.float64], offset: fl
 
     Different hulls (full or active-set, other seeds) find the same facet with
     hyperplanes that differ in the last bits. The compiled refit through the wrenches on
-    it (:func:`planner.grasp.kernel.canonical_plane`, the same code the kernel runs on its own
+    it (:func:`ogcp.planner.grasp.kernel.canonical_plane`, the same code the kernel runs on its own
     answers) makes the reported value a function of the wrench set alone, so every
     method reports bit-identical Q1 for the same grasp.
     """
@@ -301,7 +301,7 @@ def exact_q1_batch(
     Args:
         contact_wrenches: Wrenches of every contact, shape (n, k, 6) [N].
         grasps: Contact indices, shape (B, m).
-        table: :func:`planner.grasp.kernel.support_table` of ``contact_wrenches``.
+        table: :func:`ogcp.planner.grasp.kernel.support_table` of ``contact_wrenches``.
         cut: Values below ``cut - CUT_MARGIN`` may be upper bounds (branch and bound) [-].
 
     Returns:

@@ -15,9 +15,9 @@ import numpy as np
 import trimesh
 from numpy.typing import ArrayLike, NDArray
 
-from planner.grasp.defaults import DEFAULT_TIP_RADIUS_RATIO
-from planner.grasp.mesh_distance import SurfaceIndex
-from planner.infra.errors import OgcpError
+from ogcp.planner.grasp.defaults import DEFAULT_TIP_RADIUS_RATIO
+from ogcp.planner.grasp.mesh_distance import SurfaceIndex
+from ogcp.planner.infra.errors import OgcpError
 
 #: Default cut depth a reachable contact may have, as a fraction of the tip radius. It
 #: absorbs the faceting of curved concave surfaces (a sphere touching a facet near a crease
@@ -98,7 +98,7 @@ def reachable(
 
     A contact is reachable when the sphere of radius r centred at ``p - r n`` lies outside
     the object up to ``tolerance``: its centre is on the outer side of the surface (the
-    pseudonormal test of :class:`~planner.grasp.mesh_distance.SurfaceIndex`) and at least
+    pseudonormal test of :class:`~ogcp.planner.grasp.mesh_distance.SurfaceIndex`) and at least
     ``r - tolerance`` from every triangle (exact distances). On a convex object every
     contact is reachable. The test depends only on the geometry, so scaling the mesh, the
     radius and the tolerance together gives the same answer.

@@ -6,7 +6,7 @@ cost two Q1 evaluations.
 
 The search mostly needs to know that a union is no better than a value it already holds,
 which an upper bound proves: :meth:`GraspQuality.tighten` climbs from the support bound to
-facet bounds (:mod:`planner.grasp.kernel.ray_bound`, about 10 µs each) and only then to the
+facet bounds (:mod:`ogcp.planner.grasp.kernel.ray_bound`, about 10 µs each) and only then to the
 exact value (100-300 µs).
 """
 
@@ -18,11 +18,11 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from planner.grasp.contact_set import ContactSet
-from planner.grasp.kernel.geometry import CUT_MARGIN
-from planner.grasp.quality import KERNEL_MAX, q1_certificate
-from planner.grasp.support_bound import SupportBound, Vector
-from planner.infra.tolerance import TOL
+from ogcp.planner.grasp.contact_set import ContactSet
+from ogcp.planner.grasp.kernel.geometry import CUT_MARGIN
+from ogcp.planner.grasp.quality import KERNEL_MAX, q1_certificate
+from ogcp.planner.grasp.support_bound import SupportBound, Vector
+from ogcp.planner.infra.tolerance import TOL
 
 PackedMask = NDArray[np.uint8]
 #: Directions of lowest support passed to the exact engine as a warm start.
@@ -54,7 +54,7 @@ UPPER_CAPACITY = 1_000_000
 class GraspQuality:
     """Memoised Q1 over subsets of a :class:`ContactSet`.
 
-    Exact values come from :func:`planner.grasp.quality.q1_certificate`; each certificate's
+    Exact values come from :func:`ogcp.planner.grasp.quality.q1_certificate`; each certificate's
     weakest direction also tightens the :class:`SupportBound` that gives cheap upper
     bounds, and a bound below the force-closure tolerance settles Q1 = 0 without a hull.
 
@@ -134,7 +134,7 @@ class GraspQuality:
         """Tighten an upper bound of Q1 of the union by one level: (bound [-], level reached).
 
         Levels: 0, the support bound (the caller's); 1, the facet bound
-        (:func:`planner.grasp.kernel.ray_bound.facet_bound`) from the direction of lowest
+        (:func:`ogcp.planner.grasp.kernel.ray_bound.facet_bound`) from the direction of lowest
         support, about 10 µs; 2, facet bounds from the next ``FACET_STARTS - 1`` directions;
         :data:`EXACT`, Q1 itself (:meth:`of_masks`, 100-300 µs). A cached value is returned
         at once, as exact; so is Q1 = 0 when a facet bound proves it. Facet bounds carry

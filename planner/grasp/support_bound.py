@@ -80,7 +80,7 @@ class SupportBound:
         self, union: NDArray[np.uint8], vectors: Sequence[Vector], first: int, last: int
     ) -> tuple[float, NDArray[np.float64]]:
         """The best facet bound of Q1 of a union of contacts and the unit direction whose
-        support it is (:func:`~planner.grasp.kernel.ray_bound.union_facet_bound`): ([-], shape (6,)).
+        support it is (:func:`~ogcp.planner.grasp.kernel.ray_bound.union_facet_bound`): ([-], shape (6,)).
 
         Args:
             union: The union's membership flags, packed (``numpy.packbits``).
@@ -89,7 +89,7 @@ class SupportBound:
             first: Rank (lowest support first) of the first direction that starts a facet bound.
             last: One past the rank of the last.
         """
-        from planner.grasp.kernel.ray_bound import union_facet_bound
+        from ogcp.planner.grasp.kernel.ray_bound import union_facet_bound
 
         length = min(len(v) for v in vectors)
         rows = np.stack([v[:length] for v in vectors])
@@ -98,9 +98,9 @@ class SupportBound:
 
     def facet_bound_along(self, union: NDArray[np.uint8], start: int) -> tuple[float, NDArray[np.float64]]:
         """The facet bound of Q1 of a union of contacts from direction ``start`` of D and the unit
-        direction whose support it is (:func:`~planner.grasp.kernel.ray_bound.union_facet_bound_along`):
+        direction whose support it is (:func:`~ogcp.planner.grasp.kernel.ray_bound.union_facet_bound_along`):
         ([-], shape (6,))."""
-        from planner.grasp.kernel.ray_bound import union_facet_bound_along
+        from ogcp.planner.grasp.kernel.ray_bound import union_facet_bound_along
 
         bound, normal = union_facet_bound_along(self._wrenches, union, self.directions[start])
         return float(bound), normal

@@ -18,7 +18,7 @@ with ``(r mu, r gamma)`` and the exact one with ``(mu, gamma)``: r = 0.816 at k 
 k = 12, 0.898 at k = 16, 0.922 at k = 64 (the hard cones' polygon: cos(pi / k) = 0.924 at 8).
 
 The public functions check their arrays (shape, finite values) and raise
-:class:`~planner.infra.errors.OgcpError` naming the shape expected and the shape given.
+:class:`~ogcp.planner.infra.errors.OgcpError` naming the shape expected and the shape given.
 """
 
 from __future__ import annotations
@@ -29,7 +29,7 @@ from numbers import Integral, Real
 import numpy as np
 from numpy.typing import NDArray
 
-from planner.infra.errors import OgcpError
+from ogcp.planner.infra.errors import OgcpError
 
 
 def shaped_array(

@@ -1,6 +1,6 @@
 """Hand models: kinematics of the robot hands that execute planned grasps (Schunk SDH)."""
 
-from planner.hands.sdh import (
+from ogcp.planner.hands.sdh import (
     FINGER_BASES,
     FINGER_NAMES,
     JOINT_LIMITS,

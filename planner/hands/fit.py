@@ -1,6 +1,6 @@
 """Inverse kinematics of the Schunk SDH: joint angles and palm pose that put the fingertips on a grasp.
 
-The reachability model (:class:`planner.hands.reachability.SDHReachability`) records, for a grasp,
+The reachability model (:class:`ogcp.planner.hands.reachability.SDHReachability`) records, for a grasp,
 the joint angles of its nearest *sampled* configuration, matched on the fingertips' shape
 (pairwise distances and normal differences) only: at the default 10,000 samples those fingertips
 miss the contacts by 15-20 mm once the palm is placed as well as it can be. :func:`fit_hand`
@@ -8,9 +8,9 @@ refines them: starting from the recorded angles and the rigid (Kabsch) palm pose
 
 ``min over q, R, t   sum_k |R tip_k(q) + t - target_k|^2 + w^2 |R pad_k(q) - n_k|^2``
 
-within the joint limits (:data:`planner.hands.sdh.JOINT_LIMITS`), by bounded least squares
+within the joint limits (:data:`ogcp.planner.hands.sdh.JOINT_LIMITS`), by bounded least squares
 (``scipy.optimize.least_squares``, trust region reflective). ``tip_k`` is finger k's fingertip
-point (the end of its distal link, :func:`planner.hands.sdh.forward_kinematics`), ``target_k``
+point (the end of its distal link, :func:`ogcp.planner.hands.sdh.forward_kinematics`), ``target_k``
 the contact moved ``offset`` back along its inward normal ``n_k`` (where the centre of a finger of
 radius ``offset`` is when its surface touches the contact), and ``pad_k`` the pad normal. With 13
 unknowns for 9 position equations, a reachable grasp is met to numerical precision and the
@@ -27,9 +27,9 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
-from planner.hands.reachability import self_collision_free
-from planner.hands.sdh import JOINT_LIMITS, JOINT_NAMES, forward_kinematics
-from planner.infra.errors import OgcpError
+from ogcp.planner.hands.reachability import self_collision_free
+from ogcp.planner.hands.sdh import JOINT_LIMITS, JOINT_NAMES, forward_kinematics
+from ogcp.planner.infra.errors import OgcpError
 
 #: Default weight of the pad-normal term [m per unit normal difference]: a pad 11 deg off
 #: (difference 0.2) costs as much as a fingertip 1 mm off its contact.
@@ -49,15 +49,15 @@ class HandFit:
     """The hand's configuration and placement that best puts its fingertips on a grasp.
 
     Attributes:
-        joint_angles: Joint angles in :data:`planner.hands.sdh.JOINT_NAMES` order, shape (7,) [rad],
-            within :data:`planner.hands.sdh.JOINT_LIMITS`.
+        joint_angles: Joint angles in :data:`ogcp.planner.hands.sdh.JOINT_NAMES` order, shape (7,) [rad],
+            within :data:`ogcp.planner.hands.sdh.JOINT_LIMITS`.
         rotation: Rotation from the palm frame to the world (object) frame, shape (3, 3).
         translation: Palm origin in the world frame, shape (3,) [m].
         residuals: Distance of each finger's fingertip point from its target, fingers in
-            :data:`planner.hands.sdh.FINGER_NAMES` order, shape (3,) [m].
+            :data:`ogcp.planner.hands.sdh.FINGER_NAMES` order, shape (3,) [m].
         normal_angles: Angle between each pad normal and its contact's inward normal, shape (3,) [rad].
         collision_free: Whether links of different fingers keep their clearance
-            (:func:`planner.hands.reachability.self_collision_free`).
+            (:func:`ogcp.planner.hands.reachability.self_collision_free`).
     """
 
     joint_angles: NDArray[np.float64]
@@ -124,7 +124,7 @@ def evaluate_fit(
         angles: Joint angles, shape (7,) [rad], within the joint limits.
         rotation: Palm-to-world rotation, shape (3, 3).
         translation: Palm origin in the world, shape (3,) [m].
-        points: Each finger's contact, fingers in :data:`planner.hands.sdh.FINGER_NAMES` order, shape (3, 3) [m].
+        points: Each finger's contact, fingers in :data:`ogcp.planner.hands.sdh.FINGER_NAMES` order, shape (3, 3) [m].
         normals: Their inward unit normals, shape (3, 3).
         offset: Distance of a fingertip point from its contact along the normal [m] (the finger's radius).
 
@@ -151,7 +151,7 @@ def fit_hand(
     """Joint angles and palm pose that put the SDH's fingertips on three contacts (see the module docstring).
 
     Args:
-        points: Each finger's contact, fingers in :data:`planner.hands.sdh.FINGER_NAMES` order, shape (3, 3) [m].
+        points: Each finger's contact, fingers in :data:`ogcp.planner.hands.sdh.FINGER_NAMES` order, shape (3, 3) [m].
         normals: Their inward unit normals, shape (3, 3): the pad normals wanted.
         angles: Starting joint angles (the recorded ones), shape (7,) [rad].
         offset: Distance of each fingertip point from its contact, back along the normal [m]: 0

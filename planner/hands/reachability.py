@@ -13,7 +13,7 @@ difference lies in an interval, so every grasp's code lies in a box, and the sta
 pruned only if no sample lies within ``threshold`` of that box (exact point-to-box
 distances) under any assignment. A state that holds a reachable grasp is never pruned.
 The sampled model is cached on disk (``$OGCP_CACHE``, default ``~/.cache/ogcp``) as the entry
-``sdh_reach_<key>/`` of :mod:`planner.infra.cache`, under a key of its parameters.
+``sdh_reach_<key>/`` of :mod:`ogcp.planner.infra.cache`, under a key of its parameters.
 """
 
 from __future__ import annotations
@@ -27,9 +27,9 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from planner.config.methods import DEFAULT_HAND_THRESHOLD
-from planner.grasp.contact_set import ContactSet
-from planner.hands.sdh import (
+from ogcp.planner.config.methods import DEFAULT_HAND_THRESHOLD
+from ogcp.planner.grasp.contact_set import ContactSet
+from ogcp.planner.hands.sdh import (
     BASE_ROTATION_SIGN,
     DISTAL_LENGTH,
     FINGER_BASES,
@@ -39,9 +39,9 @@ from planner.hands.sdh import (
     PROXIMAL_OFFSET,
     random_configurations,
 )
-from planner.infra.cache import cache_dir as default_cache_dir
-from planner.infra.cache import read_entry, write_entry
-from planner.infra.errors import OgcpError
+from ogcp.planner.infra.cache import cache_dir as default_cache_dir
+from ogcp.planner.infra.cache import read_entry, write_entry
+from ogcp.planner.infra.errors import OgcpError
 
 MODEL_VERSION = 1
 #: The sampled model's file in its cache entry: arrays ``q`` (N, 7) [rad] and ``codes`` (N, 6).

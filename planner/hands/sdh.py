@@ -28,8 +28,8 @@ from types import MappingProxyType
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from planner.infra.assets import asset_path
-from planner.infra.errors import OgcpError
+from ogcp.planner.infra.assets import asset_path
+from ogcp.planner.infra.errors import OgcpError
 
 PALM_HEIGHT = 0.0745
 """Height of the finger bases above the palm origin, along palm z [m]."""

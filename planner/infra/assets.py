@@ -1,8 +1,7 @@
 """Where ogcp's data files are: the hand model, the manifest of fetchable objects, the suites.
 
-The files live in the repository's top-level ``assets/`` folder. A wheel installs that folder as
-the data-only package ``ogcp_assets`` (pyproject's ``package-dir``), beside ``planner``; a
-checkout or an editable install keeps it at the repository root, also beside ``planner``. Every
+The files live in the repository's top-level ``assets/`` folder, beside ``planner/``. A wheel
+installs that folder as the data-only package ``ogcp.assets``, again beside ``ogcp/planner``. Every
 reader asks :func:`asset_path` rather than building a path itself.
 """
 
@@ -10,30 +9,28 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from planner.infra.errors import OgcpError
+from ogcp.planner.infra.errors import OgcpError
 
-# Located from this file rather than with importlib.resources("ogcp_assets"): a checkout must
+# Located from this file rather than with importlib.resources("ogcp.assets"): a checkout must
 # read its own assets even when another copy of ogcp (say an editable install of a different
-# worktree) is what the import system would find under that name.
-_SITE = Path(__file__).resolve().parents[2]
-# The installed name comes first: site-packages may hold an unrelated top-level "assets".
-_CANDIDATES = (_SITE / "ogcp_assets", _SITE / "assets")
+# worktree) is what the import system would find under that name. resolve() follows ogcp/'s
+# links, so in a checkout this is the repository root and in a wheel site-packages/ogcp.
+_FOLDER = Path(__file__).resolve().parents[2] / "assets"
 
 
 def assets_dir() -> Path:
     """The folder holding ogcp's data files.
 
     Returns:
-        ``ogcp_assets`` of a wheel install, else the checkout's ``assets``.
+        ``ogcp/assets`` of a wheel install, the top-level ``assets`` of a checkout.
 
     Raises:
-        OgcpError: If neither exists (a broken install).
+        OgcpError: If it is missing (a broken install).
     """
-    for candidate in _CANDIDATES:
-        if candidate.is_dir():
-            return candidate
+    if _FOLDER.is_dir():
+        return _FOLDER
     raise OgcpError(
-        f"ogcp's data files are missing (looked for {' and '.join(map(str, _CANDIDATES))}); the ogcp "
+        f"ogcp's data files are missing (looked for {_FOLDER}); the ogcp "
         "install is incomplete, reinstall it (pip install --force-reinstall ogcp, or pip install -e . from a checkout)"
     )
 

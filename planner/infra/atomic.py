@@ -21,7 +21,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any, BinaryIO
 
-from planner.infra.errors import OgcpError
+from ogcp.planner.infra.errors import OgcpError
 
 __all__ = [
     "fsync_directory",

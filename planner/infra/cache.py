@@ -26,8 +26,8 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any, TypeVar
 
-from planner.infra.atomic import fsync_directory
-from planner.infra.errors import OgcpError
+from ogcp.planner.infra.atomic import fsync_directory
+from ogcp.planner.infra.errors import OgcpError
 
 __all__ = [
     "ENTRY_MANIFEST",

@@ -16,7 +16,7 @@ plain subprocess ends its children then: measured, the loky workers of a killed
   alone (:func:`guard_worker`), since a PDEATHSIG there would kill idle workers of a live parent.
 
 Both run from their source in a child that imports nothing of ogcp (see
-:mod:`sim_eval.decomposition.coacd_child`), so they import what they use themselves and read no
+:mod:`ogcp.sim_eval.decomposition.coacd_child`), so they import what they use themselves and read no
 module globals. :func:`owned_tempdir` names a folder after its owner's pid and locks it while in
 use, so that a later run removes the folders of killed runs.
 """

@@ -4,7 +4,7 @@ Tasks are independent and their results are merged by the caller in a determinis
 order, so the serial path (``jobs=1``), local processes (``loky``) and a Dask cluster give
 identical answers.
 
-Local workers end with the process that started them (:mod:`planner.infra.lifetime`): a suite
+Local workers end with the process that started them (:mod:`ogcp.planner.infra.lifetime`): a suite
 killed by SIGTERM or SIGKILL leaves no worker computing for nobody. Dask workers belong to their
 cluster and are left alone.
 """
@@ -16,8 +16,8 @@ import os
 from collections.abc import Callable, Iterable, Iterator
 from typing import Any
 
-from planner.infra.errors import OgcpError, choice_error
-from planner.infra.lifetime import call_in_worker, guard_worker
+from ogcp.planner.infra.errors import OgcpError, choice_error
+from ogcp.planner.infra.lifetime import call_in_worker, guard_worker
 
 BACKENDS = ("dask", "loky")
 DEFAULT_BACKEND = "loky"

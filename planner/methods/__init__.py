@@ -1,10 +1,10 @@
 """The planning methods behind one interface: runners and the registry by name.
 
-* :mod:`planner.methods.runners`: run a method's configuration on a contact set and return
+* :mod:`ogcp.planner.methods.runners`: run a method's configuration on a contact set and return
   the result with its complete ``ogcp.plan/1`` record.
-* :mod:`planner.methods.registry`: method name -> title, configuration class and runner.
+* :mod:`ogcp.planner.methods.registry`: method name -> title, configuration class and runner.
 
-The configurations themselves live one layer down, in :mod:`planner.config`, because the
+The configurations themselves live one layer down, in :mod:`ogcp.planner.config`, because the
 engines (search, baselines, hands) read their defaults from them and the registry imports
 the engines.
 
@@ -16,19 +16,19 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from planner.infra.lazy import lazy_exports
+from ogcp.planner.infra.lazy import lazy_exports
 
 if TYPE_CHECKING:
-    from planner.methods.registry import METHODS, MethodSpec, method_spec
-    from planner.methods.runners import MethodRun, RunOptions
+    from ogcp.planner.methods.registry import METHODS, MethodSpec, method_spec
+    from ogcp.planner.methods.runners import MethodRun, RunOptions
 
 #: Public name -> the module that defines it.
 _EXPORTS = {
-    "METHODS": "planner.methods.registry",
-    "MethodRun": "planner.methods.runners",
-    "MethodSpec": "planner.methods.registry",
-    "RunOptions": "planner.methods.runners",
-    "method_spec": "planner.methods.registry",
+    "METHODS": "ogcp.planner.methods.registry",
+    "MethodRun": "ogcp.planner.methods.runners",
+    "MethodSpec": "ogcp.planner.methods.registry",
+    "RunOptions": "ogcp.planner.methods.runners",
+    "method_spec": "ogcp.planner.methods.registry",
 }
 
 __all__ = [

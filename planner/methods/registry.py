@@ -14,7 +14,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from planner.config.methods import (
+from ogcp.planner.config.methods import (
     AStarConfig,
     DijkstraConfig,
     ESConfig,
@@ -23,32 +23,32 @@ from planner.config.methods import (
     SearchConfig,
     WAStarConfig,
 )
-from planner.config.options import MethodConfig, Option, options_of
-from planner.infra.errors import OgcpError, choice_error
+from ogcp.planner.config.options import MethodConfig, Option, options_of
+from ogcp.planner.infra.errors import OgcpError, choice_error
 
 if TYPE_CHECKING:
-    from planner.grasp.contact_set import ContactSet
-    from planner.methods.runners import MethodRun, RunOptions
+    from ogcp.planner.grasp.contact_set import ContactSet
+    from ogcp.planner.methods.runners import MethodRun, RunOptions
 
 Runner = Callable[[Any, "ContactSet", int, "RunOptions"], "MethodRun"]
 
 
 @dataclass(frozen=True)
 class _Deferred:
-    """The runner ``name`` of :mod:`planner.methods.runners`, imported when first called.
+    """The runner ``name`` of :mod:`ogcp.planner.methods.runners`, imported when first called.
 
     The runners import every engine (numpy, trimesh, scipy, the numba kernels), while the
     registry is also read where only names, titles and options are needed (``ogcp --help``).
     A dataclass rather than a closure, so that a spec still pickles (parallel suite cells).
 
     Attributes:
-        name: The runner function's name in :mod:`planner.methods.runners`.
+        name: The runner function's name in :mod:`ogcp.planner.methods.runners`.
     """
 
     name: str
 
     def __call__(self, config: Any, contacts: ContactSet, m: int, options: RunOptions) -> MethodRun:
-        from planner.methods import runners
+        from ogcp.planner.methods import runners
 
         runner: Runner = getattr(runners, self.name)
         return runner(config, contacts, m, options)
@@ -89,7 +89,7 @@ class MethodSpec:
         """
         if type(config) is not self.config:
             raise TypeError(f"method {self.name!r} runs a {self.config.__name__}, got a {type(config).__name__}")
-        from planner.methods.runners import RunOptions  # lazy: see _Deferred
+        from ogcp.planner.methods.runners import RunOptions  # lazy: see _Deferred
 
         return self.runner(config, contacts, m, options or RunOptions())
 
@@ -113,7 +113,7 @@ METHODS: dict[str, MethodSpec] = {
     )
 }
 #: Grasps given in an ``ogcp.grasps/1`` file rather than planned: a suite's method (see
-#: ``benchmarks.suite``), never a planner here, so :func:`method_spec` names where it belongs.
+#: ``ogcp.benchmarks.suite``), never a planner here, so :func:`method_spec` names where it belongs.
 EXTERNAL = "external"
 #: The best-first searches (A*, Dijkstra, WA*).
 SEARCH_METHODS = tuple(name for name, spec in METHODS.items() if issubclass(spec.config, SearchConfig))

@@ -13,9 +13,9 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
-from planner.baselines.es import ESResult, ExhaustiveSearch
-from planner.baselines.hfts import HFTS, HFTSResult
-from planner.config.methods import (
+from ogcp.planner.baselines.es import ESResult, ExhaustiveSearch
+from ogcp.planner.baselines.hfts import HFTS, HFTSResult
+from ogcp.planner.config.methods import (
     HAND_FINGERS,
     AStarConfig,
     ConstraintOptions,
@@ -24,15 +24,15 @@ from planner.config.methods import (
     HandOptions,
     HFTSConfig,
 )
-from planner.config.options import MEMORY_LIMIT, MethodConfig, options_of
-from planner.grasp.constraints import Constraint, MaxFingerSpread
-from planner.grasp.contact_set import ContactSet
-from planner.hands.reachability import SDHReachability
-from planner.infra.errors import OgcpError
-from planner.infra.parallel import DEFAULT_BACKEND, DEFAULT_JOBS
-from planner.records.plan import add_hand, add_optimum, contact_set_record
-from planner.search.grasp_planner import GraspPlanner
-from planner.search.result import SearchResult
+from ogcp.planner.config.options import MEMORY_LIMIT, MethodConfig, options_of
+from ogcp.planner.grasp.constraints import Constraint, MaxFingerSpread
+from ogcp.planner.grasp.contact_set import ContactSet
+from ogcp.planner.hands.reachability import SDHReachability
+from ogcp.planner.infra.errors import OgcpError
+from ogcp.planner.infra.parallel import DEFAULT_BACKEND, DEFAULT_JOBS
+from ogcp.planner.records.plan import add_hand, add_optimum, contact_set_record
+from ogcp.planner.search.grasp_planner import GraspPlanner
+from ogcp.planner.search.result import SearchResult
 
 
 @dataclass(frozen=True)
@@ -42,10 +42,10 @@ class RunOptions:
     Attributes:
         time_limit: Wall-clock budget of A*, WA* and Dijkstra [s]; None: unlimited.
         memory_limit: Most memory of one A*, WA* or Dijkstra search, all its processes [GiB]
-            (:mod:`planner.search.memory`); None: unlimited.
+            (:mod:`ogcp.planner.search.memory`); None: unlimited.
         progress: Show a progress bar on stderr (search, exhaustive search).
         jobs: Worker processes (exhaustive search, HFTS); for A*, WA* and Dijkstra the
-            processes one search is dealt to (:mod:`planner.search.parts`).
+            processes one search is dealt to (:mod:`ogcp.planner.search.parts`).
         backend: Parallel backend ``loky`` or ``dask`` (exhaustive search, HFTS).
         address: Dask scheduler ``HOST:PORT`` (backend ``dask``).
         checkpoint: Directory of finished chunks, so a rerun resumes (exhaustive search).
@@ -81,7 +81,7 @@ class MethodRun:
     record: dict[str, Any]
 
 
-#: The model of every hand in :data:`~planner.config.methods.HANDS`.
+#: The model of every hand in :data:`~ogcp.planner.config.methods.HANDS`.
 HAND_MODELS = {"sdh": SDHReachability}
 
 

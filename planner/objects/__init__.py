@@ -11,37 +11,37 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from planner.infra.lazy import lazy_exports
+from ogcp.planner.infra.lazy import lazy_exports
 
 if TYPE_CHECKING:
-    from planner.infra.cache import file_sha256
-    from planner.objects.builtin import BUILTIN_OBJECTS, DEFAULT_DIAGONAL, builtin_mesh, normalise_scale
-    from planner.objects.fetch import ObjectStatus, fetch_objects, is_cached, list_objects, load_fetched
-    from planner.objects.fetchable import FETCH_GROUPS, FETCHABLE_OBJECTS, PAPER_OBJECTS, FetchableObject
-    from planner.objects.loading import MESH_SUFFIXES, load_mesh
-    from planner.objects.repair import repair_mesh
-    from planner.objects.resolve import resolve_object
+    from ogcp.planner.infra.cache import file_sha256
+    from ogcp.planner.objects.builtin import BUILTIN_OBJECTS, DEFAULT_DIAGONAL, builtin_mesh, normalise_scale
+    from ogcp.planner.objects.fetch import ObjectStatus, fetch_objects, is_cached, list_objects, load_fetched
+    from ogcp.planner.objects.fetchable import FETCH_GROUPS, FETCHABLE_OBJECTS, PAPER_OBJECTS, FetchableObject
+    from ogcp.planner.objects.loading import MESH_SUFFIXES, load_mesh
+    from ogcp.planner.objects.repair import repair_mesh
+    from ogcp.planner.objects.resolve import resolve_object
 
 #: Public name -> the module that defines it.
 _EXPORTS = {
-    "BUILTIN_OBJECTS": "planner.objects.builtin",
-    "DEFAULT_DIAGONAL": "planner.objects.builtin",
-    "FETCHABLE_OBJECTS": "planner.objects.fetchable",
-    "FETCH_GROUPS": "planner.objects.fetchable",
-    "MESH_SUFFIXES": "planner.objects.loading",
-    "PAPER_OBJECTS": "planner.objects.fetchable",
-    "FetchableObject": "planner.objects.fetchable",
-    "ObjectStatus": "planner.objects.fetch",
-    "builtin_mesh": "planner.objects.builtin",
-    "fetch_objects": "planner.objects.fetch",
-    "file_sha256": "planner.infra.cache",
-    "is_cached": "planner.objects.fetch",
-    "list_objects": "planner.objects.fetch",
-    "load_fetched": "planner.objects.fetch",
-    "load_mesh": "planner.objects.loading",
-    "normalise_scale": "planner.objects.builtin",
-    "repair_mesh": "planner.objects.repair",
-    "resolve_object": "planner.objects.resolve",
+    "BUILTIN_OBJECTS": "ogcp.planner.objects.builtin",
+    "DEFAULT_DIAGONAL": "ogcp.planner.objects.builtin",
+    "FETCHABLE_OBJECTS": "ogcp.planner.objects.fetchable",
+    "FETCH_GROUPS": "ogcp.planner.objects.fetchable",
+    "MESH_SUFFIXES": "ogcp.planner.objects.loading",
+    "PAPER_OBJECTS": "ogcp.planner.objects.fetchable",
+    "FetchableObject": "ogcp.planner.objects.fetchable",
+    "ObjectStatus": "ogcp.planner.objects.fetch",
+    "builtin_mesh": "ogcp.planner.objects.builtin",
+    "fetch_objects": "ogcp.planner.objects.fetch",
+    "file_sha256": "ogcp.planner.infra.cache",
+    "is_cached": "ogcp.planner.objects.fetch",
+    "list_objects": "ogcp.planner.objects.fetch",
+    "load_fetched": "ogcp.planner.objects.fetch",
+    "load_mesh": "ogcp.planner.objects.loading",
+    "normalise_scale": "ogcp.planner.objects.builtin",
+    "repair_mesh": "ogcp.planner.objects.repair",
+    "resolve_object": "ogcp.planner.objects.resolve",
 }
 
 __all__ = [

@@ -9,7 +9,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import TYPE_CHECKING
 
-from planner.infra.errors import OgcpError, choice_error
+from ogcp.planner.infra.errors import OgcpError, choice_error
 
 if TYPE_CHECKING:
     import trimesh

@@ -6,7 +6,7 @@ its contact set: the object (built-in name, or mesh file path and the sha256 of 
 bytes), the diagonal, n, the seed, mu, the cone edges, the tip radius and the torsional
 friction. The entry's key adds the versions of numpy, scipy and trimesh and a digest of
 ogcp's own sampling code, so an upgrade or an edit of that code never returns a stale set.
-Entries are sealed and checked on load by :mod:`planner.infra.cache`; a damaged one is
+Entries are sealed and checked on load by :mod:`ogcp.planner.infra.cache`; a damaged one is
 discarded and sampled again, and a cache folder that cannot be written costs only the time.
 
 Fetched objects (``ogcp assets fetch``) are not cached here: they are meshes in the cache already.
@@ -23,10 +23,10 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any
 
-from planner.grasp.contact_set import ContactSet
-from planner.infra.cache import cache_dir, file_sha256, read_entry, write_entry
-from planner.infra.errors import OgcpError
-from planner.objects.builtin import BUILTIN_OBJECTS
+from ogcp.planner.grasp.contact_set import ContactSet
+from ogcp.planner.infra.cache import cache_dir, file_sha256, read_entry, write_entry
+from ogcp.planner.infra.errors import OgcpError
+from ogcp.planner.objects.builtin import BUILTIN_OBJECTS
 
 #: Cache subfolder of the entries.
 SUBDIR = "contacts"

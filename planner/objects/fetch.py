@@ -4,7 +4,7 @@ Nothing downloads implicitly: :func:`load_fetched` only reads the cache and tell
 ``ogcp assets fetch`` when an object is missing. A cache entry ``<cache>/meshes/<name>/`` holds the
 mesh file exactly as extracted from the wheel, ``normalised.npz`` (the repaired mesh centred and
 scaled to a 0.2 m bounding-box diagonal, float64 vertices) and ``meta.json``. It is written and
-verified by :mod:`planner.infra.cache`, so a failed fetch never leaves a partial entry and a file
+verified by :mod:`ogcp.planner.infra.cache`, so a failed fetch never leaves a partial entry and a file
 damaged on disk is caught when the object is loaded.
 """
 
@@ -22,13 +22,13 @@ from typing import Any
 import numpy as np
 import trimesh
 
-from planner.infra.cache import LOAD_ERRORS, DamagedEntryError, cache_dir, file_sha256, verify_entry, write_entry
-from planner.infra.errors import OgcpError, choice_error
-from planner.objects import fetchable as registry
-from planner.objects.builtin import BUILTIN_OBJECTS, DEFAULT_DIAGONAL, builtin_mesh, normalise_scale
-from planner.objects.fetchable import FETCH_GROUPS, FETCHABLE_OBJECTS, PAPER_OBJECTS, FetchableObject
-from planner.objects.loading import load_mesh
-from planner.objects.repair import repair_mesh
+from ogcp.planner.infra.cache import LOAD_ERRORS, DamagedEntryError, cache_dir, file_sha256, verify_entry, write_entry
+from ogcp.planner.infra.errors import OgcpError, choice_error
+from ogcp.planner.objects import fetchable as registry
+from ogcp.planner.objects.builtin import BUILTIN_OBJECTS, DEFAULT_DIAGONAL, builtin_mesh, normalise_scale
+from ogcp.planner.objects.fetchable import FETCH_GROUPS, FETCHABLE_OBJECTS, PAPER_OBJECTS, FetchableObject
+from ogcp.planner.objects.loading import load_mesh
+from ogcp.planner.objects.repair import repair_mesh
 
 __all__ = [
     "FETCHABLE_OBJECTS",

@@ -20,8 +20,8 @@ from dataclasses import dataclass
 from pathlib import Path, PurePosixPath
 from typing import Any
 
-from planner.infra.assets import asset_path
-from planner.infra.errors import OgcpError
+from ogcp.planner.infra.assets import asset_path
+from ogcp.planner.infra.errors import OgcpError
 
 # The largest mesh we extract; guards against a corrupt or hostile archive inflating in memory.
 MAX_MEMBER_BYTES = 256 << 20
@@ -47,7 +47,7 @@ class FetchableObject:
             re-built mirror copy may differ while the mesh inside is identical).
         vertices: Vertex count after loading, repair and scaling.
         watertight: Whether the repaired mesh is watertight (the volume centroid is then the COM).
-        repair: What the deterministic repair changes for this file (see ``planner.objects.repair.repair_mesh``).
+        repair: What the deterministic repair changes for this file (see ``ogcp.planner.objects.repair.repair_mesh``).
         description: One line for ``ogcp assets list``.
     """
 
@@ -102,7 +102,7 @@ def pip_target_args(wheel: str) -> list[str]:
 
 
 MANIFEST = "objects.toml"
-"""The manifest of fetchable objects, inside ``assets/`` (see :func:`planner.infra.assets.asset_path`)."""
+"""The manifest of fetchable objects, inside ``assets/`` (see :func:`ogcp.planner.infra.assets.asset_path`)."""
 MANIFEST_SCHEMA_VERSION = 1
 
 _FIELD_TYPES: dict[str, type] = {"vertices": int, "watertight": bool}

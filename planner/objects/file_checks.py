@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from planner.infra.errors import OgcpError
+from ogcp.planner.infra.errors import OgcpError
 
 __all__ = ["check_mesh_file"]
 

@@ -15,9 +15,9 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
-from planner.infra.errors import OgcpError
-from planner.objects.file_checks import check_mesh_file
-from planner.objects.repair import MeshOrientationWarning, require_solid
+from ogcp.planner.infra.errors import OgcpError
+from ogcp.planner.objects.file_checks import check_mesh_file
+from ogcp.planner.objects.repair import MeshOrientationWarning, require_solid
 
 MESH_SUFFIXES = (".obj", ".stl", ".ply", ".off", ".glb", ".gltf")
 

@@ -14,8 +14,8 @@ from numpy.typing import NDArray
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import breadth_first_order, connected_components
 
-from planner.infra.errors import OgcpError
-from planner.infra.tolerance import TOL
+from ogcp.planner.infra.errors import OgcpError
+from ogcp.planner.infra.tolerance import TOL
 
 __all__ = ["MeshOrientationWarning", "repair_mesh", "require_solid"]
 

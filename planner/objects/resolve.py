@@ -7,18 +7,18 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
-from planner.infra.cache import file_sha256
-from planner.infra.errors import OgcpError
-from planner.objects.builtin import BUILTIN_OBJECTS, DEFAULT_DIAGONAL, builtin_mesh, normalise_scale
-from planner.objects.fetch import load_fetched
-from planner.objects.fetchable import FETCHABLE_OBJECTS
-from planner.objects.loading import load_mesh
+from ogcp.planner.infra.cache import file_sha256
+from ogcp.planner.infra.errors import OgcpError
+from ogcp.planner.objects.builtin import BUILTIN_OBJECTS, DEFAULT_DIAGONAL, builtin_mesh, normalise_scale
+from ogcp.planner.objects.fetch import load_fetched
+from ogcp.planner.objects.fetchable import FETCHABLE_OBJECTS
+from ogcp.planner.objects.loading import load_mesh
 
 
 def resolve_object(spec: str, diagonal: float | None = None) -> tuple[trimesh.Trimesh, dict[str, object]]:
     """Turn a user's object argument (a built-in name, a fetched name or a mesh path) into a mesh.
 
-    Fetched objects (``planner.objects.fetchable.FETCHABLE_OBJECTS``) come from the cache only;
+    Fetched objects (``ogcp.planner.objects.fetchable.FETCHABLE_OBJECTS``) come from the cache only;
     nothing is downloaded here (``ogcp assets fetch`` does that).
 
     Args:

@@ -1,7 +1,7 @@
 """The ``ogcp.grasps/1`` record: grasps from any planner, as fingertip contacts on one object.
 
 A planner outside ogcp writes its grasps in this form, and ogcp gives them the same Q1, the
-same physics and the same metrics as its own methods (``sim_eval.evaluate_grasps``,
+same physics and the same metrics as its own methods (``ogcp.sim_eval.evaluate_grasps``,
 ``ogcp evaluate GRASPS.json``). The minimal record::
 
     {"schema": "ogcp.grasps/1", "object": {"mesh": "box"}, "mu": 0.5,
@@ -28,11 +28,11 @@ import numpy as np
 import trimesh
 from numpy.typing import ArrayLike, NDArray
 
-from planner.grasp.contact_model import torsion_of
-from planner.grasp.defaults import CONE_EDGES, DEFAULT_CONE_EDGES, DIAGONAL, MU
-from planner.infra.atomic import read_json, write_json_atomic
-from planner.infra.errors import OgcpError
-from planner.objects import BUILTIN_OBJECTS, FETCHABLE_OBJECTS, file_sha256, resolve_object
+from ogcp.planner.grasp.contact_model import torsion_of
+from ogcp.planner.grasp.defaults import CONE_EDGES, DEFAULT_CONE_EDGES, DIAGONAL, MU
+from ogcp.planner.infra.atomic import read_json, write_json_atomic
+from ogcp.planner.infra.errors import OgcpError
+from ogcp.planner.objects import BUILTIN_OBJECTS, FETCHABLE_OBJECTS, file_sha256, resolve_object
 
 GRASPS_SCHEMA = "ogcp.grasps/1"
 #: A normal's length may differ from 1 by this much; it is then normalised. Farther off, it is
@@ -146,7 +146,7 @@ class ExternalGrasps:
 
     @property
     def object_spec(self) -> str | None:
-        """The object as :func:`planner.objects.resolve_object` takes it: a name, or a path resolved against ``base``."""
+        """The object as :func:`ogcp.planner.objects.resolve_object` takes it: a name, or a path resolved against ``base``."""
         if self.mesh is None or is_object_name(self.mesh):
             return self.mesh
         path = Path(self.mesh)

@@ -18,14 +18,14 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from planner.grasp.contact_set import DEFAULT_CONE_EDGES, DEFAULT_MU, EVEN_SAMPLING, ContactSet
-from planner.infra.atomic import read_json
-from planner.infra.errors import OgcpError
-from planner.infra.provenance import provenance
-from planner.infra.tolerance import TOL
+from ogcp.planner.grasp.contact_set import DEFAULT_CONE_EDGES, DEFAULT_MU, EVEN_SAMPLING, ContactSet
+from ogcp.planner.infra.atomic import read_json
+from ogcp.planner.infra.errors import OgcpError
+from ogcp.planner.infra.provenance import provenance
+from ogcp.planner.infra.tolerance import TOL
 
 if TYPE_CHECKING:
-    from planner.hands.reachability import SDHReachability
+    from ogcp.planner.hands.reachability import SDHReachability
 
 PLAN_SCHEMA = "ogcp.plan/1"
 #: Keys of a contact set's ``source`` that say how it was sampled (the rest describe the object).

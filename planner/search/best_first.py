@@ -1,11 +1,11 @@
-"""One best-first search run: the open list, lazily exact values, statistics (see :mod:`planner.search.grasp_planner`).
+"""One best-first search run: the open list, lazily exact values, statistics (see :mod:`ogcp.planner.search.grasp_planner`).
 
 Open-list entries pass through stages, each keyed by a lower bound of the state's f that
 only rises: ``BOUND`` (from the support bound U), ``EXACT_G`` (g, exact for terminal
-states, else from a facet bound: see :meth:`~planner.search.search_space.SearchSpace.g_quality`),
+states, else from a facet bound: see :meth:`~ogcp.planner.search.search_space.SearchSpace.g_quality`),
 ``PARTIAL`` (branch and bound over the heuristic children under way) and ``EXACT`` (f as
 final as it gets: exact, or, once the support bound's directions are all learned, from the best
-child's facet bounds; see :mod:`planner.search.refine`). A state is expanded only from ``EXACT``. With WA* (eps > 0) a state's exact key is the
+child's facet bounds; see :mod:`ogcp.planner.search.refine`). A state is expanded only from ``EXACT``. With WA* (eps > 0) a state's exact key is the
 paper's ``g + (1 + eps) h`` (with that g, which can only raise it); the key of a state not
 yet scored is ``(1 + eps)`` times its lower bound of f. Both are at most ``(1 + eps) f``,
 which is all the WA* guarantee needs
@@ -19,7 +19,7 @@ returned: the goal itself, or (WA* only; A*'s goal is optimal) a strictly better
 which keeps the guarantee and costs nothing but the expansion of the state whose branch
 and bound found it, so that the returned grasp is a state of the tree.
 
-A* and Dijkstra also take grasps from local search (:mod:`planner.search.polish`), run for
+A* and Dijkstra also take grasps from local search (:mod:`ogcp.planner.search.polish`), run for
 a share of the time at progress reports: they only lower the cutoff below which states are
 dropped, which such a search would never pop, so its expansions and finished result stay the
 same. A search stopped by its time limit or by a stop request is a result too: the incumbent
@@ -40,18 +40,18 @@ from typing import Any
 
 import numpy as np
 
-from planner.grasp.constraints import Constraint
-from planner.grasp.contact_set import ContactSet
-from planner.infra.errors import OgcpError, SearchTimeout
-from planner.search.deal import Board, Part, PartDone
-from planner.search.expansion import Expansion
-from planner.search.open_list import OpenList
-from planner.search.outcome import Incumbent
-from planner.search.polish import Polisher
-from planner.search.refine import BOUND, EXACT, EXACT_G
-from planner.search.result import SearchResult
-from planner.search.search_space import State
-from planner.search.storage import IdPool, WaitingStore
+from ogcp.planner.grasp.constraints import Constraint
+from ogcp.planner.grasp.contact_set import ContactSet
+from ogcp.planner.infra.errors import OgcpError, SearchTimeout
+from ogcp.planner.search.deal import Board, Part, PartDone
+from ogcp.planner.search.expansion import Expansion
+from ogcp.planner.search.open_list import OpenList
+from ogcp.planner.search.outcome import Incumbent
+from ogcp.planner.search.polish import Polisher
+from ogcp.planner.search.refine import BOUND, EXACT, EXACT_G
+from ogcp.planner.search.result import SearchResult
+from ogcp.planner.search.search_space import State
+from ogcp.planner.search.storage import IdPool, WaitingStore
 
 #: Iterations between two looks at the clock for progress reports (a report costs nothing
 #: but a clock reading; the clock is read every iteration for the deadline anyway).
@@ -64,7 +64,7 @@ DROP_MARGIN = 1e-9
 #: additions; between two, a search creates at most a few hundred kilobytes of states).
 MEMORY_CHECK_ITERATIONS = 256
 #: [-] Share of a run's time that local search from its best grasps may take
-#: (:mod:`planner.search.polish`).
+#: (:mod:`ogcp.planner.search.polish`).
 POLISH_SHARE = 0.1
 #: [s] Time a search runs before local search starts (a stopped search climbs once anyway):
 #: the cutoff pays in memory only for searches of minutes, while a tenth of a short search's time
@@ -83,14 +83,14 @@ class Search(Expansion):
     Args:
         contacts: The contact set C.
         m: Number of fingers.
-        config: Resolved configuration (:meth:`planner.search.grasp_planner.GraspPlanner.resolved_config`).
+        config: Resolved configuration (:meth:`ogcp.planner.search.grasp_planner.GraspPlanner.resolved_config`).
         constraints: Grasp constraints, distinct contacts included.
         record_tree: Keep every created state for :attr:`SearchResult.tree`.
         time_limit: Wall-clock budget [s]; None: unlimited.
         stop: Set by another thread (or a signal handler) to stop the search; it then
             returns like at its time limit, with status ``interrupted``.
-        part: Search only this part of the grasps (:mod:`planner.search.parts`); None: all.
-        memory_limit: Most bytes its open states may take (:mod:`planner.search.memory`); past
+        part: Search only this part of the grasps (:mod:`ogcp.planner.search.parts`); None: all.
+        memory_limit: Most bytes its open states may take (:mod:`ogcp.planner.search.memory`); past
             it the search forgets those of the largest keys, and returns with status
             ``memory`` once it would have to expand a state no better than one it forgot.
             None: unlimited.
@@ -197,7 +197,7 @@ class Search(Expansion):
             self.part.publish(incumbent.q)
 
     def polish(self, now: float, stopping: bool = False) -> None:
-        """Local search from the search's grasps and from random ones (:mod:`planner.search.polish`),
+        """Local search from the search's grasps and from random ones (:mod:`ogcp.planner.search.polish`),
         after :data:`POLISH_AFTER` (at once when ``stopping``), within :data:`POLISH_SHARE` of the
         time so far and :data:`POLISH_SECONDS` in all; a better grasp becomes the incumbent."""
         polisher, inc = self.polisher, self.incumbent

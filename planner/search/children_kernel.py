@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from planner.grasp.kernel.jit import cached_njit
+from ogcp.planner.grasp.kernel.jit import cached_njit
 
 
 @cached_njit(inline="always")

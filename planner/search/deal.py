@@ -1,4 +1,4 @@
-"""Grasps dealt to the parts of one search, a part per process (see :mod:`planner.search.parts`).
+"""Grasps dealt to the parts of one search, a part per process (see :mod:`ogcp.planner.search.parts`).
 
 A state's parent is the tuple of its nodes' parents, so the states at one depth root disjoint
 subtrees that hold every grasp below that depth. Dealing those states to parts by a hash of

@@ -1,7 +1,7 @@
-"""Expanding a state: its successors enter the open list (a base of :class:`planner.search.best_first.Search`).
+"""Expanding a state: its successors enter the open list (a base of :class:`ogcp.planner.search.best_first.Search`).
 
 Most expansions follow the branch and bound that settled the state, whose record holds every
-successor with an upper bound of its Q1 (:meth:`planner.search.refine.ChildRefinement.settled_successors`):
+successor with an upper bound of its Q1 (:meth:`ogcp.planner.search.refine.ChildRefinement.settled_successors`):
 those successors enter in one pass over arrays and one compiled insertion
 (:meth:`Expansion.create_settled`), at m >= 5 some thirty an expansion, where a Python loop
 took a few microseconds each. The others are listed and enter one by one
@@ -16,12 +16,12 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import NDArray
 
-from planner.grasp.kernel.jit import cached_njit
-from planner.infra.arrays import grow_rows
-from planner.search.open_list import OpenList
-from planner.search.outcome import Incumbent, SearchOutcome
-from planner.search.refine import BOUND, EXACT_G, Settled
-from planner.search.search_space import State
+from ogcp.planner.grasp.kernel.jit import cached_njit
+from ogcp.planner.infra.arrays import grow_rows
+from ogcp.planner.search.open_list import OpenList
+from ogcp.planner.search.outcome import Incumbent, SearchOutcome
+from ogcp.planner.search.refine import BOUND, EXACT_G, Settled
+from ogcp.planner.search.search_space import State
 
 
 @cached_njit()
@@ -85,7 +85,7 @@ def settled_entries(
 
 
 class Expansion(SearchOutcome):
-    """Expansions of a search run (a base of :class:`planner.search.best_first.Search`, which
+    """Expansions of a search run (a base of :class:`ogcp.planner.search.best_first.Search`, which
     holds the open list, the counters and the rows of states used here)."""
 
     incumbent: Incumbent | None

@@ -11,9 +11,9 @@ Design points:
 * Finger order is irrelevant to Q1 and to every constraint, so states are kept as
   sorted tuples (exact; disable with ``ordered=True`` to reproduce the paper's raw tree).
   Every sorted state then has exactly one parent, so no closed list is needed.
-* Exact values are computed lazily (:mod:`planner.search.best_first`). A successor enters the
+* Exact values are computed lazily (:mod:`ogcp.planner.search.best_first`). A successor enters the
   open list keyed by a lower bound of its f: q(s0) - U(s'), where U is a cheap
-  support-function upper bound of q (:mod:`planner.grasp.support_bound`), raised to its parent's f
+  support-function upper bound of q (:mod:`ogcp.planner.grasp.support_bound`), raised to its parent's f
   when Γh = Γ (the heuristic is then consistent, Thm. III.2b); where its parent's branch and
   bound already tightened that bound (Γh = Γ: the children it bounded are the successors), it
   enters with that facet bound or exact value as its g instead. Each time a state
@@ -45,7 +45,7 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
-from planner.config.methods import (
+from ogcp.planner.config.methods import (
     DEFAULT_METHOD,
     DEFAULT_WASTAR_EPS,
     HEURISTICS,
@@ -53,15 +53,15 @@ from planner.config.methods import (
     SearchConfig,
     WAStarConfig,
 )
-from planner.config.options import JOBS, MEMORY_LIMIT, TIME_LIMIT, options_of
-from planner.grasp.constraints import Constraint, DistinctContacts
-from planner.grasp.contact_set import ContactSet
-from planner.infra.errors import OgcpError, choice_error
-from planner.infra.provenance import provenance
-from planner.search.best_first import Search
-from planner.search.memory import states_budget
-from planner.search.parts import search_in_parts
-from planner.search.result import SearchResult
+from ogcp.planner.config.options import JOBS, MEMORY_LIMIT, TIME_LIMIT, options_of
+from ogcp.planner.grasp.constraints import Constraint, DistinctContacts
+from ogcp.planner.grasp.contact_set import ContactSet
+from ogcp.planner.infra.errors import OgcpError, choice_error
+from ogcp.planner.infra.provenance import provenance
+from ogcp.planner.search.best_first import Search
+from ogcp.planner.search.memory import states_budget
+from ogcp.planner.search.parts import search_in_parts
+from ogcp.planner.search.result import SearchResult
 
 METHODS = tuple(sorted(SEARCH_CONFIGS))
 __all__ = ["DEFAULT_WASTAR_EPS", "HEURISTICS", "METHODS", "GraspPlanner"]
@@ -75,7 +75,7 @@ class GraspPlanner:
     Args:
         method: ``astar`` (optimal), ``wastar`` (cost within 1 + eps of optimal) or
             ``dijkstra`` (uniform cost, h = 0).
-        eps: WA* inflation; default :data:`~planner.config.methods.DEFAULT_WASTAR_EPS` for
+        eps: WA* inflation; default :data:`~ogcp.planner.config.methods.DEFAULT_WASTAR_EPS` for
             ``wastar`` and 0 otherwise.
         branching: Branching factor b of the expansion successor function.
         successor: Expansion successor function Γ: ``fc`` (k-means) or ``ru`` (random).
@@ -94,12 +94,12 @@ class GraspPlanner:
         time_limit: Wall-clock budget of :meth:`plan` [s]; past it the search returns the
             best grasp found with status ``stopped`` and the certified upper bound on the
             optimum (``bound``, ``gap``). None: unlimited.
-        jobs: Processes for one search (:mod:`planner.search.parts`): the grasps are dealt to
+        jobs: Processes for one search (:mod:`ogcp.planner.search.parts`): the grasps are dealt to
             ``jobs`` parts searched side by side. A* returns an optimal grasp either way.
         memory_limit: Most memory of the search, all its processes together [GiB]. Past it a
             search forgets its least promising open states, and once it would have to expand
             one no better than a forgotten state it returns its best grasp with status
-            ``memory`` and the certified bound (:mod:`planner.search.memory`). None: unlimited.
+            ``memory`` and the certified bound (:mod:`ogcp.planner.search.memory`). None: unlimited.
     """
 
     def __init__(

@@ -2,7 +2,7 @@
 
 At m >= 5 a search's memory is its open states: an open-list entry (48 bytes) and a row of nodes
 (4 bytes a finger) each, and the children waiting in the branch and bound of the states that
-have one under way (:mod:`planner.search.refine`), counted by :mod:`planner.search.storage`.
+have one under way (:mod:`ogcp.planner.search.refine`), counted by :mod:`ogcp.planner.search.storage`.
 Past its limit a search forgets the open states of the largest keys (:func:`forget_threshold`),
 which A* would pop last. A forgotten state's lower bound of f still bounds the grasps below it,
 so the certificate stays sound, and the search stays exact while its next key is no larger
@@ -18,13 +18,13 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-from planner.infra.arrays import GROWTH
-from planner.infra.errors import OgcpError
-from planner.search.open_list import OpenList
-from planner.search.refine import PARTIAL, ChildRefinement
-from planner.search.storage import IdPool, WaitingStore
+from ogcp.planner.infra.arrays import GROWTH
+from ogcp.planner.infra.errors import OgcpError
+from ogcp.planner.search.open_list import OpenList
+from ogcp.planner.search.refine import PARTIAL, ChildRefinement
+from ogcp.planner.search.storage import IdPool, WaitingStore
 
-#: Bytes of one open-list entry (:class:`planner.search.open_list.OpenList`).
+#: Bytes of one open-list entry (:class:`ogcp.planner.search.open_list.OpenList`).
 ENTRY_BYTES = 48
 #: Share of the limit a search keeps once it has forgotten states: room to grow before the
 #: next forgetting, which passes over every open entry twice.
@@ -67,7 +67,7 @@ def states_budget(limit_gib: float | None, parts: int) -> float | None:
 
 def reserved_bytes(entries: int, rows: int, m: int, waiting: int) -> float:
     """Memory a search's states may take before its arrays grow again [bytes]: its open-list
-    entries' and state rows' bytes times :data:`planner.infra.arrays.GROWTH` (the size of an
+    entries' and state rows' bytes times :data:`ogcp.planner.infra.arrays.GROWTH` (the size of an
     array after its next growth) plus the waiting children's."""
     return GROWTH * (entries * ENTRY_BYTES + rows * 4 * m) + waiting
 
@@ -77,7 +77,7 @@ def forget_threshold(edges: NDArray[np.float64], weights: NDArray[np.float64], e
 
     Args:
         edges: Edges of bins of keys, ascending, shape (bins + 1,)
-            (:meth:`planner.search.open_list.OpenList.key_weights`).
+            (:meth:`ogcp.planner.search.open_list.OpenList.key_weights`).
         weights: What forgetting the entries of each bin frees [bytes], shape (bins,).
         excess: Bytes to free.
 
@@ -95,7 +95,7 @@ def forget_threshold(edges: NDArray[np.float64], weights: NDArray[np.float64], e
 
 class Forgetting(ChildRefinement):
     """Open states past a memory limit forgotten, and the certificate that counts them (a base
-    of :class:`planner.search.best_first.Search`, which provides the open list and the cutoff).
+    of :class:`ogcp.planner.search.best_first.Search`, which provides the open list and the cutoff).
 
     Attributes:
         memory_limit: Most bytes the open states may take; None: unlimited.

@@ -10,8 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from planner.grasp.kernel.jit import cached_njit
-from planner.infra.arrays import grow_rows
+from ogcp.planner.grasp.kernel.jit import cached_njit
+from ogcp.planner.infra.arrays import grow_rows
 
 #: An entry: (key, -depth, tie, lower bound of the unweighted f, stage, g or NaN, state id).
 Entry = tuple[float, int, int, float, int, float, int]
@@ -183,7 +183,7 @@ class OpenList:
     """Open states of one search, smallest (key, -depth, tie) first.
 
     Args:
-        capacity: Initial room [entries]; it grows in place when full (:func:`planner.infra.arrays.grow_rows`).
+        capacity: Initial room [entries]; it grows in place when full (:func:`ogcp.planner.infra.arrays.grow_rows`).
     """
 
     def __init__(self, capacity: int = 1024) -> None:

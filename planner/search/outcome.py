@@ -1,7 +1,7 @@
 """What a search run returns: the incumbent, the certified result, its statistics and tree.
 
-The half of :class:`planner.search.best_first.Search` that turns the state of a run (its
-incumbent, its open list, its counters) into a :class:`~planner.search.result.SearchResult`,
+The half of :class:`ogcp.planner.search.best_first.Search` that turns the state of a run (its
+incumbent, its open list, its counters) into a :class:`~ogcp.planner.search.result.SearchResult`,
 and the dive that finds a grasp for a search stopped before it evaluated one.
 """
 
@@ -12,17 +12,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from planner.search.memory import Forgetting
-from planner.search.open_list import OpenList
-from planner.search.polish import Polisher
-from planner.search.result import (
+from ogcp.planner.search.memory import Forgetting
+from ogcp.planner.search.open_list import OpenList
+from ogcp.planner.search.polish import Polisher
+from ogcp.planner.search.result import (
     SearchResult,
     SearchStats,
     SearchTree,
     effective_branching_factor,
     peak_rss_bytes,
 )
-from planner.search.search_space import State
+from ogcp.planner.search.search_space import State
 
 #: States a dive may visit before it gives up (each costs one successor generation).
 DIVE_BUDGET = 20_000
@@ -37,7 +37,7 @@ class Incumbent:
     Attributes:
         q: Its exact Q1 [-].
         state: Its terminal state (sorted node tuple); None for a grasp found by local search
-            (:mod:`planner.search.polish`), which is no state of the tree.
+            (:mod:`ogcp.planner.search.polish`), which is no state of the tree.
         parent: The unexpanded state whose branch and bound found it; None once the
             grasp is a created state, and for local search's grasps.
         ident: Id of the created state, or of the parent (-1 for local search's grasps).
@@ -52,7 +52,7 @@ class Incumbent:
 
 
 class SearchOutcome(Forgetting):
-    """Results of a run (a base of :class:`planner.search.best_first.Search`, which holds the
+    """Results of a run (a base of :class:`ogcp.planner.search.best_first.Search`, which holds the
     counters and the tree record read here)."""
 
     record_tree: bool
@@ -160,7 +160,7 @@ class SearchOutcome(Forgetting):
         )
 
     def finished_status(self, q1: float, bound: float) -> str:
-        """What a finished search certifies (see :data:`~planner.search.result.SEARCH_STATUSES`)."""
+        """What a finished search certifies (see :data:`~ogcp.planner.search.result.SEARCH_STATUSES`)."""
         if self.symmetry is not None:
             return "approximate"  # the bound covers the symmetry-reduced space only
         return "optimal" if bound <= q1 else "bounded"

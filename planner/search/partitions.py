@@ -20,9 +20,9 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import NDArray
 
-from planner.config.methods import SUCCESSORS, SearchConfig
-from planner.grasp.contact_set import ContactSet
-from planner.infra.errors import OgcpError, choice_error
+from ogcp.planner.config.methods import SUCCESSORS, SearchConfig
+from ogcp.planner.grasp.contact_set import ContactSet
+from ogcp.planner.infra.errors import OgcpError, choice_error
 
 Indices = NDArray[np.intp]
 

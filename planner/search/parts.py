@@ -1,7 +1,7 @@
 """One best-first search on several cores: the grasps dealt to parts, a process each.
 
-:mod:`planner.search.deal` splits the grasps into disjoint parts. Part 0 runs in the calling
-process and the others in child interpreters (``python -m planner.search.part_child``: no copy
+:mod:`ogcp.planner.search.deal` splits the grasps into disjoint parts. Part 0 runs in the calling
+process and the others in child interpreters (``python -m ogcp.planner.search.part_child``: no copy
 of the caller's threads or locks, and no re-import of the caller's script), each a whole search
 from the root that keeps only its own states. A part ends at its own goal, at the time limit or
 stop request, or once nothing left in it can beat the best grasp of any part. The result is the
@@ -26,19 +26,19 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from planner.grasp.constraints import Constraint
-from planner.grasp.contact_set import ContactSet
-from planner.infra.errors import OgcpError, SearchTimeout
-from planner.infra.lifetime import owned_tempdir
-from planner.search.best_first import Search
-from planner.search.deal import Board, Part, PartDone
-from planner.search.result import UNFINISHED, SearchResult, SearchStats, effective_branching_factor
+from ogcp.planner.grasp.constraints import Constraint
+from ogcp.planner.grasp.contact_set import ContactSet
+from ogcp.planner.infra.errors import OgcpError, SearchTimeout
+from ogcp.planner.infra.lifetime import owned_tempdir
+from ogcp.planner.search.best_first import Search
+from ogcp.planner.search.deal import Board, Part, PartDone
+from ogcp.planner.search.result import UNFINISHED, SearchResult, SearchStats, effective_branching_factor
 
 #: [s] How often the caller looks at its children and its stop request while it waits.
 POLL_S = 0.2
 #: [s] How long a child may take to return its result once asked to stop, before it is killed.
 STOP_GRACE_S = 30.0
-#: Prefix of the folders that hold a run's board and arguments (see :func:`planner.infra.lifetime.owned_tempdir`).
+#: Prefix of the folders that hold a run's board and arguments (see :func:`ogcp.planner.infra.lifetime.owned_tempdir`).
 TEMP_PREFIX = "ogcp-search-"
 
 
@@ -113,7 +113,7 @@ def search_in_parts(
     Args:
         contacts: The contact set C.
         m: Number of fingers.
-        config: Resolved configuration (:meth:`planner.search.grasp_planner.GraspPlanner.resolved_config`).
+        config: Resolved configuration (:meth:`ogcp.planner.search.grasp_planner.GraspPlanner.resolved_config`).
         constraints: Grasp constraints, distinct contacts included.
         jobs: Number of parts (processes), >= 2.
         time_limit: Wall-clock budget [s]; None: unlimited.
@@ -122,7 +122,7 @@ def search_in_parts(
         on_progress: Called about every 0.5 s with the best Q1 of all parts (None before the
             first) and their certified bound [-].
         memory_limit: Most bytes the open states of each part may take
-            (:func:`planner.search.memory.states_budget`); None: unlimited.
+            (:func:`ogcp.planner.search.memory.states_budget`); None: unlimited.
 
     Raises:
         OgcpError: When no grasp satisfies the constraints, or a part failed.
@@ -141,7 +141,14 @@ def search_in_parts(
             root = str(Path(__file__).resolve().parents[2])
             env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [root, os.environ.get("PYTHONPATH")]))}
             for rank in range(1, jobs):
-                command = [sys.executable, "-m", "planner.search.part_child", str(folder), str(rank), str(os.getpid())]
+                command = [
+                    sys.executable,
+                    "-m",
+                    "ogcp.planner.search.part_child",
+                    str(folder),
+                    str(rank),
+                    str(os.getpid()),
+                ]
                 children.append(subprocess.Popen(command, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, env=env))
             own_part = Part(0, board)
             search = Search(contacts, m, config, constraints, False, time_limit, stop, own_part, memory_limit)
@@ -208,7 +215,7 @@ def _report(part: Part, q0: float, on_progress: Callable[[float | None, float], 
 
 def child_main(folder: Path, rank: int) -> bytes:
     """A child's part, run from ``folder`` (the board and the task); returns its pickled outcome
-    or a one-line error (:mod:`planner.search.part_child` writes it to stdout)."""
+    or a one-line error (:mod:`ogcp.planner.search.part_child` writes it to stdout)."""
     try:
         with open(folder / "task.pickle", "rb") as handle:
             task = pickle.load(handle)

@@ -5,7 +5,7 @@ A best-first search at m >= 5 evaluates its first grasps late, and far from the 
 0.207). Moving one finger to any other contact, or two fingers to contacts near theirs, and
 keeping each move that raises Q1, climbs from the best of a few thousand random grasps to
 within a few per cent of the optimum in seconds. The grasp found serves the search three
-ways: states whose bounds it beats are dropped (:attr:`planner.search.best_first.Search.cutoff`),
+ways: states whose bounds it beats are dropped (:attr:`ogcp.planner.search.best_first.Search.cutoff`),
 parts of a search on several cores stop sooner, and a stopped search returns it. It never
 proves anything: optimality stays the search's own certificate.
 
@@ -21,10 +21,10 @@ import time
 import numpy as np
 from numpy.typing import NDArray
 
-from planner.grasp.constraints import Constraint, accepts_many
-from planner.grasp.contact_set import ContactSet
-from planner.grasp.kernel import default_directions, support_table
-from planner.grasp.quality import exact_q1_batch
+from ogcp.planner.grasp.constraints import Constraint, accepts_many
+from ogcp.planner.grasp.contact_set import ContactSet
+from ogcp.planner.grasp.kernel import default_directions, support_table
+from ogcp.planner.grasp.quality import exact_q1_batch
 
 #: Contacts near each contact that a pair move may put a finger on.
 NEIGHBOURS = 12

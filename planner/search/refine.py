@@ -1,10 +1,10 @@
 """A state's f from its heuristic children: branch and bound over upper bounds of their Q1.
 
-The half of :class:`planner.search.best_first.Search` that turns a state's Γh children into its
+The half of :class:`ogcp.planner.search.best_first.Search` that turns a state's Γh children into its
 f (:meth:`ChildRefinement.refine`), and the open-list stages both halves share. A
-child's bound climbs the ladder of :meth:`planner.grasp.subset_quality.GraspQuality.tighten`;
+child's bound climbs the ladder of :meth:`ogcp.planner.grasp.subset_quality.GraspQuality.tighten`;
 where the children are listed by the compiled listing, the loop itself is compiled too
-(:mod:`planner.search.refine_kernel`) and returns to Python only for exact values.
+(:mod:`ogcp.planner.search.refine_kernel`) and returns to Python only for exact values.
 """
 
 from __future__ import annotations
@@ -15,22 +15,22 @@ from typing import TypeGuard, cast
 import numpy as np
 from numpy.typing import NDArray
 
-from planner.grasp.kernel.geometry import CUT_MARGIN
-from planner.grasp.subset_quality import EXACT as EXACT_Q1
-from planner.grasp.subset_quality import MAX_DIRECTIONS
-from planner.infra.tolerance import TOL
-from planner.search.children_kernel import decode_children
-from planner.search.deal import Part
-from planner.search.open_list import OpenList
-from planner.search.refine_kernel import NEEDS_EXACT, NEEDS_ROWS, SETTLED, YIELD, mask_support
-from planner.search.refine_kernel import branch_and_bound as compiled_branch_and_bound
-from planner.search.search_space import SearchSpace, State
-from planner.search.storage import IdPool, WaitingStore
+from ogcp.planner.grasp.kernel.geometry import CUT_MARGIN
+from ogcp.planner.grasp.subset_quality import EXACT as EXACT_Q1
+from ogcp.planner.grasp.subset_quality import MAX_DIRECTIONS
+from ogcp.planner.infra.tolerance import TOL
+from ogcp.planner.search.children_kernel import decode_children
+from ogcp.planner.search.deal import Part
+from ogcp.planner.search.open_list import OpenList
+from ogcp.planner.search.refine_kernel import NEEDS_EXACT, NEEDS_ROWS, SETTLED, YIELD, mask_support
+from ogcp.planner.search.refine_kernel import branch_and_bound as compiled_branch_and_bound
+from ogcp.planner.search.search_space import SearchSpace, State
+from ogcp.planner.search.storage import IdPool, WaitingStore
 
-#: Open-list stages (see :mod:`planner.search.best_first`).
+#: Open-list stages (see :mod:`ogcp.planner.search.best_first`).
 BOUND, EXACT_G, PARTIAL, EXACT = 0, 1, 2, 3
 #: Heuristic children waiting in a state's branch and bound: their keys
-#: (:data:`~planner.search.search_space.ChildKey`), one row each, shape (children, m). Masks
+#: (:data:`~ogcp.planner.search.search_space.ChildKey`), one row each, shape (children, m). Masks
 #: and vectors are looked up again when one is tightened: at m >= 5 millions wait, most
 #: never touched, and 4 bytes per node keep them small.
 Children = NDArray[np.int32]
@@ -79,7 +79,7 @@ def unpack_waiting(
 
 class ChildRefinement(SearchSpace):
     """The branch and bound over a state's Γh children that gives its f (a base of
-    :class:`planner.search.best_first.Search`, which provides the open list and the incumbent).
+    :class:`ogcp.planner.search.best_first.Search`, which provides the open list and the incumbent).
 
     Attributes:
         q0: Q1 of all contacts [-].
@@ -87,7 +87,7 @@ class ChildRefinement(SearchSpace):
         children_can_win: Whether a grasp child may become the incumbent.
         share_normals: Whether the branch and bound lowers the other children's bounds
             along each new facet bound's normal
-            (:func:`planner.search.refine_kernel.share_normal`).
+            (:func:`ogcp.planner.search.refine_kernel.share_normal`).
         keep_settled: Whether a compiled branch and bound that settles a state about to be
             expanded keeps its children's bounds for the expansion (:meth:`settled_successors`).
     """
@@ -112,22 +112,22 @@ class ChildRefinement(SearchSpace):
         ident: int,
         key: float | None = None,
     ) -> None:
-        """Enter a state in the open list (:meth:`planner.search.best_first.Search.push`)."""
+        """Enter a state in the open list (:meth:`ogcp.planner.search.best_first.Search.push`)."""
         raise NotImplementedError
 
     def offer(self, q: float, state: State, parent: State | None, ident: int) -> None:
-        """Offer a grasp's exact Q1 as the incumbent (:meth:`planner.search.best_first.Search.offer`)."""
+        """Offer a grasp's exact Q1 as the incumbent (:meth:`ogcp.planner.search.best_first.Search.offer`)."""
         raise NotImplementedError
 
     def state_of(self, ident: int) -> State:
-        """The state stored under an id (:meth:`planner.search.best_first.Search.state_of`)."""
+        """The state stored under an id (:meth:`ogcp.planner.search.best_first.Search.state_of`)."""
         raise NotImplementedError
 
     def refine(self, open_list: OpenList, state: State, depth: int, lower: float, g: float, ident: int) -> None:
         """Branch and bound over the heuristic children, on ever tighter upper bounds of their Q1.
 
         The children wait with upper bounds, each at a level of
-        :meth:`planner.grasp.subset_quality.GraspQuality.tighten`: the support bound, then
+        :meth:`ogcp.planner.grasp.subset_quality.GraspQuality.tighten`: the support bound, then
         facet bounds, then the exact value. The child of the largest bound is tightened by
         one level until the largest is an exact value: that is the best child, and
         f = q0 - its Q1. Meanwhile f >= q0 - (the largest bound) is a valid lower bound, and the state returns
@@ -285,7 +285,7 @@ class ChildRefinement(SearchSpace):
         levels: NDArray[np.int8],
         source: int,
     ) -> None:
-        """The Python loop's :func:`planner.search.refine_kernel.share_normal`: lower every
+        """The Python loop's :func:`ogcp.planner.search.refine_kernel.share_normal`: lower every
         child's bound but ``source``'s and the exact ones to its support along u (shape (6,)),
         plus the facet bounds' margin; the same values, bit for bit."""
         wrenches = self.contacts.wrenches
@@ -323,12 +323,12 @@ class ChildRefinement(SearchSpace):
         eps: float,
         report_grasps: bool,
     ) -> tuple[int, int, float]:
-        """One compiled run of a state's branch and bound (:func:`planner.search.refine_kernel.branch_and_bound`).
+        """One compiled run of a state's branch and bound (:func:`ogcp.planner.search.refine_kernel.branch_and_bound`).
 
         Args:
             state: The state's nodes, as listed by :meth:`numbered_children`, shape (m,).
             waiting: Its Γh children's upper bounds [-], levels, start directions and numbers
-                (:func:`planner.search.refine.unpack_waiting`); bounds and levels updated in place.
+                (:func:`ogcp.planner.search.refine.unpack_waiting`); bounds and levels updated in place.
             lower: The state's lower bound of f so far [-].
             q0: Q1 of all contacts [-].
             first_key: The open list's first key (inf when empty).

@@ -1,8 +1,8 @@
 """A state's branch and bound over its Γh children, in numba, up to the next exact value.
 
-:meth:`planner.search.refine.ChildRefinement.refine` tightens the child of the largest
+:meth:`ogcp.planner.search.refine.ChildRefinement.refine` tightens the child of the largest
 upper bound, one level at a time (support bound, first facet bound, more facet bounds, exact
-Q1: :meth:`planner.grasp.subset_quality.GraspQuality.tighten`), until the largest is
+Q1: :meth:`ogcp.planner.grasp.subset_quality.GraspQuality.tighten`), until the largest is
 exact or the state must go back to the open list. Most steps are facet bounds of 5-40 µs,
 which Python wrapped in 20 µs of dictionaries, tuples and small numpy calls, hundreds of
 thousands of times a minute. Here one call runs the loop until it needs an exact value,
@@ -20,11 +20,11 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from planner.grasp.kernel.geometry import CUT_MARGIN, FC_TOL
-from planner.grasp.kernel.jit import cached_njit
-from planner.grasp.kernel.ray_bound import union_facet_bound, union_facet_bound_along
-from planner.grasp.subset_quality import EXACT, FACET_STARTS
-from planner.search.children_kernel import decode_child, first_lowest, row_equals
+from ogcp.planner.grasp.kernel.geometry import CUT_MARGIN, FC_TOL
+from ogcp.planner.grasp.kernel.jit import cached_njit
+from ogcp.planner.grasp.kernel.ray_bound import union_facet_bound, union_facet_bound_along
+from ogcp.planner.grasp.subset_quality import EXACT, FACET_STARTS
+from ogcp.planner.search.children_kernel import decode_child, first_lowest, row_equals
 
 #: Outcomes of :func:`branch_and_bound`: the largest bound is exact (the state's f is
 #: known); the state's lower bound of f passed the open list's first key (it goes back);
@@ -152,14 +152,14 @@ def branch_and_bound(
 ) -> tuple[int, int, float]:
     """Tighten the largest of the children's upper bounds until the caller must act.
 
-    The loop of :meth:`planner.search.refine.ChildRefinement.refine`, step for step: the child
+    The loop of :meth:`ogcp.planner.search.refine.ChildRefinement.refine`, step for step: the child
     of the largest bound (the first of equal ones) is tightened by one level, as
-    :meth:`planner.grasp.subset_quality.GraspQuality.tighten` would, with the table in
+    :meth:`ogcp.planner.grasp.subset_quality.GraspQuality.tighten` would, with the table in
     place of the oracle's store of facet bounds.
 
     Args:
         codes: The children's numbers in the listing's product order
-            (:func:`planner.search.children_kernel.decode_child`), shape (k,).
+            (:func:`ogcp.planner.search.children_kernel.decode_child`), shape (k,).
         bounds: Their upper bounds of Q1 [-], shape (k,); updated in place.
         levels: The level of each bound (0 to :data:`EXACT`), shape (k,); updated in place.
         starts: Direction of D of each support bound, where the first facet bound starts,
@@ -357,8 +357,8 @@ def state_bound(
     """An upper bound of Q1 of a state's union: the best of its support bound and its table
     entry, else its first facet bound, which is then remembered ([-], level).
 
-    What :meth:`planner.search.search_space.SearchSpace.g_quality` asks of
-    :meth:`planner.grasp.subset_quality.GraspQuality.tighten` at level 0: a child's bounds
+    What :meth:`ogcp.planner.search.search_space.SearchSpace.g_quality` asks of
+    :meth:`ogcp.planner.grasp.subset_quality.GraspQuality.tighten` at level 0: a child's bounds
     from its parent's branch and bound serve its g at no cost.
 
     Args:

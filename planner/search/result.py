@@ -1,6 +1,6 @@
 """Search results: the grasp, its certificate, statistics and the search tree.
 
-Their JSON form is the ``ogcp.plan/1`` record of :mod:`planner.records.plan`.
+Their JSON form is the ``ogcp.plan/1`` record of :mod:`ogcp.planner.records.plan`.
 """
 
 from __future__ import annotations
@@ -13,13 +13,13 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from planner.records.plan import check_result, plan_record
+from ogcp.planner.records.plan import check_result, plan_record
 
 #: What a search result certifies. ``optimal``: no grasp beats it (bound = Q1);
 #: ``bounded``: WA* finished, its cost within 1 + eps of the optimum's; ``approximate``:
 #: optimal over the symmetry-reduced space only; ``stopped``: the time limit ran out, the
 #: best grasp found so far is returned with the certified bound; ``memory``: the same, stopped
-#: at its memory limit (:mod:`planner.search.memory`); ``interrupted``: the same, stopped by a
+#: at its memory limit (:mod:`ogcp.planner.search.memory`); ``interrupted``: the same, stopped by a
 #: request (Ctrl-C in the CLI).
 SEARCH_STATUSES = ("optimal", "bounded", "approximate", "stopped", "memory", "interrupted")
 #: The statuses of a search that did not finish.
@@ -56,9 +56,9 @@ class SearchStats:
         dropped: Open-list entries not kept because their lower bound of f showed that no
             grasp below the state beats the best grasp found (memory only: A* would never
             pop them before its goal).
-        local_search_evaluations: Grasps scored by local search (:mod:`planner.search.polish`).
+        local_search_evaluations: Grasps scored by local search (:mod:`ogcp.planner.search.polish`).
         local_search_seconds: Wall-clock time local search took, part of ``wall_seconds`` [s].
-        forgotten: Open states forgotten at the memory limit (:mod:`planner.search.memory`).
+        forgotten: Open states forgotten at the memory limit (:mod:`ogcp.planner.search.memory`).
     """
 
     created: int

@@ -1,6 +1,6 @@
 """The search space of one run: super-contact states, their validity, bounds and heuristic children.
 
-See :mod:`planner.search.grasp_planner` for the design; :mod:`planner.search.best_first` runs the search on it.
+See :mod:`ogcp.planner.search.grasp_planner` for the design; :mod:`ogcp.planner.search.best_first` runs the search on it.
 """
 
 from __future__ import annotations
@@ -12,14 +12,14 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from planner.grasp.constraints import Constraint, DistinctContacts
-from planner.grasp.contact_set import ContactSet
-from planner.grasp.subset_quality import GraspQuality, PackedMask
-from planner.grasp.support_bound import Vector
-from planner.search.children_kernel import shared_tree_children, stale_children, support_bounds
-from planner.search.partitions import Indices, PartitionTree, make_partitioner
-from planner.search.refine_kernel import ChildBounds, state_bound
-from planner.search.symmetry import SymmetryFilter
+from ogcp.planner.grasp.constraints import Constraint, DistinctContacts
+from ogcp.planner.grasp.contact_set import ContactSet
+from ogcp.planner.grasp.subset_quality import GraspQuality, PackedMask
+from ogcp.planner.grasp.support_bound import Vector
+from ogcp.planner.search.children_kernel import shared_tree_children, stale_children, support_bounds
+from ogcp.planner.search.partitions import Indices, PartitionTree, make_partitioner
+from ogcp.planner.search.refine_kernel import ChildBounds, state_bound
+from ogcp.planner.search.symmetry import SymmetryFilter
 
 State = tuple[int, ...]
 #: A heuristic child: its state, or ``node * b_h + part`` per super-contact when Γh has
@@ -33,7 +33,7 @@ class SearchSpace:
     Args:
         contacts: The contact set C.
         m: Number of fingers.
-        config: Resolved configuration (:meth:`planner.search.grasp_planner.GraspPlanner.resolved_config`).
+        config: Resolved configuration (:meth:`ogcp.planner.search.grasp_planner.GraspPlanner.resolved_config`).
         constraints: Grasp constraints, distinct contacts included.
     """
 
@@ -290,7 +290,7 @@ class SearchSpace:
         that gives each bound (-1: not known) and whether each is a grasp state.
 
         The same children in the same order as :meth:`heuristic_children`; listed by
-        :func:`planner.search.children_kernel.shared_tree_children` where it applies.
+        :func:`ogcp.planner.search.children_kernel.shared_tree_children` where it applies.
         """
         if not self._compiled_children:
             found = self.heuristic_children(state)
@@ -322,7 +322,7 @@ class SearchSpace:
     def _listing(
         self, state: State
     ) -> tuple[NDArray[np.int32], NDArray[np.float64], NDArray[np.int32], NDArray[np.bool_], int, NDArray[np.int64]]:
-        """:func:`planner.search.children_kernel.shared_tree_children` of a state."""
+        """:func:`ogcp.planner.search.children_kernel.shared_tree_children` of a state."""
         nodes = np.array(state, dtype=np.int64)
         count = self.oracle.bounds.count
         listing = shared_tree_children(

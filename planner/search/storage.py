@@ -1,8 +1,8 @@
 """What a search holds by state id: recycled ids, and the waiting children of branches and bounds.
 
-Both are counted for :mod:`planner.search.memory`: :class:`WaitingStore` the bytes of the children
+Both are counted for :mod:`ogcp.planner.search.memory`: :class:`WaitingStore` the bytes of the children
 waiting in the branch and bound of each state that has one under way
-(:mod:`planner.search.refine`), :class:`IdPool` the rows of states in use, which it keeps from
+(:mod:`ogcp.planner.search.refine`), :class:`IdPool` the rows of states in use, which it keeps from
 growing with every state ever created by handing the ids of dead states out again.
 """
 
@@ -14,10 +14,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from planner.infra.arrays import grow_rows
+from ogcp.planner.infra.arrays import grow_rows
 
 #: A state's waiting children: one packed record (the compiled branch and bound) or a tuple of
-#: arrays (the Python one); see :data:`planner.search.refine.Waiting`.
+#: arrays (the Python one); see :data:`ogcp.planner.search.refine.Waiting`.
 Waiting = NDArray[np.uint8] | tuple[NDArray[Any], ...]
 #: [bytes] What a waiting record costs beside its arrays' data, per array: its object and a
 #: share of the dictionary slot (200 k records of one 768-byte array each took 228 bytes a
@@ -26,7 +26,7 @@ WAITING_OVERHEAD = 120
 
 
 def waiting_bytes(waiting: Waiting) -> int:
-    """Bytes a state's waiting children hold (either form of :data:`planner.search.refine.Waiting`)."""
+    """Bytes a state's waiting children hold (either form of :data:`ogcp.planner.search.refine.Waiting`)."""
     if isinstance(waiting, np.ndarray):
         return waiting.nbytes + 2 * WAITING_OVERHEAD
     return sum(a.nbytes for a in waiting) + (len(waiting) + 1) * WAITING_OVERHEAD

@@ -9,7 +9,7 @@ the first one generated (the class representative) is kept.
 
 This is an *approximation*: two states in one cell need not have equal quality, so the
 search may miss the optimum. Results report that symmetry removal was on. Removing
-finger-order permutations (the default in :mod:`planner.search.grasp_planner`) is exact and separate.
+finger-order permutations (the default in :mod:`ogcp.planner.search.grasp_planner`) is exact and separate.
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from planner.grasp.contact_set import ContactSet
+from ogcp.planner.grasp.contact_set import ContactSet
 
 Indices = NDArray[np.intp]
 

@@ -10,20 +10,26 @@ import sys
 import types
 from typing import TYPE_CHECKING, Any
 
-from planner.infra.lazy import lazy_exports
+from ogcp.planner.infra.lazy import lazy_exports
 
 if TYPE_CHECKING:
-    from sim_eval.decomposition.decompose import CacheWriteWarning, Decomposition, cache_key, coacd_version, decompose
-    from sim_eval.decomposition.settings import DecompositionSettings
+    from ogcp.sim_eval.decomposition.decompose import (
+        CacheWriteWarning,
+        Decomposition,
+        cache_key,
+        coacd_version,
+        decompose,
+    )
+    from ogcp.sim_eval.decomposition.settings import DecompositionSettings
 
 #: Public name -> the module that defines it.
 _EXPORTS = {
-    "CacheWriteWarning": "sim_eval.decomposition.decompose",
-    "Decomposition": "sim_eval.decomposition.decompose",
-    "DecompositionSettings": "sim_eval.decomposition.settings",
-    "cache_key": "sim_eval.decomposition.decompose",
-    "coacd_version": "sim_eval.decomposition.decompose",
-    "decompose": "sim_eval.decomposition.decompose",
+    "CacheWriteWarning": "ogcp.sim_eval.decomposition.decompose",
+    "Decomposition": "ogcp.sim_eval.decomposition.decompose",
+    "DecompositionSettings": "ogcp.sim_eval.decomposition.settings",
+    "cache_key": "ogcp.sim_eval.decomposition.decompose",
+    "coacd_version": "ogcp.sim_eval.decomposition.decompose",
+    "decompose": "ogcp.sim_eval.decomposition.decompose",
 }
 
 __all__ = [

@@ -4,7 +4,7 @@ The child runs :func:`_child_main` from its source with ``python -c``: importing
 would load the whole package (MuJoCo included) just to call CoACD. Arrays travel through
 ``.npz`` files in a temporary folder; CoACD's log goes to a file the parent reads.
 
-The child ends with its parent, even one killed by SIGKILL (:mod:`planner.infra.lifetime`:
+The child ends with its parent, even one killed by SIGKILL (:mod:`ogcp.planner.infra.lifetime`:
 ``PR_SET_PDEATHSIG`` on Linux, where the starting thread waits for the child, and a watchdog
 thread everywhere), and the folder of a killed run is removed by a later one.
 """
@@ -25,8 +25,8 @@ import numpy as np
 from numpy.typing import NDArray
 from tqdm import tqdm
 
-from planner.infra.errors import OgcpError
-from planner.infra.lifetime import owned_tempdir, set_parent_death_signal, watch_parent
+from ogcp.planner.infra.errors import OgcpError
+from ogcp.planner.infra.lifetime import owned_tempdir, set_parent_death_signal, watch_parent
 
 _POLL_S = 0.2  # [s] how often the parent checks on the child
 #: Prefix of the temporary folders; a folder is ``<prefix><owner pid>-<random>``.

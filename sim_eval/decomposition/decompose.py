@@ -3,7 +3,7 @@
 :func:`decompose` splits a mesh into convex parts with CoACD (or takes its convex hull) and
 caches the result by content: the key is the sha256 of the mesh arrays, the settings (except
 the timeout) and the CoACD version. An entry is a folder ``<key>/`` holding ``parts.npz``,
-``meta.json`` and CoACD's log, stored and verified by :mod:`planner.infra.cache`: readers see a
+``meta.json`` and CoACD's log, stored and verified by :mod:`ogcp.planner.infra.cache`: readers see a
 whole entry or none, a damaged entry is reported, discarded and recomputed, and when two
 processes write the same entry the first one wins and the other uses it.
 
@@ -17,7 +17,7 @@ check) remeshes them into a closed manifold first; preprocess ``off`` needs a cl
 consistently oriented mesh and is refused otherwise. The remesh of an open surface is a thin
 closed shell around it, not a solid (measured: a box missing one triangle became 26 parts
 holding 31 % of its volume): contacts still meet a surface near the mesh, but the object's
-mass properties must not come from the parts (see :func:`sim_eval.body.object_inertia`).
+mass properties must not come from the parts (see :func:`ogcp.sim_eval.body.object_inertia`).
 """
 
 from __future__ import annotations
@@ -41,11 +41,11 @@ import trimesh
 from numpy.typing import NDArray
 from scipy.spatial import ConvexHull
 
-from planner.infra.cache import cache_dir, read_entry, write_entry
-from planner.infra.errors import OgcpError
-from sim_eval.body import Part, hull_part, is_closed_manifold, object_inertia
-from sim_eval.decomposition.coacd_child import run_coacd_child
-from sim_eval.decomposition.settings import DecompositionSettings
+from ogcp.planner.infra.cache import cache_dir, read_entry, write_entry
+from ogcp.planner.infra.errors import OgcpError
+from ogcp.sim_eval.body import Part, hull_part, is_closed_manifold, object_inertia
+from ogcp.sim_eval.decomposition.coacd_child import run_coacd_child
+from ogcp.sim_eval.decomposition.settings import DecompositionSettings
 
 __all__ = [
     "CacheWriteWarning",
@@ -54,7 +54,7 @@ __all__ = [
     "cache_key",
     "decompose",
     "mesh_sha256",
-    "object_inertia",  # re-exported from sim_eval.body for the evaluator
+    "object_inertia",  # re-exported from ogcp.sim_eval.body for the evaluator
 ]
 
 SCHEMA = "ogcp.decomposition/1"
@@ -253,7 +253,7 @@ def decompose(
     Args:
         mesh: Object mesh [m] (not modified).
         settings: Decomposition settings; default :class:`DecompositionSettings()`.
-        cache: Cache folder; default ``planner.infra.cache.cache_dir("decompositions")``.
+        cache: Cache folder; default ``ogcp.planner.infra.cache.cache_dir("decompositions")``.
         progress: Show an elapsed-time indicator on stderr while CoACD runs.
         name: Object name for messages; default the mesh's ``metadata["name"]`` or its hash.
 

@@ -8,7 +8,7 @@ import sys
 from dataclasses import asdict, dataclass, fields
 from typing import Any
 
-from planner.infra.errors import OgcpError, choice_error
+from ogcp.planner.infra.errors import OgcpError, choice_error
 
 __all__ = ["METHODS", "PREPROCESS_MODES", "DecompositionSettings"]
 

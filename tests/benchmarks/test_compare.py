@@ -11,11 +11,11 @@ from pathlib import Path
 
 import pytest
 
-from benchmarks import cli
-from benchmarks.compare import Tolerances, compare_dirs
-from benchmarks.suite.parse import parse_suite
-from benchmarks.suite.runner import SuiteRunner
-from planner.infra import OgcpError
+from ogcp.benchmarks import cli
+from ogcp.benchmarks.compare import Tolerances, compare_dirs
+from ogcp.benchmarks.suite.parse import parse_suite
+from ogcp.benchmarks.suite.runner import SuiteRunner
+from ogcp.planner.infra import OgcpError
 
 SUITE = """
 schema_version = 1

@@ -9,11 +9,11 @@ from pathlib import Path
 
 import pytest
 
-from benchmarks import cli
-from benchmarks.export import CELL_COLUMNS, DIRECTION_COLUMNS, GRASP_COLUMNS, export_run
-from benchmarks.suite.record import CellError, CellRecord
-from benchmarks.suite.store import ResultStore
-from planner.infra import OgcpError
+from ogcp.benchmarks import cli
+from ogcp.benchmarks.export import CELL_COLUMNS, DIRECTION_COLUMNS, GRASP_COLUMNS, export_run
+from ogcp.benchmarks.suite.record import CellError, CellRecord
+from ogcp.benchmarks.suite.store import ResultStore
+from ogcp.planner.infra import OgcpError
 
 PARAMS = {"object": "box", "contacts": 12, "contact_seed": 0, "m": 3, "mu": 0.5, "cone_edges": 8}
 

@@ -1,4 +1,4 @@
-"""The paper-scale timing study (benchmarks.studies.paper_scale): rows, resumption, stopped searches."""
+"""The paper-scale timing study (ogcp.benchmarks.studies.paper_scale): rows, resumption, stopped searches."""
 
 from __future__ import annotations
 
@@ -8,8 +8,8 @@ import types
 
 import pytest
 
-from benchmarks.studies import paper_scale
-from planner.search import best_first as search_run
+from ogcp.benchmarks.studies import paper_scale
+from ogcp.planner.search import best_first as search_run
 
 
 def _rows(out):
@@ -53,7 +53,7 @@ def test_a_stopped_search_is_a_row_with_its_gap(tmp_path, monkeypatch):
 
 def test_a_search_past_its_memory_limit_is_a_row_with_its_gap(tmp_path, monkeypatch):
     """The process allowance shrunk so that a few kilobytes of open states reach the limit."""
-    from planner.search import memory
+    from ogcp.planner.search import memory
 
     monkeypatch.setattr(memory, "PROCESS_BYTES", 2**30 - 8 * 1024)
     monkeypatch.setattr(memory, "MIN_STATES_BYTES", 1024)

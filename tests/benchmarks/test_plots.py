@@ -16,11 +16,11 @@ import pytest
 from matplotlib.collections import LineCollection
 from matplotlib.figure import Figure
 
-from benchmarks import cli, plots
-from benchmarks.plots.data import SkipFigure, load_run
-from benchmarks.suite.parse import parse_suite
-from benchmarks.suite.runner import SuiteRunner
-from planner.infra import OgcpError
+from ogcp.benchmarks import cli, plots
+from ogcp.benchmarks.plots.data import SkipFigure, load_run
+from ogcp.benchmarks.suite.parse import parse_suite
+from ogcp.benchmarks.suite.runner import SuiteRunner
+from ogcp.planner.infra import OgcpError
 
 matplotlib.use("Agg")
 ROOT = Path(__file__).resolve().parents[2]
@@ -652,7 +652,7 @@ def test_plot_command_lists_the_files_it_wrote(tmp_path, monkeypatch):
 
 def test_core_packages_never_import_matplotlib():
     code = (
-        "import sys, planner, sim_eval, benchmarks.plots, benchmarks.cli.app as cli; cli.build_parser();"
+        "import sys, planner, sim_eval, ogcp.benchmarks.plots, ogcp.benchmarks.cli.app as cli; cli.build_parser();"
         "assert 'matplotlib' not in sys.modules, 'matplotlib imported'"
     )
     subprocess.run([sys.executable, "-c", code], check=True, cwd=ROOT, timeout=120)

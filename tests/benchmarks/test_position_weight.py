@@ -1,11 +1,11 @@
-"""The position-weight study (benchmarks.studies.position_weight): its inputs and one small case."""
+"""The position-weight study (ogcp.benchmarks.studies.position_weight): its inputs and one small case."""
 
 from __future__ import annotations
 
 import pytest
 
-from benchmarks.studies import position_weight
-from planner.infra import OgcpError
+from ogcp.benchmarks.studies import position_weight
+from ogcp.planner.infra import OgcpError
 
 
 def test_cases_and_settings_are_parsed_and_checked():

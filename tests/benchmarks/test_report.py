@@ -17,12 +17,12 @@ from pathlib import Path
 import pytest
 import trimesh
 
-from benchmarks.cli.app import main
-from benchmarks.report import write_report, write_view
-from benchmarks.report.scene import coarsen
-from benchmarks.suite.parse import parse_suite
-from benchmarks.suite.runner import SuiteRunner
-from benchmarks.suite.store import RESULTS
+from ogcp.benchmarks.cli.app import main
+from ogcp.benchmarks.report import write_report, write_view
+from ogcp.benchmarks.report.scene import coarsen
+from ogcp.benchmarks.suite.parse import parse_suite
+from ogcp.benchmarks.suite.runner import SuiteRunner
+from ogcp.benchmarks.suite.store import RESULTS
 
 SUITE = """schema_version = 1
 name = "tiny"

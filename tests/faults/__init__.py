@@ -5,7 +5,7 @@ from __future__ import annotations
 import contextlib
 import io
 
-from benchmarks.cli import main
+from ogcp.benchmarks.cli import main
 
 
 def run_cli(argv: list[str]) -> tuple[int, str, str]:

@@ -24,26 +24,26 @@ import numpy as np
 import pytest
 import trimesh
 
-from benchmarks.cli import main
-from planner import builtin_mesh, resolve_object
-from planner.baselines import ExhaustiveSearch
-from planner.baselines.combinations import combinations_range
-from planner.baselines.es_checkpoint import CHUNK_SCHEMA, CheckpointWarning, _rank
-from planner.grasp import sample_contacts
-from planner.grasp.constraints import MaxFingerSpread
-from planner.grasp.contact_set import ContactSet
-from planner.grasp.kernel.jit import HEADER, cached_njit
-from planner.hands import reachability
-from planner.hands.reachability import SDHReachability
-from planner.infra.cache import ENTRY_MANIFEST, CacheEntryWarning
-from planner.infra.errors import OgcpError
-from planner.objects import fetch as assets
-from sim_eval.decomposition import DecompositionSettings, decompose
+from ogcp.benchmarks.cli import main
+from ogcp.planner import builtin_mesh, resolve_object
+from ogcp.planner.baselines import ExhaustiveSearch
+from ogcp.planner.baselines.combinations import combinations_range
+from ogcp.planner.baselines.es_checkpoint import CHUNK_SCHEMA, CheckpointWarning, _rank
+from ogcp.planner.grasp import sample_contacts
+from ogcp.planner.grasp.constraints import MaxFingerSpread
+from ogcp.planner.grasp.contact_set import ContactSet
+from ogcp.planner.grasp.kernel.jit import HEADER, cached_njit
+from ogcp.planner.hands import reachability
+from ogcp.planner.hands.reachability import SDHReachability
+from ogcp.planner.infra.cache import ENTRY_MANIFEST, CacheEntryWarning
+from ogcp.planner.infra.errors import OgcpError
+from ogcp.planner.objects import fetch as assets
+from ogcp.sim_eval.decomposition import DecompositionSettings, decompose
 from tests.planner.objects.test_fetch import cache, fake_pip, meshes  # noqa: F401 - the fetch tests' fixtures
 
 CHUNK = 60
 # The module, not the function the package exports under the same name.
-dec = importlib.import_module("sim_eval.decomposition.decompose")
+dec = importlib.import_module("ogcp.sim_eval.decomposition.decompose")
 
 
 def _one_line(exc: pytest.ExceptionInfo[BaseException], *parts: str) -> str:

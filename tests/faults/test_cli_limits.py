@@ -18,15 +18,15 @@ from typing import Any
 
 import pytest
 
-from benchmarks.cli import build_parser
-from benchmarks.cli.simulate import settings_file, sim_summary
-from planner import builtin_mesh
-from planner.config.methods import AStarConfig, HFTSConfig
-from planner.config.options import ConfigError
-from planner.grasp import defaults
-from planner.grasp.contact_set import ContactSet, sample_contacts
-from planner.infra.errors import OgcpError
-from sim_eval.settings import SimSettings
+from ogcp.benchmarks.cli import build_parser
+from ogcp.benchmarks.cli.simulate import settings_file, sim_summary
+from ogcp.planner import builtin_mesh
+from ogcp.planner.config.methods import AStarConfig, HFTSConfig
+from ogcp.planner.config.options import ConfigError
+from ogcp.planner.grasp import defaults
+from ogcp.planner.grasp.contact_set import ContactSet, sample_contacts
+from ogcp.planner.infra.errors import OgcpError
+from ogcp.sim_eval.settings import SimSettings
 from tests.faults import run_cli
 
 _run = run_cli
@@ -325,7 +325,7 @@ def test_an_unwritable_mesh_cache_is_refused_before_the_download(tmp_path, monke
     def fetch(*_: Any, **__: Any) -> None:
         raise AssertionError("downloaded although the cache cannot be written")
 
-    monkeypatch.setattr("planner.objects.fetch.fetch_objects", fetch)
+    monkeypatch.setattr("ogcp.planner.objects.fetch.fetch_objects", fetch)
     blocker = tmp_path / "file"
     blocker.write_text("")
     err = _one_error(["assets", "fetch", "bunny", "--cache", str(blocker)])
@@ -337,7 +337,7 @@ def test_an_unwritable_mesh_cache_is_refused_before_the_download(tmp_path, monke
 )
 def test_coacd_search_settings_have_upper_limits(name, value):
     """A CoACD search that would run for hours is refused up front, naming the range."""
-    from sim_eval.decomposition.settings import DecompositionSettings
+    from ogcp.sim_eval.decomposition.settings import DecompositionSettings
 
     with pytest.raises(OgcpError, match=f"{name}.*from 1 to"):
         DecompositionSettings(**{name: value})

@@ -23,11 +23,11 @@ from typing import Any
 
 import pytest
 
-from benchmarks.cli import main
-from benchmarks.suite import store
-from benchmarks.suite.parse import load_suite
-from benchmarks.suite.runner import SuiteRunner
-from planner.infra.errors import OgcpError
+from ogcp.benchmarks.cli import main
+from ogcp.benchmarks.suite import store
+from ogcp.benchmarks.suite.parse import load_suite
+from ogcp.benchmarks.suite.runner import SuiteRunner
+from ogcp.planner.infra.errors import OgcpError
 
 ROOT = Path(__file__).resolve().parents[2]
 SUITE = """
@@ -77,7 +77,7 @@ def _ogcp(*argv: str, limit: int | None = None) -> subprocess.CompletedProcess[s
             resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
 
     return subprocess.run(
-        [sys.executable, "-m", "benchmarks.cli", *argv],
+        [sys.executable, "-m", "ogcp.benchmarks.cli", *argv],
         cwd=ROOT,
         capture_output=True,
         text=True,

@@ -14,13 +14,13 @@ from typing import Any
 import numpy as np
 import pytest
 
-from planner import builtin_mesh
-from planner.baselines import HFTS, ExhaustiveSearch
-from planner.grasp import sample_contacts
-from planner.grasp.contact_set import ContactSet
-from planner.infra.errors import OgcpError
-from planner.records.plan import RESULT_RTOL, check_result, contact_set_record, plan_record
-from planner.search import GraspPlanner
+from ogcp.planner import builtin_mesh
+from ogcp.planner.baselines import HFTS, ExhaustiveSearch
+from ogcp.planner.grasp import sample_contacts
+from ogcp.planner.grasp.contact_set import ContactSet
+from ogcp.planner.infra.errors import OgcpError
+from ogcp.planner.records.plan import RESULT_RTOL, check_result, contact_set_record, plan_record
+from ogcp.planner.search import GraspPlanner
 
 
 @pytest.fixture(scope="module")

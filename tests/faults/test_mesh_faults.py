@@ -17,9 +17,9 @@ import numpy as np
 import pytest
 import trimesh
 
-from planner.infra.errors import OgcpError
-from planner.objects import BUILTIN_OBJECTS, builtin_mesh, load_mesh
-from planner.objects.repair import MeshOrientationWarning
+from ogcp.planner.infra.errors import OgcpError
+from ogcp.planner.objects import BUILTIN_OBJECTS, builtin_mesh, load_mesh
+from ogcp.planner.objects.repair import MeshOrientationWarning
 
 ICO = trimesh.creation.icosphere(subdivisions=2)  # 162 vertices, 320 faces
 BOX = trimesh.creation.box(extents=(0.1, 0.1, 0.1))  # 8 vertices, 12 faces
@@ -245,7 +245,17 @@ def test_fetched_raw_meshes_load_unchanged(raw, meta):
 def test_cli_refuses_a_truncated_off_in_one_line(tmp_path):
     path = _write(tmp_path / "mesh.off", "\n".join(_off_lines()[:42]) + "\n")
     run = subprocess.run(
-        [sys.executable, "-m", "benchmarks.cli", "contacts", str(path), "-n", "20", "-o", str(tmp_path / "c.json")],
+        [
+            sys.executable,
+            "-m",
+            "ogcp.benchmarks.cli",
+            "contacts",
+            str(path),
+            "-n",
+            "20",
+            "-o",
+            str(tmp_path / "c.json"),
+        ],
         capture_output=True,
         text=True,
         timeout=300,

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import pytest
 
-from planner.infra.lifetime import owned_tempdir, remove_stale_tempdirs
+from ogcp.planner.infra.lifetime import owned_tempdir, remove_stale_tempdirs
 
 pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads the process tree from /proc")
 
@@ -151,7 +151,17 @@ def parents(tmp_path: Path) -> Iterator[Parents]:
 def test_a_killed_suite_leaves_no_worker(tmp_path: Path, parents: Parents, sig: signal.Signals) -> None:
     suite = tmp_path / "slow.toml"
     suite.write_text(SLOW_SUITE)
-    argv = [sys.executable, "-m", "benchmarks.cli", "suite", str(suite), "--jobs", "2", "--out", str(tmp_path / "out")]
+    argv = [
+        sys.executable,
+        "-m",
+        "ogcp.benchmarks.cli",
+        "suite",
+        str(suite),
+        "--jobs",
+        "2",
+        "--out",
+        str(tmp_path / "out"),
+    ]
     proc = parents.spawn(argv)
 
     def started_workers() -> bool:
@@ -175,7 +185,7 @@ NAPS = """
 import sys, time
 from pathlib import Path
 
-import planner.infra.parallel as parallel
+import ogcp.planner.infra.parallel as parallel
 
 if sys.argv[1] == "tasks-only":  # the guard a task starts, alone (joblib < 1.5)
     parallel._has_initializer = lambda version: False
@@ -218,7 +228,7 @@ def test_a_killed_decomposition_leaves_no_coacd_child(tmp_path: Path, parents: P
     script = textwrap.dedent(
         """
         import trimesh
-        from sim_eval.decomposition.coacd_child import run_coacd_child
+        from ogcp.sim_eval.decomposition.coacd_child import run_coacd_child
 
         mesh = trimesh.creation.annulus(r_min=0.05, r_max=0.1, height=0.05, sections=64)
         run_coacd_child(mesh.vertices, mesh.faces, {"threshold": 0.01}, 300.0, "ring", False)
@@ -240,7 +250,7 @@ def test_a_killed_decomposition_leaves_no_coacd_child(tmp_path: Path, parents: P
 GUARDED_CHILD = """
 import os, sys, time
 from pathlib import Path
-from planner.infra import lifetime
+from ogcp.planner.infra import lifetime
 
 if sys.argv[1] == "watchdog":
     lifetime.watch_parent(os.getppid())

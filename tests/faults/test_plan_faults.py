@@ -16,13 +16,13 @@ from typing import Any
 
 import pytest
 
-from planner.grasp.contact_set import sample_contacts
-from planner.grasp.reach import default_tip_radius
-from planner.infra.errors import OgcpError
-from planner.objects import resolve_object
-from planner.records.plan import contact_set_record
-from planner.search.grasp_planner import GraspPlanner
-from sim_eval.plan_input import plan_input
+from ogcp.planner.grasp.contact_set import sample_contacts
+from ogcp.planner.grasp.reach import default_tip_radius
+from ogcp.planner.infra.errors import OgcpError
+from ogcp.planner.objects import resolve_object
+from ogcp.planner.records.plan import contact_set_record
+from ogcp.planner.search.grasp_planner import GraspPlanner
+from ogcp.sim_eval.plan_input import plan_input
 
 REFUSAL = "the plan does not match its problem: "
 Edit = Callable[[dict[str, Any]], None]
@@ -30,7 +30,7 @@ Edit = Callable[[dict[str, Any]], None]
 
 def _cli(*argv: str) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
-        [sys.executable, "-m", "benchmarks.cli", *argv], capture_output=True, text=True, timeout=300, check=False
+        [sys.executable, "-m", "ogcp.benchmarks.cli", *argv], capture_output=True, text=True, timeout=300, check=False
     )
 
 
@@ -175,7 +175,7 @@ def test_cli_evaluate_refuses_an_edited_plan_in_one_line(box_plan, tmp_path):
 @pytest.mark.parametrize("max_grasps", [0, -1, 1.5, True])
 def test_evaluate_plan_refuses_a_grasp_count_below_one(max_grasps):
     """The API refuses what the CLI's --max-grasps refuses: 0 grasps would be a run that does nothing."""
-    from sim_eval.evaluate import evaluate_plan
+    from ogcp.sim_eval.evaluate import evaluate_plan
 
     with pytest.raises(OgcpError, match="max_grasps must be an integer >= 1"):
         evaluate_plan({}, max_grasps=max_grasps)

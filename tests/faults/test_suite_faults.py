@@ -14,9 +14,9 @@ from pathlib import Path
 
 import pytest
 
-from benchmarks.suite.parse import builtin_suites, load_suite, parse_suite
-from planner.grasp import defaults
-from planner.infra.errors import OgcpError
+from ogcp.benchmarks.suite.parse import builtin_suites, load_suite, parse_suite
+from ogcp.planner.grasp import defaults
+from ogcp.planner.infra.errors import OgcpError
 from tests.faults import run_cli
 
 HEAD = 'schema_version = 1\nobjects = ["box"]\ncontacts = 16\n'

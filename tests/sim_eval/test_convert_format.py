@@ -10,11 +10,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from benchmarks.studies.convert_dexnet import close_jaws, convert, main
-from planner.infra import OgcpError
-from planner.objects import resolve_object
-from planner.records.grasps import load_grasps
-from sim_eval import evaluate_grasps
+from ogcp.benchmarks.studies.convert_dexnet import close_jaws, convert, main
+from ogcp.planner.infra import OgcpError
+from ogcp.planner.objects import resolve_object
+from ogcp.planner.records.grasps import load_grasps
+from ogcp.sim_eval import evaluate_grasps
 
 SETTINGS = {"directions": 0, "threads": 1}
 HULL = {"method": "convex_hull"}

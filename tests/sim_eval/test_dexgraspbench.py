@@ -9,15 +9,15 @@ import numpy as np
 import pytest
 import trimesh
 
-from planner.grasp import ContactSet
-from planner.infra import OgcpError
-from sim_eval import Decomposition, DecompositionSettings, GraspEvaluator, SimSettings
-from sim_eval import dexgraspbench as dg
-from sim_eval.body import object_inertia
-from sim_eval.metrics import binned_roc, roc_auc
-from sim_eval.protocol import Settled, settle
-from sim_eval.result import GraspSimResult
-from sim_eval.scene import build_scene
+from ogcp.planner.grasp import ContactSet
+from ogcp.planner.infra import OgcpError
+from ogcp.sim_eval import Decomposition, DecompositionSettings, GraspEvaluator, SimSettings
+from ogcp.sim_eval import dexgraspbench as dg
+from ogcp.sim_eval.body import object_inertia
+from ogcp.sim_eval.metrics import binned_roc, roc_auc
+from ogcp.sim_eval.protocol import Settled, settle
+from ogcp.sim_eval.result import GraspSimResult
+from ogcp.sim_eval.scene import build_scene
 
 HULL = DecompositionSettings(method="convex_hull")
 BOX = trimesh.creation.box([0.1, 0.08, 0.06])

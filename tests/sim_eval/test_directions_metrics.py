@@ -1,4 +1,4 @@
-"""Disturbance directions (sim_eval.directions) and agreement metrics (sim_eval.metrics)."""
+"""Disturbance directions (ogcp.sim_eval.directions) and agreement metrics (ogcp.sim_eval.metrics)."""
 
 from __future__ import annotations
 
@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 from scipy.optimize import linprog
 
-from planner.grasp import contact_wrenches, q1_certificate
-from planner.infra import OgcpError
-from sim_eval.directions import (
+from ogcp.planner.grasp import contact_wrenches, q1_certificate
+from ogcp.planner.infra import OgcpError
+from ogcp.sim_eval.directions import (
     DirectionSet,
     axis_directions,
     axis_labels,
@@ -22,7 +22,7 @@ from sim_eval.directions import (
     sphere_directions,
     weakest_q1_direction,
 )
-from sim_eval.metrics import (
+from ogcp.sim_eval.metrics import (
     below_floor,
     fidelity,
     kendall,

@@ -16,13 +16,13 @@ import numpy as np
 import pytest
 import trimesh
 
-from planner import GraspPlanner, builtin_mesh, sample_contacts
-from planner.infra import OgcpError
-from planner.records.grasps import GRASPS_SCHEMA, ExternalGrasps, is_grasps_file, load_grasps, save_grasps
-from planner.records.plan import contact_set_record
-from sim_eval import evaluate_grasps, evaluate_plan, export_grasps
-from sim_eval.external import OffSurfaceWarning, external_input
-from sim_eval.result import SimRecord
+from ogcp.planner import GraspPlanner, builtin_mesh, sample_contacts
+from ogcp.planner.infra import OgcpError
+from ogcp.planner.records.grasps import GRASPS_SCHEMA, ExternalGrasps, is_grasps_file, load_grasps, save_grasps
+from ogcp.planner.records.plan import contact_set_record
+from ogcp.sim_eval import evaluate_grasps, evaluate_plan, export_grasps
+from ogcp.sim_eval.external import OffSurfaceWarning, external_input
+from ogcp.sim_eval.result import SimRecord
 
 SETTINGS = {"directions": 0, "threads": 1}
 HULL = {"method": "convex_hull"}
@@ -228,8 +228,8 @@ def test_the_sim_record_carries_label_method_score_q1_and_distances(round_trip):
 
 
 def test_the_cli_handler_writes_the_record_and_prints_the_grasps(round_trip, tmp_path, capsys):
-    from benchmarks.cli.external import is_external, run_external
-    from sim_eval import SimSettings
+    from ogcp.benchmarks.cli.external import is_external, run_external
+    from ogcp.sim_eval import SimSettings
 
     _, exported, _, external = round_trip
     assert is_external(exported.path) and not is_external(tmp_path / "none.json")
@@ -246,7 +246,7 @@ def test_the_cli_handler_writes_the_record_and_prints_the_grasps(round_trip, tmp
 
 
 def _hull():
-    from sim_eval import DecompositionSettings
+    from ogcp.sim_eval import DecompositionSettings
 
     return DecompositionSettings(**HULL)
 
@@ -266,7 +266,7 @@ def test_array_grasps_of_mixed_m_simulate_with_defaults():
 
 
 def test_a_mesh_path_is_relative_to_the_json_file_and_its_digest_is_checked(tmp_path, monkeypatch):
-    from planner.objects import file_sha256, resolve_object
+    from ogcp.planner.objects import file_sha256, resolve_object
 
     (tmp_path / "meshes").mkdir()
     mesh_file = tmp_path / "meshes" / "block.stl"
@@ -292,7 +292,7 @@ def test_a_mesh_path_is_relative_to_the_json_file_and_its_digest_is_checked(tmp_
 
 
 def test_a_plan_on_a_mesh_file_exports_its_path_relative_to_the_grasps(tmp_path, monkeypatch):
-    from planner.objects import resolve_object
+    from ogcp.planner.objects import resolve_object
 
     monkeypatch.chdir(tmp_path)
     trimesh.creation.box([0.1, 0.06, 0.04]).export(tmp_path / "block.stl")
@@ -312,7 +312,7 @@ def test_a_plan_on_a_mesh_file_exports_its_path_relative_to_the_grasps(tmp_path,
 
 
 def test_the_converter_reads_a_csv_table_and_a_numpy_array(tmp_path):
-    from benchmarks.studies.convert_grasps import convert, main
+    from ogcp.benchmarks.studies.convert_grasps import convert, main
 
     x, z = 1e3 * float(HALF[0]), 1e3 * float(HALF[2])
     (tmp_path / "in.csv").write_text(

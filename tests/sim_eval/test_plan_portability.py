@@ -11,13 +11,13 @@ from typing import Any
 import numpy as np
 import pytest
 
-import sim_eval.plan_input as plan_input_module
-from planner.grasp.contact_set import ContactSet, sample_contacts
-from planner.infra.errors import OgcpError
-from planner.objects import resolve_object
-from planner.records.plan import add_plan_path, contact_set_record
-from planner.search.grasp_planner import GraspPlanner
-from sim_eval.plan_input import plan_input
+import ogcp.sim_eval.plan_input as plan_input_module
+from ogcp.planner.grasp.contact_set import ContactSet, sample_contacts
+from ogcp.planner.infra.errors import OgcpError
+from ogcp.planner.objects import resolve_object
+from ogcp.planner.records.plan import add_plan_path, contact_set_record
+from ogcp.planner.search.grasp_planner import GraspPlanner
+from ogcp.sim_eval.plan_input import plan_input
 
 N = 40
 
@@ -137,7 +137,7 @@ def test_an_old_plan_without_contacts_is_resampled(donut_plan):
 
 
 def test_evaluate_plan_simulates_the_recorded_contacts(donut_plan, monkeypatch):
-    from sim_eval.evaluate import evaluate_plan
+    from ogcp.sim_eval.evaluate import evaluate_plan
 
     monkeypatch.setattr(plan_input_module, "sample_contacts", None)  # never called: nothing re-sampled
     result = evaluate_plan(

@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from sim_eval import SIM_SCHEMA, GraspSimResult, SimGraspRecord, SimRecord, SimResult
+from ogcp.sim_eval import SIM_SCHEMA, GraspSimResult, SimGraspRecord, SimRecord, SimResult
 
 
 def _grasp(label: str, measured: list[float], error: str | None = None) -> GraspSimResult:

@@ -6,11 +6,11 @@ import numpy as np
 import pytest
 import trimesh
 
-from planner.grasp import ContactSet
-from planner.infra import OgcpError
-from sim_eval import GraspEvaluator, SimSettings
-from sim_eval.decomposition import Decomposition, DecompositionSettings
-from sim_eval.settings import LENGTH_SETTINGS, SERVO_MASSES
+from ogcp.planner.grasp import ContactSet
+from ogcp.planner.infra import OgcpError
+from ogcp.sim_eval import GraspEvaluator, SimSettings
+from ogcp.sim_eval.decomposition import Decomposition, DecompositionSettings
+from ogcp.sim_eval.settings import LENGTH_SETTINGS, SERVO_MASSES
 
 HULL = DecompositionSettings(method="convex_hull")
 

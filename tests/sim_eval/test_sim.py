@@ -9,14 +9,14 @@ import numpy as np
 import pytest
 import trimesh
 
-from planner.grasp import ContactSet
-from planner.infra import OgcpError
-from sim_eval import GraspEvaluator, SimSettings, evaluate_plan
-from sim_eval.body import object_inertia
-from sim_eval.decomposition import Decomposition, DecompositionSettings
-from sim_eval.predict import predicted_resistance
-from sim_eval.protocol import ramp_trials, serial_trials, settle
-from sim_eval.scene import build_scene
+from ogcp.planner.grasp import ContactSet
+from ogcp.planner.infra import OgcpError
+from ogcp.sim_eval import GraspEvaluator, SimSettings, evaluate_plan
+from ogcp.sim_eval.body import object_inertia
+from ogcp.sim_eval.decomposition import Decomposition, DecompositionSettings
+from ogcp.sim_eval.predict import predicted_resistance
+from ogcp.sim_eval.protocol import ramp_trials, serial_trials, settle
+from ogcp.sim_eval.scene import build_scene
 
 F_MAX = 10.0
 MU = 0.5
@@ -102,7 +102,7 @@ def test_rollout_matches_the_serial_step_loop_and_the_ramp_rate_does_not_matter(
 
 @pytest.fixture(scope="module")
 def box_grasp_result():
-    from planner import GraspPlanner, builtin_mesh, sample_contacts
+    from ogcp.planner import GraspPlanner, builtin_mesh, sample_contacts
 
     mesh = builtin_mesh("box")
     contacts = sample_contacts(mesh, 60, seed=0, source={"kind": "builtin", "name": "box", "diagonal": 0.2})
@@ -160,7 +160,7 @@ def test_dexgraspbench_mode_and_weight_test_pass_for_a_firm_grasp():
 
 
 def test_plan_with_contacts_off_the_object_is_refused(tmp_path):
-    from planner import GraspPlanner, builtin_mesh, sample_contacts
+    from ogcp.planner import GraspPlanner, builtin_mesh, sample_contacts
 
     mesh = builtin_mesh("box")
     contacts = sample_contacts(mesh, 30, seed=0, source={"kind": "builtin", "name": "box", "diagonal": 0.2})

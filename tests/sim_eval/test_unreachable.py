@@ -5,13 +5,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from benchmarks.cli.simulate import sim_summary
-from planner import builtin_mesh
-from planner.grasp import sample_contacts
-from planner.grasp.reach import DEFAULT_TIP_RADIUS_RATIO, default_tip_radius, reachable
-from sim_eval import GraspEvaluator, SimSettings
-from sim_eval.decomposition import Decomposition, DecompositionSettings
-from sim_eval.result import SimRecord
+from ogcp.benchmarks.cli.simulate import sim_summary
+from ogcp.planner import builtin_mesh
+from ogcp.planner.grasp import sample_contacts
+from ogcp.planner.grasp.reach import DEFAULT_TIP_RADIUS_RATIO, default_tip_radius, reachable
+from ogcp.sim_eval import GraspEvaluator, SimSettings
+from ogcp.sim_eval.decomposition import Decomposition, DecompositionSettings
+from ogcp.sim_eval.result import SimRecord
 from tests.planner.grasp.test_reach import SLOT, in_slot, u_bracket
 
 TIP = 0.8 * SLOT  # wider than half the slot: no tip this size touches its floor or inner walls

@@ -7,11 +7,11 @@ from pathlib import Path
 import matplotlib
 import pytest
 
-from benchmarks import plots
-from benchmarks.plots.data import RunData, SkipFigure, load_run
-from benchmarks.plots.protocol import auc_text, protocol_outcomes
-from benchmarks.suite.parse import parse_suite
-from benchmarks.suite.runner import SuiteRunner
+from ogcp.benchmarks import plots
+from ogcp.benchmarks.plots.data import RunData, SkipFigure, load_run
+from ogcp.benchmarks.plots.protocol import auc_text, protocol_outcomes
+from ogcp.benchmarks.suite.parse import parse_suite
+from ogcp.benchmarks.suite.runner import SuiteRunner
 
 matplotlib.use("Agg")
 

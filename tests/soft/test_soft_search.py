@@ -8,11 +8,11 @@ import json
 import numpy as np
 import pytest
 
-from benchmarks.cli import main
-from planner import builtin_mesh
-from planner.baselines import HFTS, ExhaustiveSearch
-from planner.grasp import q1, sample_contacts
-from planner.search import GraspPlanner
+from ogcp.benchmarks.cli import main
+from ogcp.planner import builtin_mesh
+from ogcp.planner.baselines import HFTS, ExhaustiveSearch
+from ogcp.planner.grasp import q1, sample_contacts
+from ogcp.planner.search import GraspPlanner
 from tests.conftest import exhaustive_best
 
 # (object, n, m, seed): m = 2 is where only soft fingers reach force closure.
@@ -91,7 +91,7 @@ def test_plan_cli_records_the_model_and_evaluate_reads_it_back(tmp_path, capsys)
     assert (block["contact_model"], block["torsional_friction"]) == ("soft", 0.01) and record["q1"] > 0
     hard = ["plan", "box", "-n", "20", "-m", "2", "--json"]
     assert main(hard) == 0 and json.loads(capsys.readouterr().out)["q1"] == 0.0
-    from planner.records.plan import load_plan, recorded_contacts
+    from ogcp.planner.records.plan import load_plan, recorded_contacts
 
     contacts = recorded_contacts(load_plan(out))
     assert contacts is not None and contacts.torsional_friction == 0.01

@@ -6,13 +6,13 @@ import numpy as np
 import pytest
 import trimesh
 
-from planner.grasp import ContactSet
-from sim_eval import SimSettings
-from sim_eval.body import object_inertia
-from sim_eval.predict import predicted_resistance
-from sim_eval.protocol import ramp_trials, settle
-from sim_eval.scene import build_scene
-from sim_eval.trial import contact_torsion
+from ogcp.planner.grasp import ContactSet
+from ogcp.sim_eval import SimSettings
+from ogcp.sim_eval.body import object_inertia
+from ogcp.sim_eval.predict import predicted_resistance
+from ogcp.sim_eval.protocol import ramp_trials, settle
+from ogcp.sim_eval.scene import build_scene
+from ogcp.sim_eval.trial import contact_torsion
 from tests.sim_eval.test_sim import _ramp as ramp_failure_load
 
 F_MAX, MU, RHO = 10.0, 0.5, 0.1

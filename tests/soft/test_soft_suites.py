@@ -7,12 +7,12 @@ from pathlib import Path
 
 import pytest
 
-from benchmarks.plots.data import load_run
-from benchmarks.plots.facets import facet_names, faceted
-from benchmarks.suite.parse import parse_suite
-from benchmarks.suite.runner import SuiteRunner
-from benchmarks.suite.store import RESULTS
-from planner.infra import OgcpError
+from ogcp.benchmarks.plots.data import load_run
+from ogcp.benchmarks.plots.facets import facet_names, faceted
+from ogcp.benchmarks.suite.parse import parse_suite
+from ogcp.benchmarks.suite.runner import SuiteRunner
+from ogcp.benchmarks.suite.store import RESULTS
+from ogcp.planner.infra import OgcpError
 
 SUITE = """schema_version = 1
 objects = ["box"]

@@ -8,11 +8,11 @@ import json
 import numpy as np
 import pytest
 
-from planner import builtin_mesh
-from planner.grasp import ContactSet, q1, sample_contacts
-from planner.grasp.contact_model import torsion_of
-from planner.grasp.wrench import contact_wrenches, primitives_per_contact, soft_directions, soft_inradius
-from planner.infra import OgcpError
+from ogcp.planner import builtin_mesh
+from ogcp.planner.grasp import ContactSet, q1, sample_contacts
+from ogcp.planner.grasp.contact_model import torsion_of
+from ogcp.planner.grasp.wrench import contact_wrenches, primitives_per_contact, soft_directions, soft_inradius
+from ogcp.planner.infra import OgcpError
 from tests.conftest import q1_by_facet_enumeration
 
 POSITIONS = np.array([[0.05, 0.01, -0.02], [-0.03, 0.04, 0.0]])
@@ -44,7 +44,7 @@ def test_linearisation_is_inscribed_in_the_elliptic_set(k, dense):
 
 
 def test_documented_inradii():
-    # The error statement of planner.grasp.wrench: the soft set contains the exact one scaled by r.
+    # The error statement of ogcp.planner.grasp.wrench: the soft set contains the exact one scaled by r.
     assert [round(soft_inradius(k), 3) for k in (8, 12, 16, 64)] == [0.816, 0.877, 0.898, 0.922]
     assert soft_inradius(32, dense=True) > 0.99
     # A point at r times any unit direction lies inside the hull: check against random directions.
@@ -128,7 +128,7 @@ def test_bad_contact_models_are_one_line_errors(model, torsion, message):
     ],
 )
 def test_a_grasps_record_names_the_bad_model_field(fields, message):
-    from planner.records.grasps import ExternalGrasps
+    from ogcp.planner.records.grasps import ExternalGrasps
 
     pinch = [{"position": [x, 0.0, 0.0], "normal": [-x / abs(x), 0.0, 0.0]} for x in (0.05, -0.05)]
     record = {"schema": "ogcp.grasps/1", "object": {"mesh": "box"}, "mu": 0.5, "grasps": [{"contacts": pinch}]}

@@ -2,7 +2,7 @@
 
 Q1(W) is the distance from the origin to the boundary of conv(W) when the origin is
 strictly inside (Q1 > 1e-9), else 0; degenerate sets (affine rank < 6) give 0. This module
-is the fast path of :func:`planner.grasp.quality.q1_certificate`: same definition, no qhull on
+is the fast path of :func:`ogcp.planner.grasp.quality.q1_certificate`: same definition, no qhull on
 the common path; anything it cannot certify goes back to the qhull paths there.
 
 Design (three stages, every early answer is a proof, not a heuristic):
@@ -49,12 +49,12 @@ Design (three stages, every early answer is a proof, not a heuristic):
    meets a facet simplex (a subset of conv(W)) at distance d_f / (u_f.v) >= d_f: the ball
    of radius min d_f lies in conv(W). If any check fails, or anything else looks wrong
    (overflow, a degenerate simplex, a broken horizon), the kernel returns a FALLBACK
-   status and :mod:`planner.grasp.quality` answers with its qhull paths instead.
+   status and :mod:`ogcp.planner.grasp.quality` answers with its qhull paths instead.
 
-4. **Canonical refit** (:mod:`planner.grasp.kernel.refit`). The certified facet's hyperplane is
+4. **Canonical refit** (:mod:`ogcp.planner.grasp.kernel.refit`). The certified facet's hyperplane is
    refitted through the wrenches within 1e-11 of it, in index order (Householder QR with
    column pivoting, plain IEEE arithmetic in a fixed order). The qhull paths of
-   :mod:`planner.grasp.quality` hand their facets to the same compiled routine, so the reported
+   :mod:`ogcp.planner.grasp.quality` hand their facets to the same compiled routine, so the reported
    Q1 depends on the wrench set alone and is bit-identical across every method.
 
 Statuses: ``OK`` (exact, canonical), ``FALLBACK`` (not certified: use qhull), ``BOUND``
@@ -62,14 +62,14 @@ Statuses: ``OK`` (exact, canonical), ``FALLBACK`` (not certified: use qhull), ``
 (batch: Q1 = 0 proven by the support table).
 
 Compiled code is cached on disk as numba caches it, with every file checked on load
-(:mod:`planner.grasp.kernel.jit`): a damaged cache costs one compilation, never a failed run.
+(:mod:`ogcp.planner.grasp.kernel.jit`): a damaged cache costs one compilation, never a failed run.
 
 Numerical tolerances: eps = 1e-11 * max|w| for visibility / convergence (points within
 eps of a facet hyperplane are treated as on it, which moves Q1 by at most eps), 1e-9 for
-force closure and rank (identical to ``planner.infra.tolerance.TOL``).
+force closure and rank (identical to ``ogcp.planner.infra.tolerance.TOL``).
 """
 
-from planner.grasp.kernel.batch import (
+from ogcp.planner.grasp.kernel.batch import (
     canonical_plane,
     default_directions,
     evaluate_batch,
@@ -78,7 +78,7 @@ from planner.grasp.kernel.batch import (
     q1_batch,
     support_table,
 )
-from planner.grasp.kernel.geometry import BOUND, FALLBACK, OK, ZERO
+from ogcp.planner.grasp.kernel.geometry import BOUND, FALLBACK, OK, ZERO
 
 
 def warm_up() -> float:

@@ -9,10 +9,10 @@ import numpy as np
 from numba import prange
 from numpy.typing import NDArray
 
-from planner.grasp.kernel.epa import Workspace, _q1_kernel
-from planner.grasp.kernel.geometry import BOUND, CUT_MARGIN, DIM, FALLBACK, FC_TOL, MAX_FACETS, OK, ZERO
-from planner.grasp.kernel.jit import cached_njit
-from planner.grasp.kernel.refit import _canonical_plane
+from ogcp.planner.grasp.kernel.epa import Workspace, _q1_kernel
+from ogcp.planner.grasp.kernel.geometry import BOUND, CUT_MARGIN, DIM, FALLBACK, FC_TOL, MAX_FACETS, OK, ZERO
+from ogcp.planner.grasp.kernel.jit import cached_njit
+from ogcp.planner.grasp.kernel.refit import _canonical_plane
 
 # --------------------------------------------------------------------------------------
 # Batch kernel
@@ -139,7 +139,7 @@ def kernel_q1(wrenches: NDArray[np.float64], certify: bool = True) -> tuple[bool
 
     Args:
         wrenches: Wrenches, shape (N, 6), N < 4096, finite.
-        certify: Verify the lower bound combinatorially (see :mod:`planner.grasp.kernel`).
+        certify: Verify the lower bound combinatorially (see :mod:`ogcp.planner.grasp.kernel`).
 
     Returns:
         ``(ok, q1, direction)``: ``ok`` False means the kernel could not certify an answer
@@ -158,7 +158,7 @@ def last_active(n: int) -> NDArray[np.intp]:
     """Indices of the points the last :func:`kernel_q1` call of this thread put in its hull.
 
     After a failed certificate these span the part of the hull near the origin, so they
-    seed another method well (see :func:`planner.grasp.quality.q1_certificate`).
+    seed another method well (see :func:`ogcp.planner.grasp.quality.q1_certificate`).
 
     Args:
         n: Size of the wrench set of that call.
@@ -268,7 +268,7 @@ def canonical_plane(
     Returns:
         ``(normal, offset, ok)``: the refitted plane; the input plane with ``ok`` False
         when the wrenches on it do not determine one (see
-        :func:`planner.grasp.kernel.refit._canonical_plane`).
+        :func:`ogcp.planner.grasp.kernel.refit._canonical_plane`).
     """
     w = np.ascontiguousarray(wrenches, dtype=np.float64)
     u = np.ascontiguousarray(normal, dtype=np.float64)

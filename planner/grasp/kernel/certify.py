@@ -1,16 +1,16 @@
 """Certificate of the kernel's lower bound: the facet complex is closed and encloses the origin.
 
-See :mod:`planner.grasp.kernel` for why these checks prove that no facet is missing.
+See :mod:`ogcp.planner.grasp.kernel` for why these checks prove that no facet is missing.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from planner.grasp.kernel.geometry import (
+from ogcp.planner.grasp.kernel.geometry import (
     DIM,
 )
-from planner.grasp.kernel.jit import cached_njit
+from ogcp.planner.grasp.kernel.jit import cached_njit
 
 # --------------------------------------------------------------------------------------
 # The kernel

@@ -1,14 +1,14 @@
 """The expanding-polytope kernel: exact Q1 of one wrench set, in numba.
 
-See :mod:`planner.grasp.kernel` for the design and the tolerances.
+See :mod:`ogcp.planner.grasp.kernel` for the design and the tolerances.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from planner.grasp.kernel.certify import _certify
-from planner.grasp.kernel.geometry import (
+from ogcp.planner.grasp.kernel.certify import _certify
+from ogcp.planner.grasp.kernel.geometry import (
     BOUND,
     CUT_MARGIN,
     DIM,
@@ -24,8 +24,8 @@ from planner.grasp.kernel.geometry import (
     _ridge_key,
     _support,
 )
-from planner.grasp.kernel.jit import cached_njit
-from planner.grasp.kernel.refit import _canonical_plane
+from ogcp.planner.grasp.kernel.jit import cached_njit
+from ogcp.planner.grasp.kernel.refit import _canonical_plane
 
 # --------------------------------------------------------------------------------------
 # Workspace
@@ -107,12 +107,12 @@ def _alloc(alive: np.ndarray, free: np.ndarray, nfree: int, hw: int) -> tuple[in
     return s, nfree, hw
 
 
-# nogil: the search evaluates several sets at once in threads (planner.grasp.subset_quality).
+# nogil: the search evaluates several sets at once in threads (ogcp.planner.grasp.subset_quality).
 @cached_njit(nogil=True)
 def _q1_kernel(
     P: np.ndarray, n: int, ws: tuple, certify: bool, stats: np.ndarray, threshold: float, direction: np.ndarray
 ) -> tuple[int, float]:
-    """Q1 of the first ``n`` rows of ``P`` (status, value); see :mod:`planner.grasp.kernel`.
+    """Q1 of the first ``n`` rows of ``P`` (status, value); see :mod:`ogcp.planner.grasp.kernel`.
 
     ``direction`` (6,) receives the unit normal of the facet that settled the answer: the
     certified nearest facet, or a direction whose support proves Q1 = 0; when only the
@@ -125,7 +125,7 @@ def _q1_kernel(
     the hull work, and a grasp whose Q1 ties the threshold still gets its exact value.
 
     An exact answer is canonical: the certified facet's hyperplane is refitted through
-    the points on it (:func:`planner.grasp.kernel.refit._canonical_plane`), so every path
+    the points on it (:func:`ogcp.planner.grasp.kernel.refit._canonical_plane`), so every path
     reports the bit-identical Q1 for the same wrench set.
 
     Returns:

@@ -1,19 +1,19 @@
 """Numba helpers of the exact Q1 kernel: constants, facet planes, supports, ridge hashing.
 
-Shared by :mod:`planner.grasp.kernel.epa` (the expanding polytope and its certificate) and
-:mod:`planner.grasp.kernel.batch`. See :mod:`planner.grasp.kernel` for the design.
+Shared by :mod:`ogcp.planner.grasp.kernel.epa` (the expanding polytope and its certificate) and
+:mod:`ogcp.planner.grasp.kernel.batch`. See :mod:`ogcp.planner.grasp.kernel` for the design.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from planner.grasp.kernel.jit import cached_njit
+from ogcp.planner.grasp.kernel.jit import cached_njit
 
 DIM = 6
-#: Same as planner.infra.tolerance.TOL.force_closure: Q1 at or below this reports 0.
+#: Same as ogcp.planner.infra.tolerance.TOL.force_closure: Q1 at or below this reports 0.
 FC_TOL = 1e-9
-#: Same as planner.infra.tolerance.TOL.rank.
+#: Same as ogcp.planner.infra.tolerance.TOL.rank.
 RANK_TOL = 1e-9
 #: Visibility / convergence tolerance relative to the largest wrench coordinate.
 REL_EPS = 1e-11
@@ -154,7 +154,7 @@ def _support(P: np.ndarray, n: int, u: np.ndarray) -> tuple[float, int]:
 
 @cached_njit()
 def _reference_rank_ok(P: np.ndarray, n: int) -> bool:
-    """planner.grasp.quality._affine_rank_ok verbatim: SVD of the centred points."""
+    """ogcp.planner.grasp.quality._affine_rank_ok verbatim: SVD of the centred points."""
     X = P[:n].copy()
     mean = np.zeros(DIM)
     for i in range(n):

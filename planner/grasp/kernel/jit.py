@@ -10,7 +10,7 @@ until the file is deleted by hand, and bytes changed inside the machine code may
 as numba writes) as one header line ``ogcp.numba-cache/1 <numba version> <sha256 of the rest>``
 and numba's pickle, under names of its own (``<function>.ogcp.nbi``), so numba's plain files
 are never read. A file that fails its check is reported in one line
-(:class:`~planner.infra.cache.CacheEntryWarning`), removed and read as absent: numba compiles
+(:class:`~ogcp.planner.infra.cache.CacheEntryWarning`), removed and read as absent: numba compiles
 the kernel again and writes it back. A damaged cache costs one compilation, never a failed
 run. A file of another numba version is stale, not damaged: it is overwritten silently.
 
@@ -31,7 +31,7 @@ import numba
 from numba import njit
 from numba.core.caching import FunctionCache, IndexDataCacheFile
 
-from planner.infra.cache import CacheEntryWarning
+from ogcp.planner.infra.cache import CacheEntryWarning
 
 __all__ = ["HEADER", "cached_njit"]
 

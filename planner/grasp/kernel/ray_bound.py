@@ -28,8 +28,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from planner.grasp.kernel.geometry import DIM
-from planner.grasp.kernel.jit import cached_njit
+from ogcp.planner.grasp.kernel.geometry import DIM
+from ogcp.planner.grasp.kernel.jit import cached_njit
 
 #: Pivots after the first vertex before the walk settles for the best direction so far.
 MAX_PIVOTS = 40

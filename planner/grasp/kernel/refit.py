@@ -14,8 +14,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from planner.grasp.kernel.geometry import DIM, RANK_TOL
-from planner.grasp.kernel.jit import cached_njit
+from ogcp.planner.grasp.kernel.geometry import DIM, RANK_TOL
+from ogcp.planner.grasp.kernel.jit import cached_njit
 
 #: Wrenches this close to a certified facet's hyperplane are taken to lie on it [N].
 ON_FACET = 1e-11

@@ -14,9 +14,9 @@ import time
 import numpy as np
 import pytest
 
-from benchmarks.cli import main
-from planner import builtin_mesh
-from planner.grasp import q1, sample_contacts
+from ogcp.benchmarks.cli import main
+from ogcp.planner import builtin_mesh
+from ogcp.planner.grasp import q1, sample_contacts
 
 
 def _run(argv: list[str]) -> tuple[int, str, str]:
@@ -59,7 +59,7 @@ def test_a_finished_search_exits_0_with_status_optimal(tmp_path):
 def test_ctrl_c_stops_the_search_and_prints_its_best_grasp(tmp_path):
     """The first SIGINT asks the search to stop; the record follows on stdout, exit status 130."""
     path = tmp_path / "plan.json"
-    command = [sys.executable, "-m", "benchmarks.cli", "plan", "sphere", "-n", "1000", "-m", "5", "--json"]
+    command = [sys.executable, "-m", "ogcp.benchmarks.cli", "plan", "sphere", "-n", "1000", "-m", "5", "--json"]
     command += ["-o", str(path)]
     env = {**os.environ, "OGCP_CACHE": str(tmp_path / "cache")}
     child = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
@@ -80,7 +80,7 @@ def test_ctrl_c_stops_the_search_and_prints_its_best_grasp(tmp_path):
 def test_memory_limit_prints_the_best_grasp_with_its_bound_and_exits_4(monkeypatch):
     """A search past its memory limit is a result too (the process allowance shrunk so that a few
     kilobytes of open states hit it)."""
-    from planner.search import memory
+    from ogcp.planner.search import memory
 
     monkeypatch.setattr(memory, "PROCESS_BYTES", 2**30 - 8 * 1024)
     monkeypatch.setattr(memory, "MIN_STATES_BYTES", 1024)

@@ -1,4 +1,4 @@
-"""The ``ogcp`` command line, run in-process through ``benchmarks.cli.app.main``."""
+"""The ``ogcp`` command line, run in-process through ``ogcp.benchmarks.cli.app.main``."""
 
 from __future__ import annotations
 
@@ -12,9 +12,9 @@ import sys
 import numpy as np
 import pytest
 
-from benchmarks.cli import main
-from planner import builtin_mesh
-from planner.grasp import ContactSet, q1, sample_contacts
+from ogcp.benchmarks.cli import main
+from ogcp.planner import builtin_mesh
+from ogcp.planner.grasp import ContactSet, q1, sample_contacts
 
 STATS_KEYS = {
     "created",
@@ -236,7 +236,7 @@ def test_argparse_errors_exit_2(capsys, argv):
 
 def test_building_the_parser_imports_neither_mujoco_nor_matplotlib():
     code = (
-        "import sys; from benchmarks.cli import build_parser; build_parser();"
+        "import sys; from ogcp.benchmarks.cli import build_parser; build_parser();"
         "loaded = [m for m in ('mujoco', 'matplotlib', 'coacd') if m in sys.modules];"
         "assert not loaded, loaded"
     )

@@ -9,12 +9,12 @@ import json
 import numpy as np
 import pytest
 
-from benchmarks.cli import main
-from planner import builtin_mesh, resolve_object
-from planner.grasp import ContactSet
-from planner.infra.errors import OgcpError
-from planner.records.plan import contact_sampling
-from sim_eval.plan_input import plan_input
+from ogcp.benchmarks.cli import main
+from ogcp.planner import builtin_mesh, resolve_object
+from ogcp.planner.grasp import ContactSet
+from ogcp.planner.infra.errors import OgcpError
+from ogcp.planner.records.plan import contact_sampling
+from ogcp.sim_eval.plan_input import plan_input
 
 
 def _run(argv: list[str]) -> tuple[int, str, str]:
@@ -81,7 +81,7 @@ def test_diagonal_does_not_apply_to_a_contact_file(tmp_path):
 
 
 def test_decompose_takes_a_diagonal():
-    from benchmarks.cli.app import build_parser
+    from ogcp.benchmarks.cli.app import build_parser
 
     args = build_parser().parse_args(["decompose", "box", "--diagonal", "0.05"])
     assert args.diagonal == 0.05
@@ -89,8 +89,8 @@ def test_decompose_takes_a_diagonal():
 
 
 def test_a_suite_scales_a_mesh_file_only_when_it_gives_a_diagonal(box_mm):
-    from benchmarks.suite.cells import contact_set
-    from benchmarks.suite.parse import parse_suite
+    from ogcp.benchmarks.suite.cells import contact_set
+    from ogcp.benchmarks.suite.parse import parse_suite
 
     text = f'schema_version = 1\nobjects = ["box", {json.dumps(str(box_mm))}]\ncontacts = 30\n{{extra}}\n'
     text += '[[methods]]\nmethod = "astar"\nlabel = "A*"\n'

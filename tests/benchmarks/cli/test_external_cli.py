@@ -6,8 +6,8 @@ import json
 
 import numpy as np
 
-from benchmarks.cli import main
-from planner import builtin_mesh
+from ogcp.benchmarks.cli import main
+from ogcp.planner import builtin_mesh
 
 HALF = np.ptp(np.asarray(builtin_mesh("box").vertices), axis=0) / 2
 

@@ -10,12 +10,12 @@ import textwrap
 
 import pytest
 
-from benchmarks.cli import build_parser, main
-from benchmarks.cli.method_options import config_from_args, declared_options, flag
-from benchmarks.suite.cells import contact_set, plan_record
-from benchmarks.suite.parse import parse_suite
-from planner.config.methods import DEFAULT_FINGERS, DEFAULT_METHOD
-from planner.methods import METHODS, method_spec
+from ogcp.benchmarks.cli import build_parser, main
+from ogcp.benchmarks.cli.method_options import config_from_args, declared_options, flag
+from ogcp.benchmarks.suite.cells import contact_set, plan_record
+from ogcp.benchmarks.suite.parse import parse_suite
+from ogcp.planner.config.methods import DEFAULT_FINGERS, DEFAULT_METHOD
+from ogcp.planner.methods import METHODS, method_spec
 
 
 def _plan_args(*argv: str):

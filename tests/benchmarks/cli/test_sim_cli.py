@@ -8,7 +8,7 @@ import json
 
 import pytest
 
-from benchmarks.cli import main
+from ogcp.benchmarks.cli import main
 
 
 def _run(argv: list[str]) -> tuple[int, str, str]:
@@ -36,8 +36,8 @@ def test_evaluate_prints_measured_against_predicted(plan_file):
 
 
 def test_refinement_flags_reach_the_settings(plan_file):
-    from benchmarks.cli.app import build_parser
-    from benchmarks.cli.simulate import _decomposition
+    from ogcp.benchmarks.cli.app import build_parser
+    from ogcp.benchmarks.cli.simulate import _decomposition
 
     never = _decomposition(build_parser().parse_args(["evaluate", str(plan_file), "--refine"]))
     assert never.refine_thresholds == () and never.ladder == (never.threshold,)

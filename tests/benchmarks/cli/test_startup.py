@@ -34,7 +34,7 @@ HEAVY = (
 # console script does, then reports the top-level packages that were imported.
 _HELP_EVERYWHERE = """
 import argparse, contextlib, io, json, sys
-from benchmarks.cli.app import build_parser, main
+from ogcp.benchmarks.cli.app import build_parser, main
 
 def paths(parser, prefix=()):
     for action in parser._actions:
@@ -79,22 +79,22 @@ def test_help_of_every_command_imports_no_heavy_module(help_everywhere):
     assert _heavy(modules) == []
     # Nor the planner's engines, the simulation or the figures, which import them.
     engines = (
-        "planner.grasp.kernel",
-        "planner.search",
-        "planner.baselines",
-        "sim_eval.evaluate",
-        "benchmarks.plots.report",
+        "ogcp.planner.grasp.kernel",
+        "ogcp.planner.search",
+        "ogcp.planner.baselines",
+        "ogcp.sim_eval.evaluate",
+        "ogcp.benchmarks.plots.report",
     )
     assert [m for m in modules if m.startswith(engines)] == []
 
 
 def test_console_entry_point_help_imports_no_heavy_module():
-    # The real entry (python -m benchmarks.cli, as the console script's import of main):
+    # The real entry (python -m ogcp.benchmarks.cli, as the console script's import of main):
     # -X importtime lists every module the process imported, on stderr.
-    done = _python("-X", "importtime", "-m", "benchmarks.cli", "--help")
+    done = _python("-X", "importtime", "-m", "ogcp.benchmarks.cli", "--help")
     assert done.stdout.startswith("usage: ogcp")
     imported = [line.rsplit("|", 1)[-1].strip() for line in done.stderr.splitlines() if line.startswith("import time:")]
-    assert "benchmarks.cli.app" in imported
+    assert "ogcp.benchmarks.cli.app" in imported
     assert _heavy(imported) == []
 
 
@@ -102,8 +102,8 @@ def test_plan_still_loads_the_engines_it_needs(tmp_path: Path) -> None:
     # The lazy imports move work to the handlers; they do not skip it: a plan runs the kernel,
     # and with an empty contact cache it samples the mesh with trimesh.
     script = (
-        "import sys; from benchmarks.cli.app import main; status = main(['plan', 'box', '-n', '12', '--json']); "
-        "print(status, 'planner.grasp.kernel' in sys.modules, 'trimesh' in sys.modules, file=sys.stderr)"
+        "import sys; from ogcp.benchmarks.cli.app import main; status = main(['plan', 'box', '-n', '12', '--json']); "
+        "print(status, 'ogcp.planner.grasp.kernel' in sys.modules, 'trimesh' in sys.modules, file=sys.stderr)"
     )
     done = subprocess.run(
         [sys.executable, "-c", script],
@@ -118,8 +118,8 @@ def test_plan_still_loads_the_engines_it_needs(tmp_path: Path) -> None:
 
 
 def test_figure_names_read_by_the_help_match_the_builders():
-    from benchmarks.plots.names import FIGURE_NAMES, NAMES, TABLE
-    from benchmarks.plots.report import FIGURES
+    from ogcp.benchmarks.plots.names import FIGURE_NAMES, NAMES, TABLE
+    from ogcp.benchmarks.plots.report import FIGURES
 
     assert tuple(FIGURES) == FIGURE_NAMES
     assert all(builder.__name__ == name for name, builder in FIGURES.items())

@@ -9,12 +9,12 @@ import json
 import numpy as np
 import pytest
 
-from benchmarks.cli import main
-from planner import builtin_mesh
-from planner.grasp import ContactSet, sample_contacts
-from planner.grasp.reach import DEFAULT_TIP_RADIUS_RATIO, REACH_TOLERANCE, default_tip_radius
-from planner.records.plan import contact_sampling
-from sim_eval.plan_input import plan_input
+from ogcp.benchmarks.cli import main
+from ogcp.planner import builtin_mesh
+from ogcp.planner.grasp import ContactSet, sample_contacts
+from ogcp.planner.grasp.reach import DEFAULT_TIP_RADIUS_RATIO, REACH_TOLERANCE, default_tip_radius
+from ogcp.planner.records.plan import contact_sampling
+from ogcp.sim_eval.plan_input import plan_input
 
 
 def _run(argv: list[str]) -> tuple[int, str, str]:

@@ -9,15 +9,15 @@ import matplotlib
 import numpy as np
 import pytest
 
-from benchmarks import plots
-from benchmarks.plots.data import load_run
-from benchmarks.plots.external import by_problem_with_external, host_problems, is_external
-from benchmarks.plots.grasp_figures import fig3_grasps, grasp_cells
-from benchmarks.plots.simulation import sim_q1_vs_resistance
-from benchmarks.suite.parse import load_suite
-from benchmarks.suite.runner import SuiteRunner
-from planner import builtin_mesh
-from planner.records.grasps import GRASPS_SCHEMA
+from ogcp.benchmarks import plots
+from ogcp.benchmarks.plots.data import load_run
+from ogcp.benchmarks.plots.external import by_problem_with_external, host_problems, is_external
+from ogcp.benchmarks.plots.grasp_figures import fig3_grasps, grasp_cells
+from ogcp.benchmarks.plots.simulation import sim_q1_vs_resistance
+from ogcp.benchmarks.suite.parse import load_suite
+from ogcp.benchmarks.suite.runner import SuiteRunner
+from ogcp.planner import builtin_mesh
+from ogcp.planner.records.grasps import GRASPS_SCHEMA
 
 matplotlib.use("Agg")
 # The built-in box is centred on the origin: its x faces lie at +-HALF[0].

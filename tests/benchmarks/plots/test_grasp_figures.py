@@ -8,12 +8,12 @@ import matplotlib
 import numpy as np
 import pytest
 
-from benchmarks import plots
-from benchmarks.plots.data import load_run
-from benchmarks.plots.grasp_figures import NoGraspCells, fig3_grasps
-from benchmarks.plots.raster import fit_view, look, render_mesh
-from benchmarks.suite.parse import parse_suite
-from benchmarks.suite.runner import SuiteRunner
+from ogcp.benchmarks import plots
+from ogcp.benchmarks.plots.data import load_run
+from ogcp.benchmarks.plots.grasp_figures import NoGraspCells, fig3_grasps
+from ogcp.benchmarks.plots.raster import fit_view, look, render_mesh
+from ogcp.benchmarks.suite.parse import parse_suite
+from ogcp.benchmarks.suite.runner import SuiteRunner
 
 matplotlib.use("Agg")
 SUITE = """

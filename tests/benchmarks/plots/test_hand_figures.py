@@ -9,16 +9,22 @@ import matplotlib
 import numpy as np
 import pytest
 
-from benchmarks import plots
-from benchmarks.plots.data import load_run
-from benchmarks.plots.grasp_figures import NoGraspCells, upright
-from benchmarks.plots.hand_figures import HAND_FITS, LINK_RADIUS, NoHandCells, fig10_sdh_grasps, palm_pose
-from benchmarks.plots.raster import look
-from benchmarks.plots.sim_figures_3d import NoSimulatedCells, _tip_radius, sim_grasps, simulated_grasps, tip_centres
-from benchmarks.suite.parse import parse_suite
-from benchmarks.suite.runner import SuiteRunner
-from planner.hands.reachability import finger_chain, pad_normals
-from sim_eval.plan_input import plan_input
+from ogcp.benchmarks import plots
+from ogcp.benchmarks.plots.data import load_run
+from ogcp.benchmarks.plots.grasp_figures import NoGraspCells, upright
+from ogcp.benchmarks.plots.hand_figures import HAND_FITS, LINK_RADIUS, NoHandCells, fig10_sdh_grasps, palm_pose
+from ogcp.benchmarks.plots.raster import look
+from ogcp.benchmarks.plots.sim_figures_3d import (
+    NoSimulatedCells,
+    _tip_radius,
+    sim_grasps,
+    simulated_grasps,
+    tip_centres,
+)
+from ogcp.benchmarks.suite.parse import parse_suite
+from ogcp.benchmarks.suite.runner import SuiteRunner
+from ogcp.planner.hands.reachability import finger_chain, pad_normals
+from ogcp.sim_eval.plan_input import plan_input
 
 matplotlib.use("Agg")
 SDH_SUITE = """

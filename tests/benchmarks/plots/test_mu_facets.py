@@ -8,10 +8,10 @@ import matplotlib
 import pytest
 from matplotlib.figure import Figure
 
-from benchmarks import plots
-from benchmarks.plots.data import RunData, load_run
-from benchmarks.suite.parse import parse_suite
-from benchmarks.suite.runner import SuiteRunner
+from ogcp.benchmarks import plots
+from ogcp.benchmarks.plots.data import RunData, load_run
+from ogcp.benchmarks.suite.parse import parse_suite
+from ogcp.benchmarks.suite.runner import SuiteRunner
 
 matplotlib.use("Agg")
 #: The box with 20 contacts, A* and ES, cheaply simulated (no sphere directions, one thread, the hull).

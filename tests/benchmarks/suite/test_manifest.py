@@ -1,10 +1,10 @@
-"""The ``ogcp.suite-run/1`` manifest: built and read back by benchmarks.suite.manifest."""
+"""The ``ogcp.suite-run/1`` manifest: built and read back by ogcp.benchmarks.suite.manifest."""
 
 from __future__ import annotations
 
 import json
 
-from benchmarks.suite.manifest import (
+from ogcp.benchmarks.suite.manifest import (
     MANIFEST_SCHEMA,
     ManifestSuite,
     first_commit,
@@ -13,7 +13,7 @@ from benchmarks.suite.manifest import (
     suite_hash,
     with_session,
 )
-from benchmarks.suite.parse import parse_suite
+from ogcp.benchmarks.suite.parse import parse_suite
 
 SUITE = "schema_version = 1\nname = 'tiny'\nobjects = ['box']\ncontacts = 12\n[[methods]]\nmethod = 'astar'\n"
 

@@ -14,14 +14,14 @@ from typing import Any
 
 import pytest
 
-from benchmarks import cli
-from benchmarks.compare import compare_dirs
-from benchmarks.suite import runner
-from benchmarks.suite.manifest import kernel_warmups
-from benchmarks.suite.parse import parse_suite
-from benchmarks.suite.record import CellRecord
-from benchmarks.suite.runner import SuiteRunner
-from benchmarks.suite.store import ResultStore
+from ogcp.benchmarks import cli
+from ogcp.benchmarks.compare import compare_dirs
+from ogcp.benchmarks.suite import runner
+from ogcp.benchmarks.suite.manifest import kernel_warmups
+from ogcp.benchmarks.suite.parse import parse_suite
+from ogcp.benchmarks.suite.record import CellRecord
+from ogcp.benchmarks.suite.runner import SuiteRunner
+from ogcp.benchmarks.suite.store import ResultStore
 
 SUITE = """
 schema_version = 1
@@ -51,7 +51,7 @@ def stub(monkeypatch: pytest.MonkeyPatch) -> list[float]:
         return 3.5
 
     monkeypatch.setattr(runner, "run_cell", run_cell)
-    monkeypatch.setattr("planner.grasp.kernel.warm_up", warm_up)
+    monkeypatch.setattr("ogcp.planner.grasp.kernel.warm_up", warm_up)
     monkeypatch.setattr(runner, "_WARMED", False)
     return calls
 

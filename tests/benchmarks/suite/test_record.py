@@ -6,10 +6,10 @@ import json
 
 import pytest
 
-from benchmarks.suite.cells import run_cell
-from benchmarks.suite.parse import parse_suite
-from benchmarks.suite.record import CELL_SCHEMA, PROBLEM_FIELDS, TRACEBACK_LINES, CellError, CellParams, CellRecord
-from planner.infra import OgcpError
+from ogcp.benchmarks.suite.cells import run_cell
+from ogcp.benchmarks.suite.parse import parse_suite
+from ogcp.benchmarks.suite.record import CELL_SCHEMA, PROBLEM_FIELDS, TRACEBACK_LINES, CellError, CellParams, CellRecord
+from ogcp.planner.infra import OgcpError
 
 SUITE = "schema_version = 1\nobjects = ['box']\ncontacts = 12\n[[methods]]\nmethod = 'astar'\nlabel = 'A*'\n"
 
@@ -77,7 +77,7 @@ def test_a_failing_cell_records_its_error(monkeypatch: pytest.MonkeyPatch) -> No
     def fail(*args: object) -> None:
         raise OgcpError("no contacts today\nsecond line")
 
-    monkeypatch.setattr("benchmarks.suite.cells.contact_set", fail)
+    monkeypatch.setattr("ogcp.benchmarks.suite.cells.contact_set", fail)
     line = _line(run_cell(cell))
     record = CellRecord.from_dict(line)
     assert record.status == "error" and record.plan is None and record.to_dict() == line

@@ -8,8 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from benchmarks.suite.store import ResultStore, jsonable, read_results
-from planner.infra import OgcpError
+from ogcp.benchmarks.suite.store import ResultStore, jsonable, read_results
+from ogcp.planner.infra import OgcpError
 
 
 def _records(k: int) -> list[dict]:

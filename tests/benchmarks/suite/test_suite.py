@@ -18,14 +18,14 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-import sim_eval
-from benchmarks import cli
-from benchmarks.suite.parse import builtin_suites, load_suite, parse_suite
-from benchmarks.suite.runner import SuiteRunner
-from benchmarks.suite.store import ResultStore
-from planner import builtin_mesh
-from planner.grasp import q1, sample_contacts
-from planner.infra import OgcpError
+from ogcp import sim_eval
+from ogcp.benchmarks import cli
+from ogcp.benchmarks.suite.parse import builtin_suites, load_suite, parse_suite
+from ogcp.benchmarks.suite.runner import SuiteRunner
+from ogcp.benchmarks.suite.store import ResultStore
+from ogcp.planner import builtin_mesh
+from ogcp.planner.grasp import q1, sample_contacts
+from ogcp.planner.infra import OgcpError
 
 ROOT = Path(__file__).resolve().parents[3]
 TINY = """
@@ -404,7 +404,7 @@ def test_resume_after_a_partial_run_and_a_torn_line(tiny_file, serial_run, tmp_p
 def test_resume_after_the_process_is_killed(tiny_file, serial_run, tmp_path):
     out = tmp_path / "killed"
     script = (
-        "import sys\nfrom benchmarks.suite.runner import SuiteRunner\nfrom benchmarks.suite.parse import load_suite\n"
+        "import sys\nfrom ogcp.benchmarks.suite.runner import SuiteRunner\nfrom ogcp.benchmarks.suite.parse import load_suite\n"
         "SuiteRunner(load_suite(sys.argv[1]), sys.argv[2]).run()\n"
     )
     process = subprocess.Popen([sys.executable, "-c", script, str(tiny_file), str(out)], cwd=ROOT)
@@ -555,7 +555,7 @@ def test_time_limit_records_search_cells_as_stopped_and_retry_completes(tiny_fil
 
 def test_memory_limit_records_search_cells_as_stopped_with_status_memory(tmp_path, monkeypatch):
     """The process allowance shrunk so that a few kilobytes of open states reach the limit."""
-    from planner.search import memory
+    from ogcp.planner.search import memory
 
     suite = tmp_path / "forty.toml"
     suite.write_text(

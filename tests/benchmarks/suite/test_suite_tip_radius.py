@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import pytest
 
-from benchmarks.suite.cells import contact_set
-from benchmarks.suite.parse import load_suite, parse_suite
-from planner import builtin_mesh
-from planner.grasp.reach import default_tip_radius
-from planner.infra import OgcpError
+from ogcp.benchmarks.suite.cells import contact_set
+from ogcp.benchmarks.suite.parse import load_suite, parse_suite
+from ogcp.planner import builtin_mesh
+from ogcp.planner.grasp.reach import default_tip_radius
+from ogcp.planner.infra import OgcpError
 
 BASE = """schema_version = 1
 objects = ["box", "amphora"]

@@ -12,18 +12,18 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from benchmarks import compare
-from benchmarks.plots import data as plot_data
-from benchmarks.suite.config import EXTERNAL_METHOD
-from benchmarks.suite.parse import load_suite, parse_suite
-from benchmarks.suite.runner import SuiteRunner
-from benchmarks.suite.select import parse_selection
-from benchmarks.suite.store import RESULTS
-from planner import builtin_mesh
-from planner.infra import OgcpError
-from planner.methods.registry import method_spec
-from planner.objects import file_sha256
-from planner.records.grasps import GRASPS_SCHEMA
+from ogcp.benchmarks import compare
+from ogcp.benchmarks.plots import data as plot_data
+from ogcp.benchmarks.suite.config import EXTERNAL_METHOD
+from ogcp.benchmarks.suite.parse import load_suite, parse_suite
+from ogcp.benchmarks.suite.runner import SuiteRunner
+from ogcp.benchmarks.suite.select import parse_selection
+from ogcp.benchmarks.suite.store import RESULTS
+from ogcp.planner import builtin_mesh
+from ogcp.planner.infra import OgcpError
+from ogcp.planner.methods.registry import method_spec
+from ogcp.planner.objects import file_sha256
+from ogcp.planner.records.grasps import GRASPS_SCHEMA
 
 #: The quick suite's cell ids (since the searches' Γ^fc defaults became w = 2, t = 100): a scalar mu keeps
 #: every id that suites gave before they took mu lists.

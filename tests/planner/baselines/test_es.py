@@ -8,11 +8,11 @@ import json
 import numpy as np
 import pytest
 
-from benchmarks.cli import main
-from planner.baselines import ExhaustiveSearch
-from planner.baselines.combinations import combinations_range, count
-from planner.grasp import q1
-from planner.infra import OgcpError
+from ogcp.benchmarks.cli import main
+from ogcp.planner.baselines import ExhaustiveSearch
+from ogcp.planner.baselines.combinations import combinations_range, count
+from ogcp.planner.grasp import q1
+from ogcp.planner.infra import OgcpError
 
 
 @pytest.fixture(scope="module")

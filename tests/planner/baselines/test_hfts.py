@@ -7,10 +7,10 @@ import json
 import numpy as np
 import pytest
 
-from benchmarks.cli import main
-from planner.baselines.hfts import HFTS, Hierarchy
-from planner.grasp import q1
-from planner.infra import OgcpError
+from ogcp.benchmarks.cli import main
+from ogcp.planner.baselines.hfts import HFTS, Hierarchy
+from ogcp.planner.grasp import q1
+from ogcp.planner.infra import OgcpError
 from tests.conftest import exhaustive_best
 
 

@@ -7,9 +7,9 @@ import inspect
 
 import pytest
 
-from planner.baselines import HFTS, ExhaustiveSearch
-from planner.config import ConfigError, Option, options_of
-from planner.config.methods import (
+from ogcp.planner.baselines import HFTS, ExhaustiveSearch
+from ogcp.planner.config import ConfigError, Option, options_of
+from ogcp.planner.config.methods import (
     DEFAULT_HAND_THRESHOLD,
     HANDS,
     AStarConfig,
@@ -19,11 +19,11 @@ from planner.config.methods import (
     HFTSConfig,
     WAStarConfig,
 )
-from planner.hands.reachability import SDHReachability
-from planner.infra import OgcpError
-from planner.methods.registry import EXHAUSTIVE_METHODS, METHODS, OPTIMAL_METHODS, SEARCH_METHODS, method_spec
-from planner.methods.runners import HAND_MODELS
-from planner.search import GraspPlanner
+from ogcp.planner.hands.reachability import SDHReachability
+from ogcp.planner.infra import OgcpError
+from ogcp.planner.methods.registry import EXHAUSTIVE_METHODS, METHODS, OPTIMAL_METHODS, SEARCH_METHODS, method_spec
+from ogcp.planner.methods.runners import HAND_MODELS
+from ogcp.planner.search import GraspPlanner
 
 INVALID = [
     (AStarConfig, {"successor": "xx"}, "unknown successor 'xx'; valid choices: fc, ru"),

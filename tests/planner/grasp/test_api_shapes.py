@@ -1,4 +1,4 @@
-"""The public array functions of planner.grasp: a wrongly shaped or non-finite array is an error.
+"""The public array functions of ogcp.planner.grasp: a wrongly shaped or non-finite array is an error.
 
 A mistake such as ``q1(contact_set.wrenches)`` (shape (n, k, 6), not stacked) used to give Q1 = 0,
 indistinguishable from a grasp that is not in force closure. Degenerate but well-formed input
@@ -12,8 +12,8 @@ import re
 import numpy as np
 import pytest
 
-from planner import builtin_mesh
-from planner.grasp import (
+from ogcp.planner import builtin_mesh
+from ogcp.planner.grasp import (
     ContactSet,
     cone_edges,
     contact_wrenches,
@@ -24,10 +24,10 @@ from planner.grasp import (
     signed_q1,
     tangent_basis,
 )
-from planner.grasp.kernel import support_table
-from planner.grasp.kernel.batch import default_directions
-from planner.grasp.quality import q1_certificate_direct
-from planner.infra import OgcpError
+from ogcp.planner.grasp.kernel import support_table
+from ogcp.planner.grasp.kernel.batch import default_directions
+from ogcp.planner.grasp.quality import q1_certificate_direct
+from ogcp.planner.infra import OgcpError
 
 Q1_FUNCTIONS = [q1, signed_q1, q1_certificate, q1_certificate_direct]
 

@@ -7,10 +7,10 @@ import itertools
 import numpy as np
 import pytest
 
-from planner import builtin_mesh
-from planner.grasp import ContactSet, DistinctContacts, MaxFingerSpread, q1, sample_contacts
-from planner.infra import OgcpError
-from planner.search import GraspPlanner
+from ogcp.planner import builtin_mesh
+from ogcp.planner.grasp import ContactSet, DistinctContacts, MaxFingerSpread, q1, sample_contacts
+from ogcp.planner.infra import OgcpError
+from ogcp.planner.search import GraspPlanner
 
 
 def _random_contacts(rng: np.random.Generator, n: int) -> ContactSet:

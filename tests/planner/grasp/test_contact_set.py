@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 import trimesh
 
-from planner import BUILTIN_OBJECTS, builtin_mesh, load_mesh, resolve_object
-from planner.grasp import cone_edges, contact_wrenches, tangent_basis
-from planner.grasp.contact_set import SCHEMA, ContactSet, NonWatertightWarning, mass_properties, sample_contacts
-from planner.infra import OgcpError
+from ogcp.planner import BUILTIN_OBJECTS, builtin_mesh, load_mesh, resolve_object
+from ogcp.planner.grasp import cone_edges, contact_wrenches, tangent_basis
+from ogcp.planner.grasp.contact_set import SCHEMA, ContactSet, NonWatertightWarning, mass_properties, sample_contacts
+from ogcp.planner.infra import OgcpError
 from tests.conftest import winding_number
 
 # ---------------------------------------------------------------- built-in objects

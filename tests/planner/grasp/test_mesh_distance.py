@@ -7,8 +7,8 @@ import pytest
 import trimesh
 from scipy.spatial.transform import Rotation
 
-from planner import builtin_mesh
-from planner.grasp.mesh_distance import (
+from ogcp.planner import builtin_mesh
+from ogcp.planner.grasp.mesh_distance import (
     CORNER_A,
     CORNER_B,
     EDGE_AB,
@@ -18,7 +18,7 @@ from planner.grasp.mesh_distance import (
     _point_triangle,
     triangle_distances,
 )
-from planner.infra import OgcpError
+from ogcp.planner.infra import OgcpError
 from tests.conftest import winding_number
 
 

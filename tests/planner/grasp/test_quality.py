@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from scipy.spatial import ConvexHull, QhullError
 
-from planner.grasp import ContactSet, GraspQuality, SupportBound, contact_wrenches
-from planner.grasp.quality import q1, q1_certificate, q1_certificate_direct
+from ogcp.planner.grasp import ContactSet, GraspQuality, SupportBound, contact_wrenches
+from ogcp.planner.grasp.quality import q1, q1_certificate, q1_certificate_direct
 from tests.conftest import q1_by_facet_enumeration
 
 OBJECTS = ("box", "sphere", "donut", "amphora")
@@ -263,8 +263,8 @@ def test_kernel_is_safe_under_threads(object_contacts):
 
 @pytest.mark.parametrize("name", OBJECTS)
 def test_batched_es_path_is_bit_identical_to_single_calls_and_qhull(name, object_contacts):
-    from planner.grasp.kernel import BOUND, FALLBACK, default_directions, support_table
-    from planner.grasp.quality import exact_q1_batch
+    from ogcp.planner.grasp.kernel import BOUND, FALLBACK, default_directions, support_table
+    from ogcp.planner.grasp.quality import exact_q1_batch
 
     contacts = object_contacts(name, 300, seed=3)
     rng = np.random.default_rng(6)
@@ -289,7 +289,7 @@ def test_batched_es_path_is_bit_identical_to_single_calls_and_qhull(name, object
 
 
 def test_canonical_plane_refits_through_the_points_on_the_facet():
-    from planner.grasp.kernel import canonical_plane
+    from ogcp.planner.grasp.kernel import canonical_plane
 
     rng = np.random.default_rng(2)
     normal = rng.normal(size=6)
@@ -308,7 +308,7 @@ def test_canonical_plane_refits_through_the_points_on_the_facet():
 
 
 def test_fallback_seeded_by_the_kernel_hull_gives_the_same_bits(object_contacts, monkeypatch):
-    from planner.grasp import quality
+    from ogcp.planner.grasp import quality
 
     real = quality.kernel_q1
 
@@ -327,7 +327,7 @@ def test_fallback_seeded_by_the_kernel_hull_gives_the_same_bits(object_contacts,
 
 
 def test_direction_capacity_keeps_the_support_table_in_budget(object_contacts):
-    from planner.grasp.subset_quality import DIRECTION_BUDGET, MAX_DIRECTIONS, MIN_DIRECTIONS, direction_capacity
+    from ogcp.planner.grasp.subset_quality import DIRECTION_BUDGET, MAX_DIRECTIONS, MIN_DIRECTIONS, direction_capacity
 
     assert direction_capacity(1) == direction_capacity(1000) == MAX_DIRECTIONS
     assert direction_capacity(10**6) == MIN_DIRECTIONS

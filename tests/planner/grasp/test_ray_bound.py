@@ -1,4 +1,4 @@
-"""Facet bounds of Q1 (planner.grasp.kernel.ray_bound) and the tightening ladder that uses them."""
+"""Facet bounds of Q1 (ogcp.planner.grasp.kernel.ray_bound) and the tightening ladder that uses them."""
 
 from __future__ import annotations
 
@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 from scipy.optimize import linprog
 
-from planner.grasp.kernel.ray_bound import facet_bound, union_facet_bound, union_facet_bound_along
-from planner.grasp.quality import q1_certificate
-from planner.grasp.subset_quality import EXACT, GraspQuality
-from planner.infra.tolerance import TOL
+from ogcp.planner.grasp.kernel.ray_bound import facet_bound, union_facet_bound, union_facet_bound_along
+from ogcp.planner.grasp.quality import q1_certificate
+from ogcp.planner.grasp.subset_quality import EXACT, GraspQuality
+from ogcp.planner.infra.tolerance import TOL
 
 
 def _support(points: np.ndarray, u: np.ndarray) -> float:
@@ -139,7 +139,7 @@ def test_tighten_settles_zero_without_an_exact_value(object_contacts):
 
 
 def test_the_facet_bound_store_is_capped(object_contacts, monkeypatch):
-    from planner.grasp import subset_quality
+    from ogcp.planner.grasp import subset_quality
 
     monkeypatch.setattr(subset_quality, "UPPER_CAPACITY", 5)
     contacts = object_contacts("sphere", 120, 0)

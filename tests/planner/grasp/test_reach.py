@@ -7,11 +7,11 @@ import pytest
 import trimesh
 from scipy.spatial import cKDTree
 
-from planner import builtin_mesh
-from planner.grasp import ContactSet, sample_contacts
-from planner.grasp import reach as reach_module
-from planner.grasp.reach import REACH_TOLERANCE, reach_settings, reachable
-from planner.infra import OgcpError
+from ogcp.planner import builtin_mesh
+from ogcp.planner.grasp import ContactSet, sample_contacts
+from ogcp.planner.grasp import reach as reach_module
+from ogcp.planner.grasp.reach import REACH_TOLERANCE, reach_settings, reachable
+from ogcp.planner.infra import OgcpError
 
 DIAGONAL = 0.2  # [m], the built-ins' default
 #: The simulation's default tip is 4 % of the diagonal (sim_eval's SimSettings.tip_radius_ratio).

@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from planner.hands import JOINT_LIMITS, forward_kinematics, random_configurations
-from planner.hands.fit import HandFit, evaluate_fit, fit_hand, rigid_fit
-from planner.hands.reachability import SDHReachability, self_collision_free
-from planner.infra import OgcpError
+from ogcp.planner.hands import JOINT_LIMITS, forward_kinematics, random_configurations
+from ogcp.planner.hands.fit import HandFit, evaluate_fit, fit_hand, rigid_fit
+from ogcp.planner.hands.reachability import SDHReachability, self_collision_free
+from ogcp.planner.infra import OgcpError
 
 RADIUS = 0.0095  # the drawn finger's radius [m]
 

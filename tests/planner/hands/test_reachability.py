@@ -9,12 +9,12 @@ import re
 import numpy as np
 import pytest
 
-from benchmarks.cli import main
-from planner.grasp import q1
-from planner.hands import forward_kinematics, random_configurations
-from planner.hands.reachability import SDHReachability, finger_chain, pad_normals, self_collision_free
-from planner.infra.cache import CacheEntryWarning
-from planner.search import GraspPlanner
+from ogcp.benchmarks.cli import main
+from ogcp.planner.grasp import q1
+from ogcp.planner.hands import forward_kinematics, random_configurations
+from ogcp.planner.hands.reachability import SDHReachability, finger_chain, pad_normals, self_collision_free
+from ogcp.planner.infra.cache import CacheEntryWarning
+from ogcp.planner.search import GraspPlanner
 
 
 @pytest.fixture(scope="module")
@@ -94,7 +94,7 @@ def test_cli_reports_the_hand_configuration(capsys, tmp_path, monkeypatch):
 
 
 def test_es_filtered_by_the_same_predicate(hand, donut):
-    from planner.baselines.es import ExhaustiveSearch
+    from ogcp.planner.baselines.es import ExhaustiveSearch
 
     grasps = list(itertools.combinations(range(18), 3))
     valid = [g for g in grasps if hand.accepts(g, donut)]
@@ -108,7 +108,7 @@ def test_es_filtered_by_the_same_predicate(hand, donut):
 
 
 def test_hfts_penalises_the_residual(hand, object_contacts):
-    from planner.baselines.hfts import HFTS
+    from ogcp.planner.baselines.hfts import HFTS
 
     contacts = object_contacts("donut", 100, 0)
     free = HFTS(runs=12, seed=0).run(contacts, 3)

@@ -8,7 +8,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from planner.hands import (
+from ogcp.planner.hands import (
     FINGER_BASES,
     JOINT_LIMITS,
     JOINT_NAMES,
@@ -19,7 +19,7 @@ from planner.hands import (
     sdh,
     sdh_model_path,
 )
-from planner.infra import OgcpError
+from ogcp.planner.infra import OgcpError
 
 TIP_HEIGHT = 0.0745 + 0.0165 + 0.0865 + 0.0685
 

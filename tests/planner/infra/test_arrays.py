@@ -1,11 +1,11 @@
-"""Arrays that grow in place (planner.infra.arrays)."""
+"""Arrays that grow in place (ogcp.planner.infra.arrays)."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from planner.infra.arrays import GROWTH, grow_rows
+from ogcp.planner.infra.arrays import GROWTH, grow_rows
 
 
 @pytest.mark.parametrize(("dtype", "width"), [(np.float64, 3), (np.int64, 3), (np.int32, 6)])

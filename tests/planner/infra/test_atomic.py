@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from planner.infra import (
+from ogcp.planner.infra import (
     OgcpError,
     write_atomic,
     write_bytes_atomic,

@@ -21,7 +21,7 @@ ROOT = Path(__file__).resolve().parents[3]
 CHILD = """
 import json, os, stat, sys
 from pathlib import Path
-from planner.infra import write_atomic, write_bytes_atomic, write_json_atomic, write_text_atomic
+from ogcp.planner.infra import write_atomic, write_bytes_atomic, write_json_atomic, write_text_atomic
 
 os.umask(int(sys.argv[2], 8))
 folder = Path(sys.argv[1])

@@ -8,8 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from planner.infra import OgcpError
-from planner.infra.cache import (
+from ogcp.planner.infra import OgcpError
+from ogcp.planner.infra.cache import (
     ENTRY_MANIFEST,
     ENTRY_SCHEMA,
     CacheEntryWarning,

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from planner.infra.provenance import checkout_commit
+from ogcp.planner.infra.provenance import checkout_commit
 
 pytestmark = pytest.mark.skipif(shutil.which("git") is None, reason="needs git")
 

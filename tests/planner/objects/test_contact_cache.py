@@ -12,10 +12,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from planner.grasp.contact_set import ContactSet, sample_contacts
-from planner.infra.cache import CacheEntryWarning
-from planner.objects.builtin import builtin_mesh
-from planner.objects.contact_cache import ContactRequest, cached_contacts, request_key
+from ogcp.planner.grasp.contact_set import ContactSet, sample_contacts
+from ogcp.planner.infra.cache import CacheEntryWarning
+from ogcp.planner.objects.builtin import builtin_mesh
+from ogcp.planner.objects.contact_cache import ContactRequest, cached_contacts, request_key
 
 ROOT = Path(__file__).resolve().parents[3]
 REQUEST = ContactRequest("box", None, 24, 3, 0.5, 8, 0.0, 0.0)
@@ -122,7 +122,7 @@ def test_a_mesh_file_is_keyed_by_its_bytes_and_a_missing_one_is_not_cached(tmp_p
 def test_the_cli_plans_from_a_cached_set_without_trimesh_and_the_same_result(own_cache: Path) -> None:
     script = (
         "import io, json, sys, contextlib\n"
-        "from benchmarks.cli.app import main\n"
+        "from ogcp.benchmarks.cli.app import main\n"
         "out = io.StringIO()\n"
         "with contextlib.redirect_stdout(out):\n"
         "    main(['plan', 'box', '-n', '16', '--seed', '2', '--json'])\n"

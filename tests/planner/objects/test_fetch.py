@@ -18,12 +18,12 @@ import numpy as np
 import pytest
 import trimesh
 
-from benchmarks import cli
-from planner import BUILTIN_OBJECTS, resolve_object
-from planner.infra import OgcpError
-from planner.objects import fetch as assets
-from planner.objects import fetchable as asset_registry
-from planner.objects.fetchable import FETCH_GROUPS, FETCHABLE_OBJECTS, PAPER_OBJECTS, pip_target_args
+from ogcp.benchmarks import cli
+from ogcp.planner import BUILTIN_OBJECTS, resolve_object
+from ogcp.planner.infra import OgcpError
+from ogcp.planner.objects import fetch as assets
+from ogcp.planner.objects import fetchable as asset_registry
+from ogcp.planner.objects.fetchable import FETCH_GROUPS, FETCHABLE_OBJECTS, PAPER_OBJECTS, pip_target_args
 
 PURELIB = "pymeshlab-2025.7.post1.data/purelib/"
 

@@ -7,8 +7,8 @@ import tomllib
 
 import pytest
 
-from planner.infra import OgcpError, asset_path
-from planner.objects.fetchable import FETCHABLE_OBJECTS, PAPER_OBJECTS, parse_manifest
+from ogcp.planner.infra import OgcpError, asset_path
+from ogcp.planner.objects.fetchable import FETCHABLE_OBJECTS, PAPER_OBJECTS, parse_manifest
 
 SHIPPED = asset_path("objects.toml").read_text()
 

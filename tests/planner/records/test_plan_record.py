@@ -6,10 +6,10 @@ import json
 
 import pytest
 
-from planner import builtin_mesh, resolve_object
-from planner.grasp import DEFAULT_CONE_EDGES, DEFAULT_MU, sample_contacts
-from planner.infra import OgcpError
-from planner.records.plan import (
+from ogcp.planner import builtin_mesh, resolve_object
+from ogcp.planner.grasp import DEFAULT_CONE_EDGES, DEFAULT_MU, sample_contacts
+from ogcp.planner.infra import OgcpError
+from ogcp.planner.records.plan import (
     PLAN_SCHEMA,
     contact_sampling,
     contact_set_record,
@@ -17,7 +17,7 @@ from planner.records.plan import (
     plan_grasps,
     recorded_positions,
 )
-from planner.search import GraspPlanner
+from ogcp.planner.search import GraspPlanner
 
 
 @pytest.fixture(scope="module")

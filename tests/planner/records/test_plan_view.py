@@ -8,13 +8,13 @@ import math
 import numpy as np
 import pytest
 
-from planner.baselines.es import ExhaustiveSearch
-from planner.baselines.hfts import HFTS
-from planner.grasp.contact_set import ContactSet, sample_contacts
-from planner.hands.reachability import SDHReachability
-from planner.objects import resolve_object
-from planner.records.plan import PlanView, add_hand, add_optimum, contact_set_record, hand_record
-from planner.search.grasp_planner import GraspPlanner
+from ogcp.planner.baselines.es import ExhaustiveSearch
+from ogcp.planner.baselines.hfts import HFTS
+from ogcp.planner.grasp.contact_set import ContactSet, sample_contacts
+from ogcp.planner.hands.reachability import SDHReachability
+from ogcp.planner.objects import resolve_object
+from ogcp.planner.records.plan import PlanView, add_hand, add_optimum, contact_set_record, hand_record
+from ogcp.planner.search.grasp_planner import GraspPlanner
 
 
 @pytest.fixture(scope="module")

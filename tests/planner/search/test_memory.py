@@ -7,16 +7,16 @@ import math
 import numpy as np
 import pytest
 
-from planner import builtin_mesh, sample_contacts
-from planner.grasp.constraints import DistinctContacts
-from planner.infra import OgcpError, SearchTimeout
-from planner.search import GraspPlanner
-from planner.search.best_first import Search
-from planner.search.memory import PROCESS_BYTES, forget_threshold, states_budget
-from planner.search.open_list import OpenList
-from planner.search.parts import PartOutcome, merge, search_in_parts
-from planner.search.refine import BOUND, EXACT, EXACT_G, PARTIAL, pack_waiting
-from planner.search.storage import IdPool, WaitingStore, waiting_bytes
+from ogcp.planner import builtin_mesh, sample_contacts
+from ogcp.planner.grasp.constraints import DistinctContacts
+from ogcp.planner.infra import OgcpError, SearchTimeout
+from ogcp.planner.search import GraspPlanner
+from ogcp.planner.search.best_first import Search
+from ogcp.planner.search.memory import PROCESS_BYTES, forget_threshold, states_budget
+from ogcp.planner.search.open_list import OpenList
+from ogcp.planner.search.parts import PartOutcome, merge, search_in_parts
+from ogcp.planner.search.refine import BOUND, EXACT, EXACT_G, PARTIAL, pack_waiting
+from ogcp.planner.search.storage import IdPool, WaitingStore, waiting_bytes
 from tests.conftest import exhaustive_best
 
 

@@ -1,4 +1,4 @@
-"""The array heap of open states (planner.search.open_list) against heapq on tuples."""
+"""The array heap of open states (ogcp.planner.search.open_list) against heapq on tuples."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from planner.search.open_list import OpenList
+from ogcp.planner.search.open_list import OpenList
 
 
 def _random_ops(seed: int, count: int):

@@ -5,11 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from planner import builtin_mesh
-from planner.grasp import ContactSet, sample_contacts
-from planner.infra import OgcpError
-from planner.search import KMeansPartitioner, PartitionTree, RandomPartitioner, make_partitioner
-from planner.search.partitions import content_seed
+from ogcp.planner import builtin_mesh
+from ogcp.planner.grasp import ContactSet, sample_contacts
+from ogcp.planner.infra import OgcpError
+from ogcp.planner.search import KMeansPartitioner, PartitionTree, RandomPartitioner, make_partitioner
+from ogcp.planner.search.partitions import content_seed
 
 N = 60
 

@@ -9,12 +9,12 @@ from pathlib import Path
 
 import pytest
 
-from planner.grasp.constraints import DistinctContacts
-from planner.infra import OgcpError, SearchTimeout
-from planner.search import GraspPlanner
-from planner.search.best_first import Search
-from planner.search.deal import Board, Part, owner
-from planner.search.parts import PartOutcome, merge, run_part
+from ogcp.planner.grasp.constraints import DistinctContacts
+from ogcp.planner.infra import OgcpError, SearchTimeout
+from ogcp.planner.search import GraspPlanner
+from ogcp.planner.search.best_first import Search
+from ogcp.planner.search.deal import Board, Part, owner
+from ogcp.planner.search.parts import PartOutcome, merge, run_part
 from tests.conftest import exhaustive_best
 
 
@@ -123,7 +123,7 @@ def test_merge_takes_the_best_grasp_and_the_largest_bound(object_contacts):
 
 
 def _part_children() -> list[int]:
-    """Pids of this process's live ``planner.search.part_child`` children (Linux /proc)."""
+    """Pids of this process's live ``ogcp.planner.search.part_child`` children (Linux /proc)."""
     found = []
     for entry in Path("/proc").iterdir():
         if entry.name.isdigit():
@@ -132,7 +132,7 @@ def _part_children() -> list[int]:
                 parent = int((entry / "stat").read_text().rsplit(")", 1)[1].split()[1])
             except (OSError, ValueError, IndexError):
                 continue  # ended meanwhile
-            if b"planner.search.part_child" in command and parent == os.getpid():
+            if b"ogcp.planner.search.part_child" in command and parent == os.getpid():
                 found.append(int(entry.name))
     return found
 

@@ -1,4 +1,4 @@
-"""Local search for good grasps while a search runs (planner.search.polish)."""
+"""Local search for good grasps while a search runs (ogcp.planner.search.polish)."""
 
 from __future__ import annotations
 
@@ -9,11 +9,11 @@ import time
 import numpy as np
 import pytest
 
-from planner.grasp.constraints import DistinctContacts, MaxFingerSpread
-from planner.grasp.quality import q1
-from planner.search import GraspPlanner
-from planner.search import best_first as search_run
-from planner.search.polish import Polisher
+from ogcp.planner.grasp.constraints import DistinctContacts, MaxFingerSpread
+from ogcp.planner.grasp.quality import q1
+from ogcp.planner.search import GraspPlanner
+from ogcp.planner.search import best_first as search_run
+from ogcp.planner.search.polish import Polisher
 from tests.conftest import exhaustive_best
 
 

@@ -1,4 +1,4 @@
-"""The compiled branch and bound over a state's Γh children (planner.search.refine_kernel)."""
+"""The compiled branch and bound over a state's Γh children (ogcp.planner.search.refine_kernel)."""
 
 from __future__ import annotations
 
@@ -7,12 +7,12 @@ import itertools
 import numpy as np
 import pytest
 
-from planner.grasp import subset_quality
-from planner.grasp.kernel.geometry import CUT_MARGIN
-from planner.grasp.subset_quality import EXACT
-from planner.search import GraspPlanner, search_space
-from planner.search import best_first as search_run
-from planner.search.refine_kernel import ChildBounds, share_normal
+from ogcp.planner.grasp import subset_quality
+from ogcp.planner.grasp.kernel.geometry import CUT_MARGIN
+from ogcp.planner.grasp.subset_quality import EXACT
+from ogcp.planner.search import GraspPlanner, search_space
+from ogcp.planner.search import best_first as search_run
+from ogcp.planner.search.refine_kernel import ChildBounds, share_normal
 from tests.conftest import exhaustive_best
 
 

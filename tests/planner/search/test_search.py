@@ -10,10 +10,10 @@ import types
 import numpy as np
 import pytest
 
-from planner.grasp import q1
-from planner.infra import OgcpError, SearchTimeout
-from planner.search import GraspPlanner, effective_branching_factor, memory
-from planner.search import best_first as search_run
+from ogcp.planner.grasp import q1
+from ogcp.planner.infra import OgcpError, SearchTimeout
+from ogcp.planner.search import GraspPlanner, effective_branching_factor, memory
+from ogcp.planner.search import best_first as search_run
 from tests.conftest import exhaustive_best
 
 OBJECTS = ("box", "sphere", "donut", "amphora")

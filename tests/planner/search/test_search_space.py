@@ -7,11 +7,11 @@ import itertools
 import numpy as np
 import pytest
 
-from planner.grasp.constraints import DistinctContacts, MaxFingerSpread
-from planner.search import GraspPlanner
-from planner.search.best_first import Search
-from planner.search.children_kernel import decode_children, first_lowest
-from planner.search.search_space import SearchSpace
+from ogcp.planner.grasp.constraints import DistinctContacts, MaxFingerSpread
+from ogcp.planner.search import GraspPlanner
+from ogcp.planner.search.best_first import Search
+from ogcp.planner.search.children_kernel import decode_children, first_lowest
+from ogcp.planner.search.search_space import SearchSpace
 
 
 def _space(contacts, m: int, heuristic_branching: int) -> SearchSpace:

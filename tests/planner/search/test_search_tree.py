@@ -7,7 +7,7 @@ import json
 
 import pytest
 
-from planner.search import GraspPlanner
+from ogcp.planner.search import GraspPlanner
 
 
 # box 100 with eps = 1: WA* returns a better grasp met in a branch and bound, whose state

@@ -16,16 +16,16 @@ import trimesh
 from scipy.spatial import ConvexHull
 from scipy.spatial.transform import Rotation
 
-from planner.grasp import NonWatertightWarning, mass_properties
-from planner.infra import OgcpError
-from planner.infra.cache import ENTRY_MANIFEST, CacheEntryWarning
-from sim_eval.body import hull_part, is_closed_manifold, object_inertia
-from sim_eval.collision import CollisionSurface
-from sim_eval.decomposition import Decomposition, DecompositionSettings, cache_key, decompose
+from ogcp.planner.grasp import NonWatertightWarning, mass_properties
+from ogcp.planner.infra import OgcpError
+from ogcp.planner.infra.cache import ENTRY_MANIFEST, CacheEntryWarning
+from ogcp.sim_eval.body import hull_part, is_closed_manifold, object_inertia
+from ogcp.sim_eval.collision import CollisionSurface
+from ogcp.sim_eval.decomposition import Decomposition, DecompositionSettings, cache_key, decompose
 
 # Monkeypatching needs the module objects themselves (``decompose`` is also a function name).
-dec = importlib.import_module("sim_eval.decomposition.decompose")
-coacd_runner = importlib.import_module("sim_eval.decomposition.coacd_child")
+dec = importlib.import_module("ogcp.sim_eval.decomposition.decompose")
+coacd_runner = importlib.import_module("ogcp.sim_eval.decomposition.coacd_child")
 
 #: CoACD settings small enough for a sub-second run on the test meshes.
 TINY = {"preprocess_resolution": 20, "resolution": 500, "mcts_nodes": 10, "mcts_iterations": 30, "mcts_max_depth": 2}

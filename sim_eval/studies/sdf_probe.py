@@ -1,6 +1,6 @@
 """Probe: can a MuJoCo signed distance field stand in for CoACD's convex parts as the object's collider?
 
-Run: ``python -m benchmarks.studies.sdf_probe [--objects donut,amphora,bunny] [--points 50]``.
+Run: ``python -m ogcp.sim_eval.studies.sdf_probe [--objects donut,amphora,bunny] [--points 50]``.
 
 ``import mujoco`` loads every library in ``mujoco/plugin/`` (``libsdf_plugin.so`` among them),
 but the wheel's SDF library registers only the analytic bolt, bowl, gear, nut and torus. So the
@@ -15,7 +15,7 @@ collider it measures:
   diagonal; ``ncon``: median contacts of the one pair; ``normal``: median/max angle between the
   deepest contact's normal and the exact one (centre minus nearest surface point);
 * speed and stability: compile time, steps/s of the object held by 3 preloaded tips (the A*
-  grasp of 50 contacts; tips on 3 slides with servos as in :mod:`sim_eval.scene`), contacts per
+  grasp of 50 contacts; tips on 3 slides with servos as in :mod:`ogcp.sim_eval.scene`), contacts per
   step, and over the second half of 2 x settle_time: object and tip drift [% diag] and the
   normal-force spread std/mean of the worst tip.
 """
@@ -27,17 +27,17 @@ import itertools
 import time
 from typing import Any
 
-import mujoco  # a study of MuJoCo itself; the import contract lets this one module reach it
+import mujoco  # a study of MuJoCo itself, so it lives in sim_eval
 import numpy as np
 import trimesh
 from numpy.typing import NDArray
 
-from planner import GraspPlanner, resolve_object, sample_contacts
-from planner.grasp.mesh_distance import SurfaceIndex
-from planner.grasp.wrench import tangent_basis
-from sim_eval.body import object_inertia
-from sim_eval.decomposition.decompose import decompose
-from sim_eval.settings import SimSettings
+from ogcp.planner import GraspPlanner, resolve_object, sample_contacts
+from ogcp.planner.grasp.mesh_distance import SurfaceIndex
+from ogcp.planner.grasp.wrench import tangent_basis
+from ogcp.sim_eval.body import object_inertia
+from ogcp.sim_eval.decomposition.decompose import decompose
+from ogcp.sim_eval.settings import SimSettings
 
 SDFLIB = (
     '<extension><plugin plugin="mujoco.sdf.sdflib"><instance name="sdf"><config key="aabb" value="0"/>'
@@ -134,7 +134,7 @@ def accuracy(mesh: trimesh.Trimesh, parts: Parts | None, r: float, diag: float, 
 def grasp_model(
     mesh: trimesh.Trimesh, parts: Parts | None, settings: SimSettings, r: float, initpoints: int | None
 ) -> tuple[mujoco.MjModel, NDArray[np.float64], float]:
-    """The object (free) held by 3 tips at the A* grasp of 50 contacts, as in :func:`sim_eval.scene.build_scene`.
+    """The object (free) held by 3 tips at the A* grasp of 50 contacts, as in :func:`ogcp.sim_eval.scene.build_scene`.
 
     Returns:
         ``(model, preload ctrl, compile seconds)``.
