@@ -26,7 +26,7 @@ if TYPE_CHECKING:
     from ogcp.planner.grasp.constraints import DistinctContacts, MaxFingerSpread
     from ogcp.planner.grasp.contact_set import ContactSet, sample_contacts
     from ogcp.planner.grasp.quality import Q1Certificate, q1, q1_certificate
-    from ogcp.planner.hands.reachability import SDHReachability
+    from ogcp.planner.hands.reachability import HandReachability, SDHReachability
     from ogcp.planner.infra.errors import OgcpError, SearchTimeout
     from ogcp.planner.infra.tolerance import TOL
     from ogcp.planner.objects import BUILTIN_OBJECTS, builtin_mesh, load_mesh, resolve_object
@@ -47,6 +47,7 @@ _EXPORTS = {
     "MaxFingerSpread": "ogcp.planner.grasp.constraints",
     "OgcpError": "ogcp.planner.infra.errors",
     "Q1Certificate": "ogcp.planner.grasp.quality",
+    "HandReachability": "ogcp.planner.hands.reachability",
     "SDHReachability": "ogcp.planner.hands.reachability",
     "SearchResult": "ogcp.planner.search.result",
     "SearchStats": "ogcp.planner.search.result",
@@ -69,6 +70,7 @@ __all__ = [
     "ExhaustiveSearch",
     "GraspPlanner",
     "HFTSResult",
+    "HandReachability",
     "MaxFingerSpread",
     "OgcpError",
     "Q1Certificate",

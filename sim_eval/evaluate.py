@@ -19,7 +19,7 @@ import time
 import traceback
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import trimesh
@@ -38,6 +38,9 @@ from ogcp.sim_eval.result import GraspSimResult, SimResult
 from ogcp.sim_eval.settings import SimSettings, scaled_lengths
 from ogcp.sim_eval.trial import ObjectBody, contact_torsion, failed_result, simulate_grasp
 
+if TYPE_CHECKING:
+    from ogcp.sim_eval.hand.trial import HandSetup
+
 
 class GraspEvaluator:
     """Simulates grasps on one object and compares them with the analytic prediction.
@@ -47,6 +50,8 @@ class GraspEvaluator:
         decomposition: Convex decomposition settings (default CoACD with its defaults).
         cache: Decomposition cache folder (default ``$OGCP_CACHE/decompositions``).
         progress: Show progress bars on stderr.
+        hand: Test the grasps with this hand instead of fingertip spheres
+            (:class:`ogcp.sim_eval.hand.trial.HandSetup`); None: fingertips.
     """
 
     def __init__(
@@ -55,11 +60,13 @@ class GraspEvaluator:
         decomposition: DecompositionSettings | None = None,
         cache: str | Path | None = None,
         progress: bool = False,
+        hand: HandSetup | None = None,
     ) -> None:
         self.settings = settings
         self.decomposition = decomposition
         self.cache = None if cache is None else Path(cache)
         self.progress = progress
+        self.hand = hand
 
     def evaluate(
         self,
@@ -105,7 +112,12 @@ class GraspEvaluator:
         radius = tip_radius(mesh, settings)
         body = ObjectBody(com, inertia, radius, diagonal)
         ladder = DecompositionLadder(mesh, decomposition, diagonal, radius, self.cache, self.progress, first=parts)
-        unreachable = _unreachable_contacts(mesh, contacts, chosen, radius)
+        if self.hand is not None and settings.protocol == "dexgraspbench":
+            raise OgcpError(
+                "the dexgraspbench protocol presses fingertips; with a hand use the ogcp protocol (or --tips)"
+            )
+        # A hand's fit decides what it reaches; the fingertip's own check is for spheres.
+        unreachable = _unreachable_contacts(mesh, contacts, chosen, radius) if self.hand is None else set()
         results = []
         bar = tqdm(total=len(chosen), desc="simulate", unit="grasp", disable=not self.progress)
         for grasp, label in zip(chosen, labels, strict=True):
@@ -117,7 +129,16 @@ class GraspEvaluator:
             try:
                 idx = np.asarray(grasp, dtype=np.intp)
                 fit = ladder.fit(contacts.positions[idx], contacts.normals[idx])
-                results.append(simulate_grasp(contacts, grasp, label, fit, body, settings))
+                if self.hand is None:
+                    results.append(simulate_grasp(contacts, grasp, label, fit, body, settings))
+                else:
+                    from ogcp.sim_eval.hand.trial import simulate_hand_grasp
+
+                    mu = settings.mu if settings.mu is not None else contacts.mu
+                    torsion = contact_torsion(contacts, settings)
+                    results.append(
+                        simulate_hand_grasp(contacts, grasp, label, fit, body, settings, self.hand, mu, torsion)
+                    )
             except Exception as exc:  # noqa: BLE001 - one bad grasp must not sink the batch
                 reason = f"{type(exc).__name__}: {exc}"
                 results.append(failed_result(contacts, grasp, label, reason, traceback.format_exc(limit=3)))
@@ -136,6 +157,7 @@ class GraspEvaluator:
                 "decomposition": decomposition.to_dict(),
                 # What the simulation and the prediction used: Q1 keeps the contact set's own model.
                 "contact_model": contact_model_record(contacts, settings),
+                **({"hand": self.hand.kinematics.describe()} if self.hand is not None else {}),
             },
             decomposition=_decomposition_meta(parts, ladder),
             wall_seconds=time.perf_counter() - start,
@@ -249,8 +271,12 @@ def evaluate_plan(
     progress: bool = False,
     max_grasps: int | None = None,
     plan_file: str | Path | None = None,
+    tips: bool = False,
 ) -> SimResult:
     """Simulate the grasps of an ``ogcp.plan/1`` record (best grasp, ES top grasps, HFTS runs).
+
+    A plan made with a hand is tested with that hand (its descriptor, the fingers it chose),
+    unless ``tips`` asks for fingertip spheres.
 
     Args:
         record: The plan record.
@@ -261,6 +287,7 @@ def evaluate_plan(
             None: all.
         plan_file: Where the record was read from: a mesh file is looked for next to it first
             (a plan moved together with its mesh still evaluates).
+        tips: Test with fingertip spheres even when the plan has a hand.
 
     Returns:
         The simulation result.
@@ -275,5 +302,32 @@ def evaluate_plan(
         decomposition = DecompositionSettings(**dict(decomposition))
     plan = plan_input(record, plan_file)
     grasps, labels = plan.grasps[:max_grasps], plan.labels[:max_grasps]
-    evaluator = GraspEvaluator(settings, decomposition, progress=progress)
+    hand = None if tips else plan_hand(record)
+    evaluator = GraspEvaluator(settings, decomposition, progress=progress, hand=hand)
     return evaluator.evaluate(plan.mesh, plan.contacts, grasps, labels)
+
+
+def plan_hand(record: dict[str, Any]) -> HandSetup | None:
+    """The hand a plan was made for, compiled, with the fingers it chose; None for a plan without one.
+
+    Raises:
+        OgcpError: If the hand's descriptor is gone or changed since the plan (its sha256 differs).
+    """
+    from ogcp.planner.hands.kinematics import HandKinematics
+    from ogcp.planner.hands.registry import resolve_hand
+    from ogcp.planner.records.plan import PlanView
+    from ogcp.sim_eval.hand.trial import HandSetup
+
+    block = PlanView(record).hand
+    if block is None:
+        return None
+    source = block.descriptor or block.name
+    if source is None:
+        raise OgcpError("the plan's hand block names no hand (no descriptor, no name)")
+    descriptor = resolve_hand(source)
+    if block.descriptor_sha256 is not None and descriptor.sha256 != block.descriptor_sha256:
+        raise OgcpError(
+            f"hand descriptor {descriptor.path} changed since the plan (sha256 {descriptor.sha256[:12]}, "
+            f"the plan has {block.descriptor_sha256[:12]}); re-plan, or evaluate with --tips"
+        )
+    return HandSetup.of(HandKinematics(descriptor), block.fingers or None)

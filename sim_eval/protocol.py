@@ -88,7 +88,7 @@ def tip_normal_forces(scene: GraspScene, data: mujoco.MjData) -> NDArray[np.floa
     """Summed normal force of each tip's contacts with the object, shape (m,) [N]."""
     forces = np.zeros(scene.fingers)
     wrench = np.zeros(6)
-    tip_index = {int(g): i for i, g in enumerate(scene.tip_geoms)}
+    tip_index = scene.geom_fingers()
     for c in range(data.ncon):
         contact = data.contact[c]
         for geom in (contact.geom1, contact.geom2):
@@ -101,7 +101,7 @@ def tip_normal_forces(scene: GraspScene, data: mujoco.MjData) -> NDArray[np.floa
 def _penetration(scene: GraspScene, data: mujoco.MjData) -> tuple[float, NDArray[np.float64]]:
     """Deepest penetration of any contact, and of each tip's contacts, shape (m,) [m]."""
     depth, tips = 0.0, np.zeros(scene.fingers)
-    tip_index = {int(g): i for i, g in enumerate(scene.tip_geoms)}
+    tip_index = scene.geom_fingers()
     for c in range(data.ncon):
         contact = data.contact[c]
         depth = max(depth, -float(contact.dist))
@@ -131,6 +131,8 @@ def settle(scene: GraspScene, settings: SimSettings) -> Settled:
     """
     model = scene.model
     data = mujoco.MjData(model)
+    start = scene.start()
+    data.qpos[:] = start
     data.ctrl[:] = scene.preload_ctrl
     mujoco.mj_forward(model, data)
     penetration, tip_penetration = _penetration(scene, data)
@@ -139,14 +141,16 @@ def settle(scene: GraspScene, settings: SimSettings) -> Settled:
     q = slice(scene.object_qpos, scene.object_qpos + 7)
     diverged = False
     # Tips flung far from the object (an unstable step size) count as divergence too.
-    slides = np.setdiff1d(np.arange(model.nq), np.arange(scene.object_qpos, scene.object_qpos + 7))
+    slides = scene.watched_qpos
+    if slides is None:
+        slides = np.setdiff1d(np.arange(model.nq), np.arange(scene.object_qpos, scene.object_qpos + 7))
     runaway = RUNAWAY_RADII * scene.tip_radius
     window_start = data.qpos[q].copy()
     for k in range(steps):
         if k == steps - window:
             window_start = data.qpos[q].copy()
         mujoco.mj_step(model, data)
-        if not np.all(np.isfinite(data.qpos)) or np.max(np.abs(data.qpos[slides])) > runaway:
+        if not np.all(np.isfinite(data.qpos)) or np.max(np.abs(data.qpos[slides] - start[slides])) > runaway:
             diverged = True
             break
     # MuJoCo resets the data when the acceleration blows up, so a rewound clock also means divergence.

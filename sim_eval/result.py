@@ -79,6 +79,11 @@ class GraspSimResult:
         collision: The decomposition the grasp ran on (``threshold``, ``hull_count``) and the
             collision surface's ``offsets`` [m] from the mesh along each contact normal,
             ``tolerance``, ``within_tolerance``, ``tried`` and a ``note`` when it was not met.
+        hand: For a grasp tested with a hand (empty for fingertips): ``name``,
+            ``descriptor_sha256``, ``finger_contacts``, ``fit`` (realised, reason, residuals),
+            ``fit_residuals`` [m] per finger, ``joint_angles`` (the fit's), ``settled_joint_angles``,
+            the palm pose, ``pregrasp``, ``squeeze``, and ``extra_contacts`` (other links' contacts:
+            link and force [N]).
     """
 
     grasp: tuple[int, ...]
@@ -100,6 +105,7 @@ class GraspSimResult:
     predicted_planned: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
     realized: dict[str, Any] = field(default_factory=dict)
     collision: dict[str, Any] = field(default_factory=dict)
+    hand: dict[str, Any] = field(default_factory=dict)
 
     @property
     def valid(self) -> bool:
@@ -151,6 +157,7 @@ class GraspSimResult:
                 "predicted_planned": self.predicted_planned,
                 "realized": self.realized,
                 "collision": self.collision,
+                **({"hand": self.hand} if self.hand else {}),
             }
         )
 
@@ -243,6 +250,7 @@ class SimGraspRecord:
             ``/1`` record the tips started there, so it is ``predicted``.
         realized: Realized contacts and Q1 (empty in ``/1`` records).
         collision: Collision-surface offsets at the contacts (empty in ``/1`` records).
+        hand: The hand block of a grasp tested with a hand (empty for fingertips and older records).
     """
 
     label: str
@@ -268,6 +276,7 @@ class SimGraspRecord:
     predicted_planned: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
     realized: dict[str, Any] = field(default_factory=dict)
     collision: dict[str, Any] = field(default_factory=dict)
+    hand: dict[str, Any] = field(default_factory=dict)
 
     @property
     def q1_realized(self) -> float | None:
@@ -314,6 +323,7 @@ class SimGraspRecord:
             predicted_planned=_floats(data.get("predicted_planned", data.get("predicted"))),
             realized=_mapping(data.get("realized")),
             collision=_mapping(data.get("collision")),
+            hand=_mapping(data.get("hand")),
         )
 
 

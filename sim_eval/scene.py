@@ -45,6 +45,12 @@ class GraspScene:
         mu: Friction coefficient of every tip-object contact.
         torsion: Torsional friction coefficient of every tip-object contact [m]; 0 = hard
             fingers (condim 3), else soft fingers (condim 4).
+        finger_geoms: The geoms that are each finger's pad (a hand's tip-body geoms); None: the
+            tip spheres, one per finger.
+        watched_qpos: qpos entries whose drift from the start beyond ``RUNAWAY_RADII`` tip radii
+            counts as divergence; None: every entry but the object's (the tips' slides).
+        start_qpos: The state the protocol starts from (a closed hand), shape (nq,); None: the
+            model's ``qpos0``. (``qpos0`` itself is the joints' reference and is never changed.)
     """
 
     model: mujoco.MjModel
@@ -56,14 +62,27 @@ class GraspScene:
     tip_radius: float
     mu: float
     torsion: float = 0.0
+    finger_geoms: tuple[NDArray[np.intp], ...] | None = None
+    watched_qpos: NDArray[np.intp] | None = None
+    start_qpos: NDArray[np.float64] | None = None
+
+    def start(self) -> NDArray[np.float64]:
+        """The qpos the protocol starts from, shape (nq,)."""
+        return self.model.qpos0.copy() if self.start_qpos is None else self.start_qpos.copy()
 
     @property
     def fingers(self) -> int:
-        """Number of fingertips m."""
+        """Number of fingers m."""
         return len(self.tip_geoms)
 
+    def geom_fingers(self) -> dict[int, int]:
+        """Geom id -> the finger it belongs to, for the geoms that are the fingers' pads."""
+        if self.finger_geoms is None:
+            return {int(g): i for i, g in enumerate(self.tip_geoms)}
+        return {int(g): i for i, geoms in enumerate(self.finger_geoms) for g in geoms}
 
-def _friction(mu: float, torsion: float) -> dict[str, Any]:
+
+def contact_friction(mu: float, torsion: float) -> dict[str, Any]:
     """Geom attributes of a contact: sliding friction only (condim 3), or with torsion (condim 4).
 
     MuJoCo takes a pair's friction from the larger of its geoms' values and its condim from
@@ -74,7 +93,7 @@ def _friction(mu: float, torsion: float) -> dict[str, Any]:
     return {"condim": 3, "friction": [mu, 0.0, 0.0]}
 
 
-def _options(spec: mujoco.MjSpec, settings: SimSettings, gravity: bool) -> None:
+def set_options(spec: mujoco.MjSpec, settings: SimSettings, gravity: bool) -> None:
     opt = spec.option
     opt.timestep = settings.timestep
     opt.integrator = _INTEGRATORS[settings.integrator]
@@ -88,7 +107,7 @@ def _options(spec: mujoco.MjSpec, settings: SimSettings, gravity: bool) -> None:
     opt.gravity = [0.0, 0.0, -GRAVITY / settings.inertia_scale if gravity else 0.0]
 
 
-def _add_object(
+def add_object(
     spec: mujoco.MjSpec,
     parts: Sequence[tuple[NDArray[np.float64], NDArray[np.int64]]],
     com: NDArray[np.float64],
@@ -118,7 +137,7 @@ def _add_object(
             meshname=f"part{k}",
             contype=1,
             conaffinity=0,
-            **_friction(mu, torsion),
+            **contact_friction(mu, torsion),
             density=0.0,
             solref=list(settings.contact_solref),
             solimp=[*settings.contact_solimp, 0.5, 2.0],
@@ -151,7 +170,7 @@ def _add_tip(
         mass=settings.tip_mass,
         contype=0,
         conaffinity=1,
-        **_friction(mu, torsion),
+        **contact_friction(mu, torsion),
         solref=list(settings.contact_solref),
         solimp=[*settings.contact_solimp, 0.5, 2.0],
         rgba=[0.2, 0.45, 0.8, 1.0],
@@ -204,8 +223,8 @@ def build_scene(
     normals = np.asarray(normals, dtype=float)
     spec = mujoco.MjSpec()
     spec.modelname = "ogcp_grasp"
-    _options(spec, settings, settings.gravity if gravity is None else gravity)
-    _add_object(spec, parts, com, inertia, settings.body_mass, settings, mu, torsion)
+    set_options(spec, settings, settings.gravity if gravity is None else gravity)
+    add_object(spec, parts, com, inertia, settings.body_mass, settings, mu, torsion)
     a, b = tangent_basis(normals)
     for i in range(len(positions)):
         centre = positions[i] - tip_radius * normals[i]

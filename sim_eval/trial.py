@@ -179,7 +179,9 @@ def simulate_grasp(
         holds["dexgraspbench"] = _dexgraspbench(scene, settled, settings)
     if not settled.gates["diverged"]:
         if not compat:
-            measured, censored = _ramp(scene, settled, dirs.vectors, predicted, contacts.torque_scale, settings)
+            measured, censored = ramp_to_failure(
+                scene, settled, dirs.vectors, predicted, contacts.torque_scale, settings
+            )
             fid = fidelity(measured, predicted, FIDELITY_FLOOR * settings.max_normal_force)
             fid[censored] = math.nan
         if settings.weight_test:
@@ -222,7 +224,7 @@ def _weakest(achieved: Q1Certificate, planned: Q1Certificate) -> NDArray[np.floa
     return planned.direction if planned.force_closure else None
 
 
-def _ramp(
+def ramp_to_failure(
     scene: GraspScene,
     settled: Settled,
     directions: NDArray[np.float64],

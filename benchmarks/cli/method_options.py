@@ -25,7 +25,7 @@ GROUPS = (
     ("exhaustive search (--method es / es-pruned)", ("es", "es-pruned")),
     ("HFTS baseline (--method hfts)", ("hfts",)),
 )
-_TYPES: dict[str, Callable[[str], Any]] = {"int": integer, "float": number, "choice": str}
+_TYPES: dict[str, Callable[[str], Any]] = {"int": integer, "float": number, "choice": str, "text": str, "names": str}
 
 
 def flag(field: str) -> str:

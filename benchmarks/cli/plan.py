@@ -115,12 +115,25 @@ def tip_radius(text: str) -> float:
     return float(typed(TIP_RADIUS)(text))
 
 
+def hand_tip_radius(args: argparse.Namespace) -> float | None:
+    """``ogcp contacts --hand`` without ``--tip-radius``: the hand's largest pad rounding [m]."""
+    hand = getattr(args, "hand", None) if args.command == "contacts" else None
+    if hand is None or args.tip_radius is not None:
+        return None
+    from ogcp.planner.hands.registry import resolve_hand
+
+    return max(finger.tip_radius for finger in resolve_hand(hand).fingers)
+
+
 def sample_from_args(mesh: trimesh.Trimesh, source: dict[str, Any], n: int, args: argparse.Namespace) -> ContactSet:
     """Sample ``n`` contacts with the contact flags; no ``--tip-radius`` means the default fingertip."""
     from ogcp.planner.grasp.contact_set import sample_contacts
     from ogcp.planner.grasp.reach import default_tip_radius
 
-    radius = default_tip_radius(mesh) if args.tip_radius is None else args.tip_radius
+    # ``ogcp contacts --hand``: its pads' rounding. ``ogcp plan --hand`` keeps the default fingertip,
+    # as a suite's cells share one contact set across methods with and without hands.
+    radius = args.tip_radius if args.tip_radius is not None else hand_tip_radius(args)
+    radius = default_tip_radius(mesh) if radius is None else radius
     mu = DEFAULT_MU if args.mu is None else args.mu
     cone_edges = DEFAULT_CONE_EDGES if args.cone_edges is None else args.cone_edges
     torsion = torsion_from_args(args)
@@ -134,6 +147,13 @@ def register(commands: Any) -> None:
     contacts = commands.add_parser("contacts", help="sample a contact set from a mesh and write it as JSON")
     contacts.add_argument("object", metavar="MESH_OR_NAME", help=f"mesh file or built-in object ({objects})")
     _add_contact_options(contacts, DEFAULT_CONTACTS)
+    contacts.add_argument(
+        "--hand",
+        metavar="NAME|FILE.toml",
+        default=None,
+        help="sample contacts this hand's pads can touch: the tip radius is its largest pad rounding "
+        "(unless --tip-radius is given)",
+    )
     contacts.add_argument("-o", "--output", required=True, type=Path, help="output JSON file")
     contacts.set_defaults(handler=run_contacts)
 

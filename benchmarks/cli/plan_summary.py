@@ -149,7 +149,10 @@ def _hand_text(hand: PlanHand | None) -> str:
     if hand is None:
         return ""
     residual = "n/a" if hand.residual is None else f"{hand.residual:.3f}"
-    return (
-        f"\nhand: {hand.name}, residual {residual}, fingers on contacts {list(hand.finger_contacts)}, "
-        f"joint angles [rad] {[round(a, 3) for a in hand.joint_angles]}"
-    )
+    if hand.fingers and len(hand.fingers) == len(hand.finger_contacts):
+        placed = ", ".join(f"{f} on {c}" for f, c in zip(hand.fingers, hand.finger_contacts, strict=True))
+    else:
+        placed = f"fingers on contacts {list(hand.finger_contacts)}"
+    angles = [round(a, 3) for a in hand.joint_angles]
+    names = f" ({', '.join(hand.joint_names)})" if len(hand.joint_names) == len(angles) else ""
+    return f"\nhand: {hand.name}, residual {residual}, {placed}, nearest sampled joint angles{names} {angles}"

@@ -123,6 +123,12 @@ def register(commands: Any) -> None:
         help="ramp to failure (default) or DexGraspBench's fixed +-x,y,z load",
     )
     evaluate.add_argument("--weight-test", action="store_true", help="also hold m g along the six force axes")
+    evaluate.add_argument(
+        "--tips",
+        action="store_true",
+        help="test a plan made with a hand with fingertip spheres instead (default: the plan's hand, closed "
+        "by its servos)",
+    )
     model = evaluate.add_argument_group(
         "contact model of the simulation",
         "default: the plan's own (a grasps file's, else hard); given, it replaces it in the simulation and the "
@@ -274,6 +280,23 @@ def _realized_lines(grasp: Any) -> list[str]:
     return lines
 
 
+def _hand_lines(hand: dict[str, Any]) -> list[str]:
+    """The hand's fit and the contacts of its other links, for a grasp tested with a hand."""
+    if not hand:
+        return []
+    residuals = [f"{1e3 * r:.2f}" for r in _list(hand.get("fit_residuals")) if isinstance(r, int | float)]
+    lines = [f"  hand {hand.get('name', '?')}: pad residuals [mm] {', '.join(residuals) or '-'}"]
+    extra = [
+        f"{e.get('link')} {_fmt(e.get('force'))} N" for e in _list(hand.get("extra_contacts")) if isinstance(e, dict)
+    ]
+    if extra:
+        lines.append(f"  other links touching the object: {', '.join(extra)}")
+    pads = (hand.get("fit") or {}).get("reason") if isinstance(hand.get("fit"), dict) else None
+    if pads:
+        lines.append(f"  fit: {pads}")
+    return lines
+
+
 def sim_summary(record: dict[str, Any]) -> str:
     """Human-readable table of an ``ogcp.sim/1`` or ``/2`` record."""
     import numpy as np
@@ -296,6 +319,7 @@ def sim_summary(record: dict[str, Any]) -> str:
             f"tips in contact {gates.get('tips_in_contact', '-')}, creep {_fmt(gates.get('creep'), 2, 1e6)} um)"
         )
         lines.extend(f"  invalid: {reason}" for reason in g.invalid_reasons)
+        lines.extend(_hand_lines(g.hand))
         lines.extend(_realized_lines(g))
         for name, test in g.hold_tests.items():
             test = test if isinstance(test, dict) else {}
@@ -366,6 +390,7 @@ def run_evaluate(args: argparse.Namespace) -> int:
         progress=sys.stderr.isatty(),
         max_grasps=args.max_grasps,
         plan_file=args.plan,
+        tips=args.tips,
     )
     data = result.to_dict()
     if args.render is not None:

@@ -30,7 +30,7 @@ if TYPE_CHECKING:
         fig8_wastar_tradeoff,
     )
     from ogcp.benchmarks.plots.grasp_figures import fig3_grasps
-    from ogcp.benchmarks.plots.hand_figures import fig10_sdh_grasps
+    from ogcp.benchmarks.plots.hand_figures import fig10_hand_grasps
     from ogcp.benchmarks.plots.names import NAMES, TABLE
     from ogcp.benchmarks.plots.protocol import sim_protocol
     from ogcp.benchmarks.plots.report import FIGURES, PlotReport, plot_run
@@ -53,7 +53,7 @@ _EXPORTS = {
     "SkipFigure": "ogcp.benchmarks.plots.data",
     "TimeTable": "ogcp.benchmarks.plots.tables",
     "fig3_grasps": "ogcp.benchmarks.plots.grasp_figures",
-    "fig10_sdh_grasps": "ogcp.benchmarks.plots.hand_figures",
+    "fig10_hand_grasps": "ogcp.benchmarks.plots.hand_figures",
     "fig4_q1_histograms": "ogcp.benchmarks.plots.figures",
     "fig5_search_tree": "ogcp.benchmarks.plots.tree",
     "fig6_states_per_level": "ogcp.benchmarks.plots.figures",
@@ -90,7 +90,7 @@ __all__ = [
     "fig6_states_per_level",
     "fig7_iterations_f",
     "fig8_wastar_tradeoff",
-    "fig10_sdh_grasps",
+    "fig10_hand_grasps",
     "layout_tree",
     "load_run",
     "method_colour",

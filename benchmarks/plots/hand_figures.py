@@ -1,17 +1,15 @@
-"""Fig. 10: the Schunk SDH on the optimal reachable grasp of each object.
+"""Fig. 10: each plan's hand on its best reachable grasp, for any hand.
 
-The plan record's ``hand`` block holds the joint angles of the reachability model's nearest sample
-and the contact each finger takes (:class:`ogcp.planner.records.plan.PlanHand`); it holds no hand pose,
-since the model matches the fingertips' *shape* (pairwise distances and normal differences), not
-their place. Placed rigidly (:func:`palm_pose`), those angles leave the fingertips 14-24 mm off
-their contacts. The figure draws the refined pose instead (:func:`ogcp.planner.hands.fit.fit_hand`):
-joint angles within their limits and the palm pose, solved from the recorded angles so that each
-finger's end sphere touches its contact from outside, pad towards the surface. Each panel's title
-gives the largest distance of a refined fingertip from its contact and the rigid fit's, and
-:data:`HAND_FITS` keeps the last figure's fits with the distance of every finger. Fingers and palm
-are capsules and a cylinder rasterised with the object (:mod:`ogcp.benchmarks.plots.raster`), so each
-hides the other correctly. The fit has no collision terms: the title says when fingers touch each
-other, and the hand is not kept out of the object.
+The plan record's ``hand`` block holds the reachability model's nearest sampled configuration and
+the contact each finger takes (:class:`ogcp.planner.records.plan.PlanHand`); it holds no palm pose,
+since the model matches the pads' rigid invariants, not their place. The figure fits the hand to
+the contacts (:func:`ogcp.sim_eval.hand.fit.fit_hand`: joint angles within their limits and the
+palm pose, from the recorded configuration and the next nearest samples) and draws every
+colliding geom of the hand's MuJoCo model in that pose, rasterised with the object
+(:mod:`ogcp.benchmarks.plots.raster`), so each hides the other correctly. Each panel's title gives
+the largest pad residual; :data:`HAND_FITS` keeps the last figure's fits. The fit here checks the
+hand against itself but not against the object (that needs the object's convex decomposition;
+the simulation's fit does).
 """
 
 from __future__ import annotations
@@ -21,30 +19,27 @@ import time
 from typing import TYPE_CHECKING
 
 import numpy as np
-from numpy.typing import NDArray
 
-from ogcp.planner.hands.fit import HandFit, fit_hand, rigid_fit
-from ogcp.planner.hands.reachability import LINK_CLEARANCE, finger_chain, pad_normals
-from ogcp.planner.hands.sdh import FINGER_BASES, PALM_HEIGHT
+from ogcp.planner.hands.kinematics import HandKinematics
+from ogcp.planner.hands.reachability import HandReachability
+from ogcp.planner.hands.registry import resolve_hand
+from ogcp.planner.infra.errors import OgcpError
 from ogcp.planner.records.plan import PlanHand
+from ogcp.sim_eval.hand.fit import FitScene, HandFit, fit_hand
+from ogcp.sim_eval.hand.geometry import posed_triangles
 from ogcp.sim_eval.plan_input import PlanInput
 
 from .data import CellData, RunData, SkipFigure
 from .grasp_figures import CONTACT_COLOUR, NoGraspCells, best_view, panel_grid, rebuilt_panels
-from .raster import fit_view, merge_meshes, render_mesh, sphere_mesh, tube_mesh
+from .raster import fit_view, render_mesh
 from .style import method_colour, styled
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
-#: Radius of the drawn finger links [m]: the reachability model's collision capsules.
-LINK_RADIUS = LINK_CLEARANCE / 2
-#: Radius of the drawn palm cylinder [m], just around the finger bases.
-PALM_RADIUS = 0.048
-#: How far along the normals the pose fit also matches the fingertips [m]: it turns the pads
-#: towards the surface, not only the tips onto it.
-NORMAL_REACH = 0.03
+#: Sampled configurations a panel's fit starts from, nearest first, until one is realised.
+FIT_STARTS = 8
 HAND_COLOUR = (0.42, 0.47, 0.56)
 #: Seconds spent drawing each panel of the last figure.
 RENDER_SECONDS: list[float] = []
@@ -56,12 +51,10 @@ class PanelFit:
 
     Attributes:
         title: The panel's problem and cell.
-        rigid_misfit: Largest fingertip distance from its target at the recorded angles, rigidly placed [m].
-        fit: The refined pose that is drawn; its ``residuals`` are per finger [m].
+        fit: The pose that is drawn; its ``residuals`` are per chosen finger [m].
     """
 
     title: str
-    rigid_misfit: float
     fit: HandFit
 
 
@@ -70,11 +63,11 @@ HAND_FITS: list[PanelFit] = []
 
 
 class NoHandCells(NoGraspCells):
-    """The run has no cell with an SDH record: left out without a note unless asked for by name."""
+    """The run has no cell with a hand record: left out without a note unless asked for by name."""
 
 
 def hand_cells(data: RunData) -> list[tuple[CellData, PlanHand]]:
-    """Per problem, its best-Q1 cell whose plan records an SDH configuration (A* first).
+    """Per problem, its best-Q1 cell whose plan records a hand configuration (A* first).
 
     Args:
         data: The run.
@@ -87,88 +80,65 @@ def hand_cells(data: RunData) -> list[tuple[CellData, PlanHand]]:
         found = []
         for cell in cells:
             hand = cell.plan_view.hand
-            if hand is None or hand.name != "sdh" or cell.plan_view.grasp is None:
+            if hand is None or cell.plan_view.grasp is None or not hand.joint_angles or not hand.finger_contacts:
                 continue
-            if len(hand.joint_angles) == 7 and len(hand.finger_contacts) == 3:
-                found.append((cell.method != "astar", -(cell.q1 or 0.0), cell.label, cell, hand))
+            found.append((cell.method != "astar", -(cell.q1 or 0.0), cell.label, cell, hand))
         if found:
             best = min(found, key=lambda f: f[:3])
             chosen.append((best[3], best[4]))
     return chosen
 
 
-def palm_pose(
-    angles: NDArray[np.float64], points: NDArray[np.float64], normals: NDArray[np.float64]
-) -> tuple[NDArray[np.float64], NDArray[np.float64], float]:
-    """The palm pose that best puts the fingertips on the contacts (least squares, Kabsch).
+def hand_of(record: PlanHand) -> HandKinematics:
+    """The recorded hand, compiled: its descriptor path, else its built-in name (older plans).
 
-    Args:
-        angles: Joint angles, shape (7,) [rad].
-        points: Each finger's contact, fingers in the SDH order, shape (3, 3) [m].
-        normals: Their inward normals, shape (3, 3).
-
-    Returns:
-        Rotation (3, 3) and translation (3,) from the palm frame to the world [m], and the largest
-        distance of a fingertip's sphere centre from where it should be [m].
+    Raises:
+        OgcpError: If the hand cannot be found, or its descriptor changed since the plan.
     """
-    tips = finger_chain(angles)[0, :, 2]
-    pads = pad_normals(angles)[0]
-    # The finger's axis ends one link radius outside the surface, its pad facing along the normal.
-    targets = points - LINK_RADIUS * normals
-    source = np.vstack([tips, tips + NORMAL_REACH * pads])
-    target = np.vstack([targets, targets + NORMAL_REACH * normals])
-    rotation, translation = rigid_fit(source, target)
-    misfit = float(np.linalg.norm(tips @ rotation.T + translation - targets, axis=1).max())
-    return rotation, translation, misfit
-
-
-def hand_mesh(angles: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
-    """Palm cylinder and finger capsules of a configuration, in the palm frame.
-
-    Args:
-        angles: Joint angles, shape (7,) [rad].
-
-    Returns:
-        Vertices, shape (v, 3) [m], and triangles, shape (f, 3).
-    """
-    chain = finger_chain(angles)[0]  # (finger, [proximal axis, distal axis, tip], 3)
-    parts = [tube_mesh([0.0, 0.0, 0.0], [0.0, 0.0, PALM_HEIGHT], PALM_RADIUS, sides=24)]
-    for base, (proximal, distal, tip) in zip(FINGER_BASES, chain, strict=True):
-        for start, end in ((base, proximal), (proximal, distal), (distal, tip)):
-            parts.append(tube_mesh(start, end, LINK_RADIUS))
-        for joint in (proximal, distal, tip):
-            parts.append(sphere_mesh(joint, LINK_RADIUS))
-    return merge_meshes(parts)
+    source = record.descriptor or record.name
+    if source is None:
+        raise OgcpError("the plan's hand block names no hand")
+    descriptor = resolve_hand(source)
+    if record.descriptor_sha256 is not None and descriptor.sha256 != record.descriptor_sha256:
+        raise OgcpError(f"hand descriptor {descriptor.path} changed since the plan (its sha256 differs)")
+    return HandKinematics(descriptor)
 
 
 @styled
-def fig10_sdh_grasps(data: RunData, notes: list[str] | None = None) -> Figure:
-    """Fig. 10: the SDH, its recorded joint angles refined, on each object's best reachable grasp.
+def fig10_hand_grasps(data: RunData, notes: list[str] | None = None) -> Figure:
+    """Fig. 10: each problem's hand, fitted to its best reachable grasp.
 
     Args:
         data: The run.
-        notes: Gets one line per cell whose object or contact set cannot be rebuilt.
+        notes: Gets one line per cell whose object, contact set or hand cannot be rebuilt.
 
     Returns:
-        The figure, one panel per problem with an SDH cell, at most three per row.
+        The figure, one panel per problem with a hand cell, at most three per row.
 
     Raises:
-        NoHandCells: No cell records an SDH configuration.
+        NoHandCells: No cell records a hand configuration.
         SkipFigure: No such cell's plan could be rebuilt.
     """
     cells = hand_cells(data)
     if not cells:
-        raise NoHandCells('needs cells planned with hand = "sdh"')
+        raise NoHandCells('needs cells planned with a hand (hand = "sdh" or a descriptor)')
     names = data.problem_names()
-    inputs = rebuilt_panels(data, cells, "fig10_sdh_grasps", notes)
-    if not inputs:
-        raise SkipFigure("no SDH cell's object and contact set could be rebuilt")
-    figure, axes, pixels = panel_grid(len(inputs))
+    inputs = rebuilt_panels(data, cells, "fig10_hand_grasps", notes)
+    hands = []
+    for cell, hand, rebuilt in inputs:
+        try:
+            hands.append((cell, hand, rebuilt, hand_of(hand)))
+        except OgcpError as exc:
+            if notes is not None:
+                notes.append(f"fig10_hand_grasps: {cell.label}: {exc}")
+    if not hands:
+        raise SkipFigure("no hand cell's object, contact set and hand could be rebuilt")
+    figure, axes, pixels = panel_grid(len(hands))
     RENDER_SECONDS.clear()
     HAND_FITS.clear()
-    for ax, (cell, hand, rebuilt) in zip(axes, inputs, strict=True):
+    for ax, (cell, hand, rebuilt, kinematics) in zip(axes, hands, strict=True):
         started = time.perf_counter()
-        posed = draw_hand(ax, rebuilt, hand, method_colour(cell.method), pixels)
+        posed = draw_hand(ax, rebuilt, hand, kinematics, method_colour(cell.method), pixels)
         RENDER_SECONDS.append(time.perf_counter() - started)
         HAND_FITS.append(dataclasses.replace(posed, title=f"{names[cell.problem]}: {cell.label}"))
         quality = f", $Q_1$={cell.q1:.3f}" if cell.q1 is not None else ""
@@ -177,43 +147,69 @@ def fig10_sdh_grasps(data: RunData, notes: list[str] | None = None) -> Figure:
 
 
 def fit_caption(posed: PanelFit) -> str:
-    """One short line on the drawn pose: the largest fingertip distance from its contact, and the rigid fit's."""
-    clash = ", fingers touch" if not posed.fit.collision_free else ""
-    return f"tips within {posed.fit.max_residual * 1e3:.1f} mm (rigid: {posed.rigid_misfit * 1e3:.0f} mm){clash}"
+    """One short line on the drawn pose: the largest pad distance from its contact, and collisions."""
+    clash = ", links touch" if posed.fit.self_penetration > 0 else ""
+    return f"pads within {posed.fit.residuals.max() * 1e3:.1f} mm{clash}"
 
 
-def draw_hand(ax: Axes, rebuilt: PlanInput, hand: PlanHand, colour: str, pixels: int = 800) -> PanelFit:
-    """Draw the object, the grasp's contacts and the hand in its refined pose into ``ax``.
+def fitted(kinematics: HandKinematics, hand: PlanHand, rebuilt: PlanInput) -> HandFit:
+    """The hand fitted to the plan's contacts: from its recorded configuration, then the next nearest
+    samples of the reachability model (:data:`FIT_STARTS` in all), until one fit is realised."""
+    contacts = rebuilt.contacts
+    grasp = tuple(int(i) for i in hand.finger_contacts)
+    names = hand.fingers or kinematics.descriptor.finger_names[: len(grasp)]
+    fingers = kinematics.descriptor.choose_fingers(len(grasp), names)
+    scene = FitScene(kinematics)
+    starts: list[tuple[tuple[int, ...], tuple[float, ...]]] = []
+    if len(hand.joint_angles) == len(kinematics.joint_names):
+        starts.append((grasp, hand.joint_angles))
+    model = HandReachability(kinematics.descriptor, names)
+    starts += [(tuple(grasp[i] for i in s.fingers), s.joint_angles) for s in model.starts(grasp, contacts, FIT_STARTS)]
+    best: HandFit | None = None
+    for order, angles in starts[:FIT_STARTS]:
+        index = list(order)
+        fit = fit_hand(scene, fingers, contacts.positions[index], contacts.normals[index], angles)
+        if best is None or fit.residuals.max() < best.residuals.max():
+            best = fit
+        if fit.realised:
+            break
+    assert best is not None
+    return best
+
+
+def draw_hand(
+    ax: Axes, rebuilt: PlanInput, hand: PlanHand, kinematics: HandKinematics, colour: str, pixels: int = 800
+) -> PanelFit:
+    """Draw the object, the grasp's contacts and the fitted hand into ``ax``.
 
     Args:
         ax: The panel (its axis frame is switched off).
         rebuilt: Mesh and contact set of the plan.
-        hand: The plan's hand block (7 joint angles, 3 finger contacts).
+        hand: The plan's hand block (configuration, finger contacts).
+        kinematics: The hand, compiled.
         colour: Colour of the grasp's contacts.
         pixels: Side of the square rendered image [px].
 
     Returns:
-        The drawn pose (title left empty) with the recorded angles' rigid misfit.
+        The drawn pose (title left empty).
     """
     mesh, contacts = rebuilt.mesh, rebuilt.contacts
-    angles = np.asarray(hand.joint_angles, dtype=float)
-    index = np.asarray(hand.finger_contacts, dtype=int)
-    points, normals = contacts.positions[index], contacts.normals[index]
-    _, _, misfit = palm_pose(angles, points, normals)
-    fit = fit_hand(points, normals, angles, offset=LINK_RADIUS)
-    vertices, faces = hand_mesh(fit.joint_angles)
-    vertices = fit.to_world(vertices)
+    fit = fitted(kinematics, hand, rebuilt)
+    points, normals = contacts.positions[list(hand.finger_contacts)], contacts.normals[list(hand.finger_contacts)]
+    scene = FitScene(kinematics)
+    scene.pose(fit.joint_angles, fit.rotation, fit.translation)
+    vertices, faces = posed_triangles(scene.model, scene.data, scene.hand.geoms)
     camera = best_view(mesh.vertices, mesh.faces, points, normals, occluder=(vertices, faces))
     view = fit_view(np.vstack([mesh.vertices, vertices]), camera, pixels, pixels)
-    scene = render_mesh(mesh.vertices, mesh.faces, view).over(render_mesh(vertices, faces, view, HAND_COLOUR))
-    ax.imshow(scene.rgba, extent=(0, pixels, pixels, 0), interpolation="antialiased", zorder=1)
+    image = render_mesh(mesh.vertices, mesh.faces, view).over(render_mesh(vertices, faces, view, HAND_COLOUR))
+    ax.imshow(image.rgba, extent=(0, pixels, pixels, 0), interpolation="antialiased", zorder=1)
     diagonal = float(np.linalg.norm(mesh.bounds[1] - mesh.bounds[0]))
-    # Contacts under a fingertip are hidden by it, as they should be; the others show.
-    shown = scene.visible(points, 0.005 * diagonal)
+    # Contacts under a pad are hidden by it, as they should be; the others show.
+    shown = image.visible(points, 0.005 * diagonal)
     where = view.project(points)
     ax.scatter(where[shown, 0], where[shown, 1], s=12, c=colour, edgecolors=CONTACT_COLOUR, linewidths=0.6, zorder=4)
     ax.set_xlim(0, pixels)
     ax.set_ylim(pixels, 0)
     ax.set_aspect("equal")
     ax.axis("off")
-    return PanelFit("", misfit, fit)
+    return PanelFit("", fit)

@@ -16,7 +16,7 @@ FIGURE_NAMES = (
     "sim_fidelity",
     "sim_survival",
     "sim_protocol",
-    "fig10_sdh_grasps",
+    "fig10_hand_grasps",
     "sim_grasps",
 )
 #: File stem of the time table (Fig. 9).

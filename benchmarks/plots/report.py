@@ -12,7 +12,7 @@ from ogcp.planner.infra.errors import OgcpError
 from .data import RunData, SkipFigure, load_run
 from .figures import fig4_q1_histograms, fig6_states_per_level, fig7_iterations_f, fig8_wastar_tradeoff
 from .grasp_figures import NoGraspCells, fig3_grasps
-from .hand_figures import fig10_sdh_grasps
+from .hand_figures import fig10_hand_grasps
 from .names import FIGURE_NAMES, NAMES, TABLE
 from .protocol import sim_protocol
 from .sim_figures_3d import sim_grasps
@@ -42,7 +42,7 @@ FIGURES: dict[str, FigureBuilder] = dict(
             sim_fidelity,
             sim_survival,
             sim_protocol,
-            fig10_sdh_grasps,
+            fig10_hand_grasps,
             sim_grasps,
         ),
         strict=True,

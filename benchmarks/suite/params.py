@@ -34,6 +34,8 @@ METHOD_PARAMS: dict[str, dict[str, Option]] = {name: spec.options() for name, sp
 TITLES = {name: spec.title for name, spec in METHODS.items()}
 #: Parameters left out of default labels: they vary within one plotted series.
 UNLABELLED = ("seed", "record_tree")
+#: Options added after cell ids were first recorded: left out of a variant while unset.
+ADDED_UNSET = ("hand_fingers",)
 #: Most seeds of one ``{start, count}`` range: repeats for statistics, where 10^4 is plenty;
 #: 10^12 asked for terabytes before the suite's size was known.
 MAX_SEED_COUNT = 10_000
@@ -66,7 +68,7 @@ def values_of(where: str, value: Any, param: Option) -> list[Any]:
     Raises:
         OgcpError: For an empty list, a list where none is allowed, or an invalid value.
     """
-    if isinstance(value, list):
+    if isinstance(value, list) and param.kind != "names":  # a names value is itself a list
         if not param.sweep:
             raise OgcpError(f"{where}: expected {param.describe()}, got a list")
         if not value:
@@ -93,7 +95,11 @@ def complete(method: str, where: str, given: dict[str, Any]) -> dict[str, Any]:
         config = METHODS[method].config(**given)
     except ConfigError as exc:
         raise OgcpError(f"{where}.{exc}") from exc
-    return config.canonical()
+    canonical = config.canonical()
+    for name in ADDED_UNSET:  # cells keep the ids they had before these options existed
+        if canonical.get(name) is None:
+            canonical.pop(name, None)
+    return canonical
 
 
 def default_label(method: str, params: dict[str, Any]) -> str:

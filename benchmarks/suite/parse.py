@@ -35,7 +35,7 @@ from ogcp.benchmarks.suite.params import (
     seed_values,
     values_of,
 )
-from ogcp.planner.config.methods import DEFAULT_FINGERS, DEFAULT_SEED, HAND_FINGERS
+from ogcp.planner.config.methods import DEFAULT_FINGERS, DEFAULT_SEED
 from ogcp.planner.config.options import Option
 from ogcp.planner.grasp.defaults import (
     CONE_EDGES,
@@ -48,6 +48,7 @@ from ogcp.planner.grasp.defaults import (
     check_contact_memory,
 )
 from ogcp.planner.grasp.wrench import primitives_per_contact
+from ogcp.planner.hands.registry import is_descriptor_path, resolve_hand
 from ogcp.planner.infra.assets import asset_path, assets_dir
 from ogcp.planner.infra.errors import OgcpError, choice_error
 from ogcp.planner.objects import BUILTIN_OBJECTS, DEFAULT_DIAGONAL, MESH_SUFFIXES, file_sha256
@@ -213,10 +214,11 @@ class _Parser:
         for obj, n, seed, m, mu, torsion, tip, (method, params, label, vwhere) in itertools.product(
             objects, contacts, seeds, ms, mus, torsions, tips, variants
         ):
-            if params.get("hand") is not None and m != HAND_FINGERS:
-                raise OgcpError(
-                    f"{vwhere}.hand: the {params['hand']} hand has {HAND_FINGERS} fingers; {where}.m includes {m}"
-                )
+            if params.get("hand") is not None:
+                try:
+                    resolve_hand(params["hand"]).choose_fingers(m, params.get("hand_fingers"))
+                except OgcpError as exc:
+                    raise OgcpError(f"{vwhere}.hand: {exc} ({where}.m includes {m})") from exc
             cells.append(
                 Cell(
                     obj,
@@ -362,12 +364,19 @@ class _Parser:
         options = []
         for key in sorted(k for k in table if k in spec):
             check = seed_values if key == "seed" else lambda w, v, p=spec[key]: values_of(w, v, p)
-            options.append([(key, v) for v in check(f"{where}.{key}", table[key])])
+            values = check(f"{where}.{key}", table[key])
+            if key == "hand":  # a descriptor path is relative to the suite, like a mesh
+                values = [self.hand_path(str(v)) for v in values]
+            options.append([(key, v) for v in values])
         variants = []
         for chosen in itertools.product(*options):
             params = complete(method, where, dict(chosen))
             variants.append((method, params, _format_label(where, label, method, params), where))
         return variants
+
+    def hand_path(self, hand: str) -> str:
+        """A hand as the cells name it: a built-in name, or its descriptor's absolute path."""
+        return str((self.base / hand).resolve()) if is_descriptor_path(hand) else hand
 
     def external_variant(self, where: str, table: dict[str, Any]) -> tuple[str, dict[str, Any], str, str]:
         """``method = "external"``: the grasps file, read and checked now; its sha256 is the variant.

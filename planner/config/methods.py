@@ -27,12 +27,11 @@ SUCCESSORS = ("fc", "ru")
 HEURISTICS = (*SUCCESSORS, "none")
 #: WA*'s inflation eps when none is given (the other searches have eps = 0).
 DEFAULT_WASTAR_EPS = 0.4
-#: Hand models a grasp can be constrained to.
-HANDS = ("sdh",)
-#: Fingers of every hand in HANDS: a hand constrains m-contact grasps with m = HAND_FINGERS only.
-HAND_FINGERS = 3
+#: Built-in hands a grasp can be constrained to by name (ogcp.planner.hands.registry has their
+#: descriptors); any other hand is named by the path of its ogcp.hand/1 descriptor (*.toml).
+HANDS = ("sdh", "parallel_gripper")
 #: Largest reachability residual of a reachable grasp (normalised code distance).
-DEFAULT_HAND_THRESHOLD = 0.3
+DEFAULT_HAND_THRESHOLD = 1.0
 #: Grasps per chunk of exhaustive search (the unit of parallel work and of checkpoints).
 DEFAULT_CHUNK = 200_000
 #: Bins of exhaustive search's Q1 histogram over (0, Q_OWS].
@@ -71,10 +70,18 @@ class HandOptions(MethodConfig):
     """
 
     hand: str | None = option(
-        "choice",
+        "text",
         None,
-        f"constraint: fingertips reachable by this hand ({{choices}}); needs m = {HAND_FINGERS}",
-        choices=HANDS,
+        f"constraint: the fingers of this hand reach the contacts: {', '.join(HANDS)}, or an ogcp.hand/1 "
+        "descriptor (FILE.toml); m <= its fingers",
+        metavar="NAME|FILE.toml",
+    )
+    hand_fingers: tuple[str, ...] | None = option(
+        "names",
+        None,
+        "the hand's fingers that take the m contacts, by name, comma-separated (default: its first m)",
+        metavar="A,B,...",
+        sweep=False,
     )
     hand_threshold: float | None = option(
         "float",
@@ -86,9 +93,14 @@ class HandOptions(MethodConfig):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        if self.hand is None and self.hand_threshold is not None:
-            hands = " or ".join(repr(h) for h in HANDS)
-            raise ConfigError("hand_threshold", f"applies only with hand = {hands}")
+        if self.hand is None:
+            for name in ("hand_threshold", "hand_fingers"):
+                if getattr(self, name) is not None:
+                    raise ConfigError(name, "applies only with a hand (hand = NAME or FILE.toml)")
+        elif not self.hand.lower().endswith(".toml") and self.hand not in HANDS:
+            raise ConfigError(
+                "hand", f"unknown hand {self.hand!r}; built-in hands are {', '.join(HANDS)}, or give FILE.toml"
+            )
         if self.hand is not None and self.hand_threshold is None:
             object.__setattr__(self, "hand_threshold", DEFAULT_HAND_THRESHOLD)
 

@@ -21,7 +21,10 @@ from typing import Any, ClassVar
 from ogcp.planner.infra.errors import OgcpError, choice_error
 from ogcp.planner.infra.parallel import max_jobs
 
-KINDS = ("int", "float", "bool", "choice")
+KINDS = ("int", "float", "bool", "choice", "text", "names")
+#: Longest ``text`` value (a file path) and most entries of a ``names`` list.
+MAX_TEXT = 4096
+MAX_NAMES = 64
 #: Key of a dataclass field's metadata that holds its Option.
 METADATA_KEY = "ogcp.option"
 #: Largest seed: an unsigned 32-bit integer, the range CoACD's seed and most random-number
@@ -44,8 +47,8 @@ UPPER_LIMITS: dict[str, float] = {
     # Metres, like the largest object diagonal (ogcp.planner.grasp.defaults.DIAGONAL): a larger
     # spread constrains nothing.
     "max_spread": 100.0,
-    # Residuals are distances between codes whose 6 dimensions are normalised by their sampled
-    # spread (the default accepts 0.3): 10 is 33x that; at 10^308 squaring it overflowed.
+    # Residuals are distances between codes whose dimensions (4 per finger pair) are normalised by
+    # their sampled spread (the default accepts 1): 10 is 10x that; at 10^308 squaring it overflowed.
     "hand_threshold": 10.0,
     # WA*'s Q1 >= Q_OWS - (1 + eps) (Q_OWS - Q1*) says nothing at eps = 100 unless the
     # optimum holds 99 % of Q_OWS; larger eps only inflates the priorities towards overflow.
@@ -88,7 +91,9 @@ class Option:
     """The declaration of one parameter.
 
     Attributes:
-        kind: ``int``, ``float``, ``bool`` or ``choice``.
+        kind: ``int``, ``float``, ``bool``, ``choice``, ``text`` (a non-empty string such as a
+            file path) or ``names`` (a list of distinct non-empty names; comma-separated on the
+            command line).
         default: Value when none is given; None means unset (then None is also valid).
         help: One line for ``--help``; ``{choices}`` is replaced by the valid choices.
         minimum: Smallest valid value (numbers only).
@@ -119,6 +124,10 @@ class Option:
             return "one of " + ", ".join(self.choices)
         if self.kind == "bool":
             return "true or false"
+        if self.kind == "text":
+            return "a non-empty string"
+        if self.kind == "names":
+            return "a list of distinct names"
         what = "an integer" if self.kind == "int" else "a number"
         bounds = self.bounds()
         if bounds.startswith(("<", ">")):
@@ -154,6 +163,12 @@ class Option:
             if not isinstance(value, bool):
                 raise ConfigError(where, f"expected true or false, got {value!r}")
             return value
+        if self.kind == "text":
+            if not isinstance(value, str) or not value.strip() or len(value) > MAX_TEXT:
+                raise ConfigError(where, f"expected a non-empty string of at most {MAX_TEXT} characters, got {value!r}")
+            return value
+        if self.kind == "names":
+            return _names(where, value)
         # TOML booleans are Python ints; a flag is never a valid count or size.
         numeric = isinstance(value, numbers.Integral if self.kind == "int" else numbers.Real)
         below = (
@@ -176,6 +191,18 @@ class Option:
         else:
             side = "" if below else f"<= {_number(self.maximum)}"
         return f"expected {what}{' ' + side if side else ''}, got {value!r} (valid: {self.bounds()})"
+
+
+def _names(where: str, value: Any) -> tuple[str, ...]:
+    """A ``names`` value as a tuple: a list or tuple of strings, or one comma-separated string."""
+    if isinstance(value, str):
+        value = [part.strip() for part in value.split(",")]
+    ok = isinstance(value, list | tuple) and 0 < len(value) <= MAX_NAMES
+    if not ok or not all(isinstance(v, str) and v.strip() for v in value):
+        raise ConfigError(where, f"expected a list of 1 to {MAX_NAMES} non-empty names, got {value!r}")
+    if len(set(value)) != len(value):
+        raise ConfigError(where, f"names a value twice: {', '.join(value)}")
+    return tuple(value)
 
 
 def _number(value: float) -> str:

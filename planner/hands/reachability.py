@@ -1,132 +1,365 @@
-"""Fingertip reachability of the Schunk SDH as a grasp constraint P(g) (paper Sec. V-E).
+"""Fingertip reachability of any hand as a grasp constraint P(g) (paper Sec. V-E).
 
-The model samples joint configurations (seeded, self-collisions rejected), encodes each
-fingertip triple by the pairwise code ``[|p_i - p_j|, |n_i - n_j|]`` for the finger pairs
-(1,2), (1,3), (2,3), normalises every dimension by its spread over the samples, and keeps
-a k-d tree. A grasp of three contacts (positions, inward normals: a fingertip pushes
-along the inward normal, which is its pad normal) is reachable when, for some assignment
-of contacts to fingers, its code lies within ``threshold`` of a sample; the distance to
-the nearest sample is the *residual*.
+The model samples joint configurations of the hand (seeded, uniform within the joint limits,
+joint equalities kept), computes every finger's pad point and pad normal in the palm frame with
+MuJoCo (:class:`ogcp.planner.hands.kinematics.HandKinematics`) and records which fingers collide
+in each. For a grasp of m contacts the m chosen fingers (``fingers``, default the first m of the
+descriptor) are used: each sample in which they and the palm are collision-free is encoded by the
+pairwise code ``[|p_i - p_j|, |n_i - n_j|, n_i . u_ij, n_j . u_ij]`` over the finger pairs
+(``u_ij`` the unit direction from p_i to p_j), every dimension is normalised
+by its spread over the samples, and a k-d tree is kept. A grasp (positions, inward normals: a pad
+pushes along the inward normal, its pad normal) is reachable when, for some assignment of its
+contacts to the fingers, its code lies within ``threshold`` of a sample; the distance to the
+nearest sample is the *residual*.
 
-Pruning super-contact states is sound: over a state every pairwise distance and normal
-difference lies in an interval, so every grasp's code lies in a box, and the state is
-pruned only if no sample lies within ``threshold`` of that box (exact point-to-box
-distances) under any assignment. A state that holds a reachable grasp is never pruned.
-The sampled model is cached on disk (``$OGCP_CACHE``, default ``~/.cache/ogcp``) as the entry
-``sdh_reach_<key>/`` of :mod:`ogcp.planner.infra.cache`, under a key of its parameters.
+What pruning guarantees: over a super-contact state every pairwise distance and normal difference
+lies in an interval, so every grasp's code lies in a box, and the state is pruned only if no
+sample lies within ``threshold`` of that box (exact point-to-box distances) under any assignment.
+A state that holds a grasp accepted by the *sampled* model is never pruned. The model is a sample:
+a grasp the real hand reaches but no sample comes near is rejected, and more samples (``samples``)
+shrink that gap; the fit in simulation is what finally decides.
+
+The sampled model is cached (``$OGCP_CACHE``) as the entry ``hand_reach_<name>_<key>/`` of
+:mod:`ogcp.planner.infra.cache`, keyed by the descriptor's and the model's sha256 and the
+sampling parameters, and rebuilt when damaged.
 """
 
 from __future__ import annotations
 
 import hashlib
 import itertools
+import math
+import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ogcp.planner.config.methods import DEFAULT_HAND_THRESHOLD
 from ogcp.planner.grasp.contact_set import ContactSet
-from ogcp.planner.hands.sdh import (
-    BASE_ROTATION_SIGN,
-    DISTAL_LENGTH,
-    FINGER_BASES,
-    FINGER_YAWS,
-    JOINT_NAMES,
-    PROXIMAL_LENGTH,
-    PROXIMAL_OFFSET,
-    random_configurations,
-)
+from ogcp.planner.hands.descriptor import HandDescriptor
+from ogcp.planner.hands.registry import resolve_hand
 from ogcp.planner.infra.cache import cache_dir as default_cache_dir
 from ogcp.planner.infra.cache import read_entry, write_entry
 from ogcp.planner.infra.errors import OgcpError
 
-MODEL_VERSION = 1
-#: The sampled model's file in its cache entry: arrays ``q`` (N, 7) [rad] and ``codes`` (N, 6).
+MODEL_VERSION = 3
+#: The sampled model's file in its cache entry: ``joint_names`` (J,), ``angles`` (N, J),
+#: ``points`` and ``normals`` (N, F, 3) in the palm frame, ``collisions`` (N, F + 1, F + 1).
 MODEL_FILE = "model.npz"
-PAIRS = ((0, 1), (0, 2), (1, 2))
-ASSIGNMENTS = tuple(itertools.permutations(range(3)))
-#: Links of different fingers closer than this are in collision (twice the capsule radius) [m].
-LINK_CLEARANCE = 0.019
-POINTS_PER_LINK = 8
-
-
-def finger_chain(q: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Proximal axis, distal axis and tip of every finger, shape (..., 3 fingers, 3 points, 3) [m]."""
-    q = np.atleast_2d(q)
-    yaw = FINGER_YAWS[None, :] + BASE_ROTATION_SIGN[None, :] * q[:, :1]
-    u = np.stack([np.cos(yaw), np.sin(yaw), np.zeros_like(yaw)], axis=-1)  # toward the palm axis
-    z = np.array([0.0, 0.0, 1.0])
-    proximal, distal = q[:, 1::2], q[:, 2::2]
-    d1 = np.sin(proximal)[..., None] * u + np.cos(proximal)[..., None] * z
-    d2 = np.sin(proximal + distal)[..., None] * u + np.cos(proximal + distal)[..., None] * z
-    a = np.broadcast_to(FINGER_BASES + PROXIMAL_OFFSET * z, d1.shape)
-    b = a + PROXIMAL_LENGTH * d1
-    tip = b + DISTAL_LENGTH * d2
-    return np.stack([a, b, tip], axis=2)
-
-
-def pad_normals(q: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Pad normal of every fingertip (distal link's local +x), shape (..., 3, 3)."""
-    q = np.atleast_2d(q)
-    yaw = FINGER_YAWS[None, :] + BASE_ROTATION_SIGN[None, :] * q[:, :1]
-    u = np.stack([np.cos(yaw), np.sin(yaw), np.zeros_like(yaw)], axis=-1)
-    angle = (q[:, 1::2] + q[:, 2::2])[..., None]
-    return np.cos(angle) * u - np.sin(angle) * np.array([0.0, 0.0, 1.0])
-
-
-def self_collision_free(q: NDArray[np.float64]) -> NDArray[np.bool_]:
-    """Whether links of different fingers keep :data:`LINK_CLEARANCE`, shape (...,)."""
-    chain = finger_chain(q)
-    t = np.linspace(0.0, 1.0, POINTS_PER_LINK)[:, None]
-    points = np.concatenate(
-        [
-            chain[:, :, 0:1] + t * (chain[:, :, 1:2] - chain[:, :, 0:1]),
-            chain[:, :, 1:2] + t * (chain[:, :, 2:3] - chain[:, :, 1:2]),
-        ],
-        axis=2,
-    )  # (N, 3, 2P, 3)
-    ok = np.ones(len(points), dtype=bool)
-    for i, j in PAIRS:
-        gap = np.linalg.norm(points[:, i, :, None, :] - points[:, j, None, :, :], axis=-1).min(axis=(1, 2))
-        ok &= gap >= LINK_CLEARANCE
-    return ok
+#: Most contacts a grasp may have: the residual is a minimum over m! finger assignments.
+MAX_FINGERS = 6
+#: Smallest spread a code dimension is normalised by, for distances [m] and for normal differences
+#: and cosines:
+#: a gripper whose pads always face each other has no spread in normal difference, and its
+#: tolerance (threshold x spread) must still admit slightly curved surfaces.
+DISTANCE_SCALE_FLOOR = 1e-3
+NORMAL_SCALE_FLOOR = 0.02
 
 
 def pair_code(positions: NDArray[np.float64], normals: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Pairwise code of fingertip triples, shape (..., 6): distance and normal difference per pair."""
+    """Pairwise rigid invariants of pad tuples, shape (..., 4 C(m, 2)).
+
+    For each pair i < j: the distance ``|p_j - p_i|``, the normal difference ``|n_i - n_j|``, and
+    both normals' cosines with the direction ``u = (p_j - p_i) / |p_j - p_i|`` (a parallel gripper
+    pinches only points whose line runs along its pads' normals).
+    """
+    m = positions.shape[-2]
     columns = []
-    for i, j in PAIRS:
-        columns.append(np.linalg.norm(positions[..., i, :] - positions[..., j, :], axis=-1))
+    for i, j in itertools.combinations(range(m), 2):
+        line = positions[..., j, :] - positions[..., i, :]
+        length = np.linalg.norm(line, axis=-1)
+        u = line / np.maximum(length, 1e-12)[..., None]
+        columns.append(length)
         columns.append(np.linalg.norm(normals[..., i, :] - normals[..., j, :], axis=-1))
+        columns.append(np.einsum("...k,...k->...", normals[..., i, :], u))
+        columns.append(np.einsum("...k,...k->...", normals[..., j, :], u))
     return np.stack(columns, axis=-1)
 
 
 @dataclass(frozen=True)
 class Reach:
-    """Reachability of one grasp: residual, the nearest sample's joint angles, the assignment."""
+    """Reachability of one grasp.
+
+    Attributes:
+        residual: Normalised code distance to the nearest sample.
+        joint_angles: That sample's configuration (the hand's finger joints) [rad or m].
+        fingers: ``fingers[k]`` = index in the grasp of the contact that chosen finger k touches.
+        finger_names: The chosen fingers, in order.
+    """
 
     residual: float
     joint_angles: tuple[float, ...]
-    fingers: tuple[int, ...]  # fingers[k] = index of the grasp contact that finger k touches
+    fingers: tuple[int, ...]
+    finger_names: tuple[str, ...] = ()
 
 
-class SDHReachability:
-    """Constraint P(g): the SDH can place its three fingertips on the grasp's contacts.
+@dataclass(frozen=True, eq=False)
+class SampledHand:
+    """A hand's sampled configurations: pads in the palm frame and collisions."""
+
+    joint_names: tuple[str, ...]
+    angles: NDArray[np.float64]
+    points: NDArray[np.float64]
+    normals: NDArray[np.float64]
+    collisions: NDArray[np.bool_]
+
+
+@dataclass(frozen=True, eq=False)
+class _FingerModel:
+    """The k-d tree of one choice of fingers."""
+
+    rows: NDArray[np.intp]
+    scale: NDArray[np.float64]
+    codes: NDArray[np.float64]
+    tree: Any
+
+
+class HandReachability:
+    """Constraint P(g): the hand can place the chosen fingers' pads on the grasp's contacts.
 
     Args:
-        samples: Joint configurations to sample (before self-collision rejection).
+        hand: A built-in hand name, a descriptor path, or a loaded descriptor.
+        fingers: Names of the fingers that take the contacts, in order; None: the first m.
+        samples: Joint configurations to sample (before collision rejection).
         seed: Sampling seed.
         threshold: Largest residual (normalised code distance) that counts as reachable.
-            Residuals shrink as samples grow; with the default 10,000 samples about 5 % of
-            random contact triples on the built-in objects fall within 0.3.
-        cache_dir: Where the sampled model is cached; default ``$OGCP_CACHE`` or
-            ``~/.cache/ogcp``.
+        cache_dir: Where the sampled model is cached; default ``$OGCP_CACHE`` or ``~/.cache/ogcp``.
+
+    Raises:
+        OgcpError: For an unknown hand, a bad descriptor or model, or bad parameters.
     """
 
-    name = "sdh"
+    def __init__(
+        self,
+        hand: str | Path | HandDescriptor = "sdh",
+        fingers: Sequence[str] | None = None,
+        samples: int = 10_000,
+        seed: int = 0,
+        threshold: float = DEFAULT_HAND_THRESHOLD,
+        cache_dir: str | Path | None = None,
+    ) -> None:
+        if isinstance(samples, bool) or not isinstance(samples, int) or samples < 1:
+            raise OgcpError(f"hand samples must be an integer >= 1, got {samples!r}")
+        if not (isinstance(threshold, int | float) and math.isfinite(threshold) and threshold > 0):
+            raise OgcpError(f"reachability threshold must be a positive number, got {threshold!r}")
+        self.descriptor = hand if isinstance(hand, HandDescriptor) else resolve_hand(hand)
+        self.name = self.descriptor.name
+        self.fingers = tuple(fingers) if fingers is not None else None
+        if self.fingers is not None:
+            self.descriptor.choose_fingers(len(self.fingers), self.fingers)
+        self.samples, self.seed, self.threshold = samples, seed, float(threshold)
+        self.cache_dir = Path(cache_dir) if cache_dir else default_cache_dir()
+        self.sampled = self._load_or_sample()
+        self._models: dict[tuple[int, ...], _FingerModel] = {}
+
+    # ----- the sampled model -------------------------------------------------------------------
+
+    def _key(self) -> str:
+        parts = (MODEL_VERSION, self.descriptor.sha256, self.descriptor.model_sha256, self.samples, self.seed)
+        return hashlib.sha256(repr(parts).encode()).hexdigest()[:16]
+
+    def _load_or_sample(self) -> SampledHand:
+        slug = re.sub(r"[^A-Za-z0-9_-]+", "_", self.name)[:40]
+        folder = self.cache_dir / f"hand_reach_{slug}_{self._key()}"
+        cached = read_entry(folder, self._read_model)
+        if cached is not None:
+            return cached
+        from ogcp.planner.hands.kinematics import HandKinematics  # MuJoCo only when sampling
+
+        kinematics = HandKinematics(self.descriptor)
+        angles = kinematics.sample(self.samples, self.seed)
+        points, normals = kinematics.pads_many(angles)
+        sampled = SampledHand(kinematics.joint_names, angles, points, normals, kinematics.collisions(angles))
+
+        def save(stage: Path) -> None:
+            np.savez(
+                stage / MODEL_FILE,
+                joint_names=np.array(sampled.joint_names),
+                angles=angles,
+                points=points,
+                normals=normals,
+                collisions=sampled.collisions,
+            )
+
+        try:
+            write_entry(folder, save)
+        except OgcpError:
+            pass  # a read-only cache only costs the sampling time next run
+        return sampled
+
+    def _read_model(self, folder: Path) -> SampledHand:
+        """The sampled model of a cache entry, checked against this hand.
+
+        Raises:
+            ValueError: For arrays of the wrong shape or with non-finite values.
+        """
+        keys = ("joint_names", "angles", "points", "normals", "collisions")
+        with np.load(folder / MODEL_FILE, allow_pickle=False) as data:
+            names, angles, points, normals, collisions = (data[k] for k in keys)
+        count, fingers = self.samples, len(self.descriptor.fingers)
+        if names.ndim != 1 or names.dtype.kind != "U" or angles.shape != (count, len(names)):
+            raise ValueError(
+                f"{len(names)} joint names and configurations of shape {angles.shape}, expected {count} rows"
+            )
+        if points.shape != (count, fingers, 3) or normals.shape != points.shape:
+            raise ValueError(f"pads of shape {points.shape} and {normals.shape}")
+        if collisions.shape != (count, fingers + 1, fingers + 1) or collisions.dtype != np.bool_:
+            raise ValueError(f"collisions of shape {collisions.shape} and type {collisions.dtype}")
+        if not all(np.isfinite(a).all() for a in (angles, points, normals)):
+            raise ValueError("non-finite values")
+        return SampledHand(tuple(str(n) for n in names), angles, points, normals, collisions)
+
+    def chosen(self, m: int) -> tuple[int, ...]:
+        """Indices of the fingers that take an m-contact grasp.
+
+        Raises:
+            OgcpError: If m exceeds the hand's fingers or :data:`MAX_FINGERS`, or differs from the
+                number of named fingers.
+        """
+        if m > MAX_FINGERS:
+            raise OgcpError(f"hand constraints take grasps of at most {MAX_FINGERS} contacts; got m = {m}")
+        if m < 2:
+            raise OgcpError(f"a hand grasp needs at least 2 contacts; got m = {m}")
+        return self.descriptor.choose_fingers(m, self.fingers)
+
+    def _model(self, m: int) -> _FingerModel:
+        chosen = self.chosen(m)
+        if chosen not in self._models:
+            groups = [*chosen, len(self.descriptor.fingers)]
+            hits = self.sampled.collisions[:, groups][:, :, groups]
+            rows = np.flatnonzero(~hits.any(axis=(1, 2)))
+            if len(rows) == 0:
+                names = ", ".join(self.descriptor.finger_names[f] for f in chosen)
+                raise OgcpError(
+                    f"no collision-free configuration of the {self.name} hand's fingers {names} was sampled "
+                    f"in {self.samples}; raise the number of samples or check the model's geoms"
+                )
+            codes = pair_code(self.sampled.points[rows][:, chosen], self.sampled.normals[rows][:, chosen])
+            floor = np.tile([DISTANCE_SCALE_FLOOR, *[NORMAL_SCALE_FLOOR] * 3], codes.shape[1] // 4)
+            scale = np.maximum(codes.std(axis=0), floor)
+            from scipy.spatial import cKDTree  # here, not at the top: every plan imports this module
+
+            self._models[chosen] = _FingerModel(rows, scale, codes / scale, cKDTree(codes / scale))
+        return self._models[chosen]
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        """The hand's finger joints, in the order of every configuration."""
+        return self.sampled.joint_names
+
+    @property
+    def q(self) -> NDArray[np.float64]:
+        """Every sampled configuration, shape (N, J)."""
+        return self.sampled.angles
+
+    # ----- the constraint ----------------------------------------------------------------------
+
+    def residuals(self, positions: NDArray[np.float64], normals: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Residuals of target tuples, best over assignments of contacts to fingers, shape (B,).
+
+        Args:
+            positions: Target points, shape (B, m, 3) [m].
+            normals: Inward normals at the targets (the pad normals needed), shape (B, m, 3).
+        """
+        m = positions.shape[1]
+        model = self._model(m)
+        assignments = list(itertools.permutations(range(m)))
+        codes = np.stack([pair_code(positions[:, list(a)], normals[:, list(a)]) for a in assignments], axis=1)
+        distance, _ = model.tree.query(codes.reshape(-1, codes.shape[-1]) / model.scale, k=1)
+        return distance.reshape(len(positions), len(assignments)).min(axis=1)
+
+    def reach(self, grasp: Sequence[int], contacts: ContactSet) -> Reach:
+        """Residual of a grasp over all finger assignments, with the nearest sample."""
+        m = len(grasp)
+        model = self._model(m)
+        assignments = list(itertools.permutations(range(m)))
+        p, n = contacts.positions[list(grasp)], contacts.normals[list(grasp)]
+        codes = np.array([pair_code(p[list(a)], n[list(a)]) for a in assignments]) / model.scale
+        distance, nearest = model.tree.query(codes, k=1)
+        best = int(np.argmin(distance))
+        angles = self.sampled.angles[model.rows[nearest[best]]]
+        names = tuple(self.descriptor.finger_names[f] for f in self.chosen(m))
+        return Reach(float(distance[best]), tuple(float(v) for v in angles), assignments[best], names)
+
+    def starts(self, grasp: Sequence[int], contacts: ContactSet, count: int) -> list[Reach]:
+        """The ``count`` nearest samples over every assignment, nearest first: starts for a fit.
+
+        A fit from the single nearest sample can end in a local minimum (a finger through the
+        object); the next samples, often under another assignment, are other ways to hold it.
+        """
+        m = len(grasp)
+        model = self._model(m)
+        assignments = list(itertools.permutations(range(m)))
+        p, n = contacts.positions[list(grasp)], contacts.normals[list(grasp)]
+        codes = np.array([pair_code(p[list(a)], n[list(a)]) for a in assignments]) / model.scale
+        k = min(count, len(model.rows))
+        distance, nearest = model.tree.query(codes, k=k)
+        distance, nearest = distance.reshape(len(assignments), k), nearest.reshape(len(assignments), k)
+        order = np.argsort(distance, axis=None, kind="stable")[:count]
+        names = tuple(self.descriptor.finger_names[f] for f in self.chosen(m))
+        found = []
+        for flat in order:
+            a, j = divmod(int(flat), k)
+            angles = self.sampled.angles[model.rows[nearest[a, j]]]
+            found.append(Reach(float(distance[a, j]), tuple(float(v) for v in angles), assignments[a], names))
+        return found
+
+    def accepts(self, grasp: Sequence[int], contacts: ContactSet) -> bool:
+        """P(g): the residual is within the threshold."""
+        return self.reach(grasp, contacts).residual <= self.threshold
+
+    def accepts_many(self, grasps: NDArray[np.intp], contacts: ContactSet) -> NDArray[np.bool_]:
+        """P(g) for many grasps of one size at once, shape (B,)."""
+        return self.residuals(contacts.positions[grasps], contacts.normals[grasps]) <= self.threshold
+
+    def admits(self, super_contacts: Sequence[NDArray[np.intp]], contacts: ContactSet) -> bool:
+        """Sound: False only if no grasp drawn from the super-contacts is accepted."""
+        m = len(super_contacts)
+        model = self._model(m)
+        # bounds[x, y]: the interval of every code dimension of contact x (finger i) and y (finger j).
+        bounds = np.zeros((m, m, 2, 4))
+        for x, y in itertools.permutations(range(m), 2):
+            px, py = contacts.positions[super_contacts[x]], contacts.positions[super_contacts[y]]
+            nx, ny = contacts.normals[super_contacts[x]], contacts.normals[super_contacts[y]]
+            line = py[None, :, :] - px[:, None, :]
+            length = np.linalg.norm(line, axis=-1)
+            u = line / np.maximum(length, 1e-12)[..., None]
+            values = (
+                length,
+                np.linalg.norm(nx[:, None, :] - ny[None, :, :], axis=-1),
+                np.einsum("ak,abk->ab", nx, u),
+                np.einsum("bk,abk->ab", ny, u),
+            )
+            bounds[x, y, 0] = [v.min() for v in values]
+            bounds[x, y, 1] = [v.max() for v in values]
+        pairs = list(itertools.combinations(range(m), 2))
+        for a in itertools.permutations(range(m)):
+            box_lo = np.concatenate([bounds[a[i], a[j], 0] for i, j in pairs]) / model.scale
+            box_hi = np.concatenate([bounds[a[i], a[j], 1] for i, j in pairs]) / model.scale
+            gap = np.maximum(box_lo - model.codes, 0.0) + np.maximum(model.codes - box_hi, 0.0)
+            if np.min(np.einsum("ij,ij->i", gap, gap)) <= self.threshold**2:
+                return True
+        return False
+
+    def describe(self) -> dict[str, object]:
+        """JSON-ready description (the same whatever grasps were asked about before)."""
+        return {
+            "name": self.name,
+            "descriptor_sha256": self.descriptor.sha256,
+            "model_sha256": self.descriptor.model_sha256,
+            "fingers": list(self.fingers) if self.fingers is not None else None,
+            "samples": self.samples,
+            "seed": self.seed,
+            "threshold": self.threshold,
+        }
+
+
+class SDHReachability(HandReachability):
+    """:class:`HandReachability` of the built-in Schunk SDH (three fingers)."""
 
     def __init__(
         self,
@@ -135,108 +368,4 @@ class SDHReachability:
         threshold: float = DEFAULT_HAND_THRESHOLD,
         cache_dir: str | Path | None = None,
     ) -> None:
-        if not isinstance(samples, int) or samples < 1:
-            raise OgcpError(f"hand samples must be an integer >= 1, got {samples!r}")
-        if not (np.isfinite(threshold) and threshold > 0):
-            raise OgcpError(f"reachability threshold must be a positive number, got {threshold!r}")
-        self.samples, self.seed, self.threshold = samples, seed, float(threshold)
-        self.cache_dir = Path(cache_dir) if cache_dir else default_cache_dir()
-        self.q, codes = self._load_or_sample()
-        self.scale = np.maximum(codes.std(axis=0), 1e-9)
-        self.codes = codes / self.scale
-        from scipy.spatial import cKDTree  # here, not at the top: every plan imports this module
-
-        self._tree = cKDTree(self.codes)
-
-    def _load_or_sample(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        key = hashlib.sha256(repr((MODEL_VERSION, self.samples, self.seed, LINK_CLEARANCE)).encode()).hexdigest()[:16]
-        folder = self.cache_dir / f"sdh_reach_{key}"
-        cached = read_entry(folder, self._read_model)
-        if cached is not None:
-            return cached
-        q = random_configurations(self.samples, self.seed)
-        q = q[self_collision_free(q)]
-        if len(q) == 0:
-            raise OgcpError("no collision-free SDH configuration was sampled; raise the number of samples")
-        codes = pair_code(finger_chain(q)[:, :, 2], pad_normals(q))
-        try:
-            write_entry(folder, lambda stage: np.savez(stage / MODEL_FILE, q=q, codes=codes))
-        except OgcpError:
-            pass  # a read-only cache only costs the sampling time next run
-        return q, codes
-
-    def _read_model(self, folder: Path) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """The sampled model of a cache entry, checked against this model's parameters.
-
-        Raises:
-            ValueError: For arrays of the wrong shape or with non-finite values.
-        """
-        with np.load(folder / MODEL_FILE, allow_pickle=False) as data:
-            q, codes = data["q"], data["codes"]
-        if not (q.ndim == 2 and q.shape[1] == len(JOINT_NAMES) and 0 < len(q) <= self.samples):
-            raise ValueError(f"joint configurations of shape {q.shape}")
-        if codes.shape != (len(q), 6) or not (np.isfinite(q).all() and np.isfinite(codes).all()):
-            raise ValueError(f"pair codes of shape {codes.shape} or non-finite values")
-        return q, codes
-
-    def residuals(self, positions: NDArray[np.float64], normals: NDArray[np.float64]) -> NDArray[np.float64]:
-        """Residuals of fingertip target triples, best over finger assignments, shape (B,).
-
-        Args:
-            positions: Target points, shape (B, 3, 3) [m].
-            normals: Inward normals at the targets (the pad normals needed), shape (B, 3, 3).
-        """
-        codes = np.stack([pair_code(positions[:, list(a)], normals[:, list(a)]) for a in ASSIGNMENTS], axis=1)
-        distance, _ = self._tree.query(codes.reshape(-1, 6) / self.scale, k=1)
-        return distance.reshape(len(positions), len(ASSIGNMENTS)).min(axis=1)
-
-    def reach(self, grasp: Sequence[int], contacts: ContactSet) -> Reach:
-        """Residual of a 3-contact grasp over all finger assignments, with the nearest sample."""
-        if len(grasp) != 3:
-            raise OgcpError(f"the SDH has 3 fingers; a grasp of {len(grasp)} contacts cannot be assigned")
-        p, n = contacts.positions[list(grasp)], contacts.normals[list(grasp)]
-        codes = np.array([pair_code(p[list(a)], n[list(a)]) for a in ASSIGNMENTS]) / self.scale
-        distance, nearest = self._tree.query(codes, k=1)
-        best = int(np.argmin(distance))
-        return Reach(float(distance[best]), tuple(float(v) for v in self.q[nearest[best]]), ASSIGNMENTS[best])
-
-    def accepts(self, grasp: Sequence[int], contacts: ContactSet) -> bool:
-        """P(g): the residual is within the threshold."""
-        return self.reach(grasp, contacts).residual <= self.threshold
-
-    def accepts_many(self, grasps: NDArray[np.intp], contacts: ContactSet) -> NDArray[np.bool_]:
-        """P(g) for many 3-contact grasps at once, shape (B,)."""
-        if grasps.shape[1] != 3:
-            raise OgcpError(f"the SDH has 3 fingers; grasps of {grasps.shape[1]} contacts cannot be assigned")
-        return self.residuals(contacts.positions[grasps], contacts.normals[grasps]) <= self.threshold
-
-    def admits(self, super_contacts: Sequence[NDArray[np.intp]], contacts: ContactSet) -> bool:
-        """Sound: False only if no grasp drawn from the super-contacts is reachable."""
-        if len(super_contacts) != 3:
-            raise OgcpError(f"the SDH has 3 fingers; m = {len(super_contacts)} cannot be assigned")
-        from scipy.spatial.distance import cdist
-
-        lo, hi = np.zeros((3, 3, 2)), np.zeros((3, 3, 2))
-        for i, j in itertools.combinations(range(3), 2):
-            pi, pj = contacts.positions[super_contacts[i]], contacts.positions[super_contacts[j]]
-            ni, nj = contacts.normals[super_contacts[i]], contacts.normals[super_contacts[j]]
-            d, e = cdist(pi, pj), cdist(ni, nj)
-            lo[i, j] = lo[j, i] = d.min(), e.min()
-            hi[i, j] = hi[j, i] = d.max(), e.max()
-        for a in ASSIGNMENTS:
-            box_lo = np.concatenate([lo[a[i], a[j]] for i, j in PAIRS]) / self.scale
-            box_hi = np.concatenate([hi[a[i], a[j]] for i, j in PAIRS]) / self.scale
-            gap = np.maximum(box_lo - self.codes, 0.0) + np.maximum(self.codes - box_hi, 0.0)
-            if np.min(np.einsum("ij,ij->i", gap, gap)) <= self.threshold**2:
-                return True
-        return False
-
-    def describe(self) -> dict[str, object]:
-        """JSON-ready description."""
-        return {
-            "name": self.name,
-            "samples": self.samples,
-            "kept": len(self.q),
-            "seed": self.seed,
-            "threshold": self.threshold,
-        }
+        super().__init__("sdh", None, samples, seed, threshold, cache_dir)

@@ -16,7 +16,6 @@ from typing import Any
 from ogcp.planner.baselines.es import ESResult, ExhaustiveSearch
 from ogcp.planner.baselines.hfts import HFTS, HFTSResult
 from ogcp.planner.config.methods import (
-    HAND_FINGERS,
     AStarConfig,
     ConstraintOptions,
     ESConfig,
@@ -27,8 +26,7 @@ from ogcp.planner.config.methods import (
 from ogcp.planner.config.options import MEMORY_LIMIT, MethodConfig, options_of
 from ogcp.planner.grasp.constraints import Constraint, MaxFingerSpread
 from ogcp.planner.grasp.contact_set import ContactSet
-from ogcp.planner.hands.reachability import SDHReachability
-from ogcp.planner.infra.errors import OgcpError
+from ogcp.planner.hands.reachability import HandReachability
 from ogcp.planner.infra.parallel import DEFAULT_BACKEND, DEFAULT_JOBS
 from ogcp.planner.records.plan import add_hand, add_optimum, contact_set_record
 from ogcp.planner.search.grasp_planner import GraspPlanner
@@ -81,30 +79,26 @@ class MethodRun:
     record: dict[str, Any]
 
 
-#: The model of every hand in :data:`~ogcp.planner.config.methods.HANDS`.
-HAND_MODELS = {"sdh": SDHReachability}
-
-
 @lru_cache(maxsize=4)
-def hand_model(name: str, threshold: float) -> SDHReachability:
-    """The hand model (cached: sampling it takes seconds, and a worker runs many cells)."""
-    return HAND_MODELS[name](threshold=threshold)
+def hand_model(hand: str, fingers: tuple[str, ...] | None, threshold: float) -> HandReachability:
+    """The hand model of a built-in name or descriptor path (cached: a worker runs many cells)."""
+    return HandReachability(hand, fingers, threshold=threshold)
 
 
-def constraints_of(config: HandOptions, m: int) -> tuple[list[Constraint], SDHReachability | None]:
+def constraints_of(config: HandOptions, m: int) -> tuple[list[Constraint], HandReachability | None]:
     """The grasp constraints a configuration asks for; the hand model is also returned.
 
     Raises:
-        OgcpError: For a hand and m other than its number of fingers.
+        OgcpError: For a bad hand, or m more than its fingers or other than the fingers named.
     """
     constraints: list[Constraint] = []
     if isinstance(config, ConstraintOptions) and config.max_spread is not None:
         constraints.append(MaxFingerSpread(config.max_spread))
     if config.hand is None:
         return constraints, None
-    if m != HAND_FINGERS:
-        raise OgcpError(f"the {config.hand} hand has {HAND_FINGERS} fingers; got m = {m}")
-    hand = hand_model(config.hand, config.hand_threshold)
+    assert config.hand_threshold is not None  # resolved with the hand
+    hand = hand_model(config.hand, config.hand_fingers, config.hand_threshold)
+    hand.chosen(m)
     return [*constraints, hand], hand
 
 

@@ -25,7 +25,7 @@ from ogcp.planner.infra.provenance import provenance
 from ogcp.planner.infra.tolerance import TOL
 
 if TYPE_CHECKING:
-    from ogcp.planner.hands.reachability import SDHReachability
+    from ogcp.planner.hands.reachability import HandReachability
 
 PLAN_SCHEMA = "ogcp.plan/1"
 #: Keys of a contact set's ``source`` that say how it was sampled (the rest describe the object).
@@ -162,11 +162,14 @@ def add_plan_path(record: dict[str, Any], plan_file: str | Path) -> dict[str, An
     return record
 
 
-def hand_record(hand: SDHReachability, grasp: Sequence[int], contacts: ContactSet) -> dict[str, Any]:
-    """The ``"hand"`` block of a result: joint angles, residual, which finger takes which contact."""
+def hand_record(hand: HandReachability, grasp: Sequence[int], contacts: ContactSet) -> dict[str, Any]:
+    """The ``"hand"`` block of a result: the hand's identity, the nearest sampled configuration
+    (joint names and angles), its residual, and which finger takes which contact."""
     reach = hand.reach(grasp, contacts)
     return {
-        "name": hand.name,
+        **hand.descriptor.to_dict(),
+        "fingers": list(reach.finger_names),
+        "joint_names": list(hand.joint_names),
         "joint_angles": list(reach.joint_angles),
         "residual": reach.residual,
         "reachable": reach.residual <= hand.threshold,
@@ -174,7 +177,7 @@ def hand_record(hand: SDHReachability, grasp: Sequence[int], contacts: ContactSe
     }
 
 
-def add_hand(record: dict[str, Any], hand: SDHReachability | None, contacts: ContactSet) -> dict[str, Any]:
+def add_hand(record: dict[str, Any], hand: HandReachability | None, contacts: ContactSet) -> dict[str, Any]:
     """``record`` with the :func:`hand_record` of its best grasp (unchanged without a hand)."""
     if hand is not None:
         record["hand"] = hand_record(hand, record["grasp"], contacts)
@@ -350,12 +353,20 @@ class PlanHistogram:
 
 @dataclass(frozen=True)
 class PlanHand:
-    """The ``"hand"`` block read back (see :func:`hand_record`): joint angles [rad], residual, contact per finger."""
+    """The ``"hand"`` block read back (see :func:`hand_record`): joint angles [rad], residual, contact per finger.
+
+    Plans written before hands had descriptors carry no ``descriptor``, ``fingers`` or
+    ``joint_names`` (then None or empty).
+    """
 
     name: str | None
     joint_angles: tuple[float, ...]
     residual: float | None
     finger_contacts: tuple[int, ...]
+    descriptor: str | None = None
+    descriptor_sha256: str | None = None
+    fingers: tuple[str, ...] = ()
+    joint_names: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -473,11 +484,16 @@ class PlanView:
         if not isinstance(block, dict):
             return None
         name, angles = block.get("name"), block.get("joint_angles")
+        descriptor, digest = block.get("descriptor"), block.get("descriptor_sha256")
         return PlanHand(
             name=None if name is None else str(name),
             joint_angles=tuple(float(a) for a in angles if _is_number(a)) if isinstance(angles, list) else (),
             residual=_number(block.get("residual")),
             finger_contacts=_indices(block.get("finger_contacts")) or (),
+            descriptor=descriptor if isinstance(descriptor, str) else None,
+            descriptor_sha256=digest if isinstance(digest, str) else None,
+            fingers=_names(block.get("fingers")),
+            joint_names=_names(block.get("joint_names")),
         )
 
     @property
@@ -490,6 +506,10 @@ class PlanView:
         return PlanOptimum(
             None if method is None else str(method), _indices(block.get("grasp")), _number(block.get("q1"))
         )
+
+
+def _names(value: Any) -> tuple[str, ...]:
+    return tuple(v for v in value if isinstance(v, str)) if isinstance(value, list) else ()
 
 
 def _is_number(value: Any) -> bool:

@@ -33,7 +33,7 @@ from ogcp.planner.grasp import sample_contacts
 from ogcp.planner.grasp.constraints import MaxFingerSpread
 from ogcp.planner.grasp.contact_set import ContactSet
 from ogcp.planner.grasp.kernel.jit import HEADER, cached_njit
-from ogcp.planner.hands import reachability
+from ogcp.planner.hands.kinematics import HandKinematics
 from ogcp.planner.hands.reachability import SDHReachability
 from ogcp.planner.infra.cache import ENTRY_MANIFEST, CacheEntryWarning
 from ogcp.planner.infra.errors import OgcpError
@@ -360,20 +360,20 @@ def sdh_cache(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> tuple[Path, li
     """``$OGCP_CACHE`` with a small SDH model in it, and a log of the samplings."""
     monkeypatch.setenv("OGCP_CACHE", str(tmp_path))
     sampled: list[int] = []
-    original = reachability.random_configurations
+    original = HandKinematics.sample
 
-    def counting(samples: int, seed: int) -> np.ndarray:
+    def counting(self: HandKinematics, samples: int, seed: int) -> np.ndarray:
         sampled.append(samples)
-        return original(samples, seed)
+        return original(self, samples, seed)
 
-    monkeypatch.setattr(reachability, "random_configurations", counting)
+    monkeypatch.setattr(HandKinematics, "sample", counting)
     SDHReachability(samples=300, seed=3)
     assert sampled == [300]
     return tmp_path, sampled
 
 
 def _sdh_entry(root: Path) -> Path:
-    (entry,) = root.glob("sdh_reach_*")
+    (entry,) = root.glob("hand_reach_sdh_*")
     return entry
 
 
@@ -398,7 +398,7 @@ def _flip_middle(data: bytes) -> bytes:
 def test_a_damaged_sdh_model_in_ogcp_cache_is_rebuilt_once(sdh_cache: tuple[Path, list[int]], damage: str) -> None:
     root, sampled = sdh_cache
     entry = _sdh_entry(root)
-    first = np.load(entry / "model.npz")["q"]
+    first = np.load(entry / "model.npz")["angles"]
     SDH_DAMAGE[damage](entry)
     with pytest.warns(CacheEntryWarning, match=rf"cache entry {re.escape(str(entry))} is damaged"):
         rebuilt = SDHReachability(samples=300, seed=3)
@@ -419,7 +419,7 @@ def test_sdh_leftovers_are_no_entry_and_a_file_in_its_place_is_replaced(
         warnings.simplefilter("error")
         SDHReachability(samples=300, seed=3)
     assert sampled == [300]
-    # A truncated bare file of the old layout (the issue's sdh_reach_*.npz) is never read.
+    # A truncated bare file of the old layout (the issue's *_reach_*.npz) is never read.
     (root / f"{entry.name}.npz").write_bytes(b"PK\x03\x04 truncated")
     for path in (entry / "model.npz", entry / ENTRY_MANIFEST):
         path.unlink(missing_ok=True)
@@ -427,7 +427,7 @@ def test_sdh_leftovers_are_no_entry_and_a_file_in_its_place_is_replaced(
     entry.write_bytes(b"a file where the entry folder goes")
     SDHReachability(samples=300, seed=3)
     assert sampled == [300, 300] and entry.is_dir()
-    assert SDHReachability(samples=300, seed=3).q.shape[1] == 7 and sampled == [300, 300]
+    assert SDHReachability(samples=300, seed=3).q.shape[1] == 8 and sampled == [300, 300]
 
 
 # -- convex decompositions --------------------------------------------------------------------

@@ -64,7 +64,7 @@ def _run(argv: list[str]) -> tuple[int, str, str]:
         (["--method", "astar", "--runs", "3"], "--runs applies to method 'hfts' only"),
         (["--method", "astar", "--backend", "dask"], "--backend applies to methods es, es-pruned, hfts only"),
         (["--method", "es", "--no-optimum"], "--no-optimum applies to method 'hfts' only"),
-        (["--method", "astar", "--hand-threshold", "0.2"], "hand_threshold: applies only with hand = 'sdh'"),
+        (["--method", "astar", "--hand-threshold", "0.2"], "hand_threshold: applies only with a hand"),
         (["--method", "hfts", "--runs", "0"], "runs: expected an integer >= 1, got 0"),
     ],
 )

@@ -1,4 +1,4 @@
-"""Fig. 10 (SDH on its grasp), sim_grasps (tips and weakest push) and the per-mesh camera."""
+"""Fig. 10 (each plan's hand on its grasp), sim_grasps (tips and weakest push) and the per-mesh camera."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ import pytest
 from ogcp.benchmarks import plots
 from ogcp.benchmarks.plots.data import load_run
 from ogcp.benchmarks.plots.grasp_figures import NoGraspCells, upright
-from ogcp.benchmarks.plots.hand_figures import HAND_FITS, LINK_RADIUS, NoHandCells, fig10_sdh_grasps, palm_pose
+from ogcp.benchmarks.plots.hand_figures import HAND_FITS, NoHandCells, fig10_hand_grasps
 from ogcp.benchmarks.plots.raster import look
 from ogcp.benchmarks.plots.sim_figures_3d import (
     NoSimulatedCells,
@@ -23,7 +23,6 @@ from ogcp.benchmarks.plots.sim_figures_3d import (
 )
 from ogcp.benchmarks.suite.parse import parse_suite
 from ogcp.benchmarks.suite.runner import SuiteRunner
-from ogcp.planner.hands.reachability import finger_chain, pad_normals
 from ogcp.sim_eval.plan_input import plan_input
 
 matplotlib.use("Agg")
@@ -54,20 +53,6 @@ label = "A*"
 [simulation]
 enabled = true
 """
-
-
-def test_the_palm_fit_recovers_a_known_hand_pose():
-    angles = np.array([0.4, 0.3, 0.5, 0.2, 0.6, 0.7, 0.1])
-    tips, pads = finger_chain(angles)[0, :, 2], pad_normals(angles)[0]
-    turn = np.linalg.qr(np.array([[1.0, 0.2, 0.1], [0.3, 1.0, 0.4], [0.2, 0.1, 1.0]]))[0]
-    turn *= np.sign(np.linalg.det(turn))
-    shift = np.array([0.1, -0.2, 0.3])
-    normals = pads @ turn.T
-    points = tips @ turn.T + shift + LINK_RADIUS * normals  # the contact is one radius beyond the axis
-    rotation, translation, misfit = palm_pose(angles, points, normals)
-    assert misfit < 1e-9
-    np.testing.assert_allclose(rotation, turn, atol=1e-9)
-    np.testing.assert_allclose(translation, shift, atol=1e-9)
 
 
 def test_look_turns_the_picture_up_to_the_given_axis():
@@ -105,15 +90,15 @@ def sim_run(tmp_path_factory) -> Path:
 
 
 def test_fig10_draws_one_hand_panel_per_object_and_writes_its_files(sdh_run, tmp_path):
-    figure = fig10_sdh_grasps(load_run(sdh_run))
+    figure = fig10_hand_grasps(load_run(sdh_run))
     assert [ax.get_title().split(":")[0] for ax in figure.axes] == ["box"]
-    assert "tips within" in figure.axes[0].get_title()
-    # The drawn fingertips sit on their contacts (the recorded angles, placed rigidly, miss by ~2 cm).
+    assert "pads within" in figure.axes[0].get_title()
+    # The drawn pads sit on their contacts: the hand is fitted, not the recorded sample placed rigidly.
     [posed] = HAND_FITS
     assert posed.title == "box: A* SDH" and posed.fit.residuals.shape == (3,)
-    assert posed.fit.max_residual < 2e-3 < posed.rigid_misfit
-    report = plots.plot_run(sdh_run, tmp_path / "out", only=["fig10_sdh_grasps"], formats=["png"], dpi=60)
-    assert [p.name for p in report.written] == ["fig10_sdh_grasps.png"]
+    assert posed.fit.realised and posed.fit.residuals.max() < 1e-3
+    report = plots.plot_run(sdh_run, tmp_path / "out", only=["fig10_hand_grasps"], formats=["png"], dpi=60)
+    assert [p.name for p in report.written] == ["fig10_hand_grasps.png"]
 
 
 def test_runs_without_hand_or_simulation_skip_quietly_by_default_and_with_a_note_on_request(sdh_run, tmp_path):
@@ -127,7 +112,7 @@ def test_runs_without_hand_or_simulation_skip_quietly_by_default_and_with_a_note
 def test_sim_grasps_draws_the_realized_tips_or_says_it_used_the_planned_ones(sim_run):
     data = load_run(sim_run)
     with pytest.raises(NoHandCells):
-        fig10_sdh_grasps(data)
+        fig10_hand_grasps(data)
     title = sim_grasps(data).axes[0].get_title()
     assert title.startswith("box: A* best") and "weakest" in title and "planned" not in title
     # An ogcp.sim/1 record has no realized contacts: the tips go on the planned ones, said in the title.

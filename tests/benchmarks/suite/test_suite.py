@@ -215,11 +215,11 @@ BAD_SUITES = [
     ),
     (
         "schema_version = 1\nobjects = ['box']\n[[methods]]\nmethod = 'astar'\nhand = 'shadow'",
-        "hand 'shadow'; valid choices: sdh",
+        "hand 'shadow'; built-in hands are sdh, parallel_gripper, or give FILE.toml",
     ),
     (
         "schema_version = 1\nobjects = ['box']\n[[methods]]\nmethod = 'es'\nhand_threshold = 0.2",
-        "methods[0].hand_threshold: applies only with hand = 'sdh'",
+        "methods[0].hand_threshold: applies only with a hand",
     ),
     (
         "schema_version = 1\nobjects = ['box']\n[[methods]]\nmethod = 'astar'\nlabel = 'A* {epz}'",

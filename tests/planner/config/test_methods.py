@@ -20,9 +20,9 @@ from ogcp.planner.config.methods import (
     WAStarConfig,
 )
 from ogcp.planner.hands.reachability import SDHReachability
+from ogcp.planner.hands.registry import BUILTIN_HANDS
 from ogcp.planner.infra import OgcpError
 from ogcp.planner.methods.registry import EXHAUSTIVE_METHODS, METHODS, OPTIMAL_METHODS, SEARCH_METHODS, method_spec
-from ogcp.planner.methods.runners import HAND_MODELS
 from ogcp.planner.search import GraspPlanner
 
 INVALID = [
@@ -38,8 +38,16 @@ INVALID = [
     (AStarConfig, {"position_weight": 0.0}, "position_weight: expected a number > 0, got 0.0"),
     (AStarConfig, {"position_weight": float("nan")}, "position_weight: expected a number > 0"),
     (AStarConfig, {"max_spread": -1.0}, "max_spread: expected a number > 0, got -1.0"),
-    (AStarConfig, {"hand": "shadow"}, "unknown hand 'shadow'; valid choices: sdh"),
-    (AStarConfig, {"hand_threshold": 0.2}, "hand_threshold: applies only with hand = 'sdh'"),
+    (
+        AStarConfig,
+        {"hand": "shadow"},
+        "unknown hand 'shadow'; built-in hands are sdh, parallel_gripper, or give FILE.toml",
+    ),
+    (AStarConfig, {"hand_threshold": 0.2}, "hand_threshold: applies only with a hand"),
+    (AStarConfig, {"hand_fingers": ["thumb"]}, "hand_fingers: applies only with a hand"),
+    (AStarConfig, {"hand": "sdh", "hand_fingers": ["a", "a"]}, "hand_fingers: names a value twice: a, a"),
+    (AStarConfig, {"hand": "sdh", "hand_fingers": []}, "hand_fingers: expected a list of 1 to 64 non-empty names"),
+    (AStarConfig, {"hand": ""}, "hand: expected a non-empty string"),
     (AStarConfig, {"hand": "sdh", "hand_threshold": 0}, "hand_threshold: expected a number > 0, got 0"),
     (WAStarConfig, {"eps": -1}, "eps: expected a number >= 0, got -1"),
     (DijkstraConfig, {"heuristic": "fc"}, "method 'dijkstra' uses no heuristic (got heuristic 'fc'); valid: none"),
@@ -48,7 +56,7 @@ INVALID = [
     (ESPrunedConfig, {"max_spread": 0}, "max_spread: expected a number > 0, got 0"),
     (HFTSConfig, {"runs": 0}, "runs: expected an integer >= 1, got 0"),
     (HFTSConfig, {"iterations": -3}, "iterations: expected an integer >= 1, got -3"),
-    (HFTSConfig, {"hand_threshold": 0.5}, "hand_threshold: applies only with hand = 'sdh'"),
+    (HFTSConfig, {"hand_threshold": 0.5}, "hand_threshold: applies only with a hand"),
 ]
 
 
@@ -84,7 +92,15 @@ def test_canonical_form_is_every_parameter_sorted():
     canonical = WAStarConfig(eps=0.2).canonical()
     assert list(canonical) == sorted(options_of(WAStarConfig)) and canonical["eps"] == 0.2
     assert "bins" in ESConfig().canonical() and "bins" not in ESPrunedConfig().canonical()
-    assert set(HFTSConfig().canonical()) == {"hand", "hand_threshold", "iterations", "position_weight", "runs", "seed"}
+    assert set(HFTSConfig().canonical()) == {
+        "hand",
+        "hand_fingers",
+        "hand_threshold",
+        "iterations",
+        "position_weight",
+        "runs",
+        "seed",
+    }
 
 
 def test_every_option_is_declared_with_a_valid_default_and_help():
@@ -131,10 +147,10 @@ def test_engine_constructors_take_their_defaults_from_the_configurations():
     for name in ("runs", "iterations", "seed", "position_weight"):
         assert _default(HFTS, name) == getattr(HFTSConfig(), name), name
     assert _default(SDHReachability, "threshold") == AStarConfig(hand="sdh").hand_threshold
-    assert set(HAND_MODELS) == set(HANDS)
+    assert set(BUILTIN_HANDS) == set(HANDS)
 
 
 def test_config_errors_carry_the_field_for_callers_that_prefix_a_key_path():
     with pytest.raises(ConfigError) as info:
         ESConfig(hand_threshold=0.2)
-    assert info.value.field == "hand_threshold" and info.value.problem == "applies only with hand = 'sdh'"
+    assert info.value.field == "hand_threshold" and info.value.problem.startswith("applies only with a hand")

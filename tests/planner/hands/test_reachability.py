@@ -1,4 +1,4 @@
-"""SDH reachability: the kinematic chain, the sampled model, sound pruning, constrained search."""
+"""Reachability of any hand: the sampled model, its cache, sound pruning against brute force, constrained search."""
 
 from __future__ import annotations
 
@@ -11,15 +11,18 @@ import pytest
 
 from ogcp.benchmarks.cli import main
 from ogcp.planner.grasp import q1
-from ogcp.planner.hands import forward_kinematics, random_configurations
-from ogcp.planner.hands.reachability import SDHReachability, finger_chain, pad_normals, self_collision_free
+from ogcp.planner.hands import HandKinematics, HandReachability, SDHReachability, load_descriptor
+from ogcp.planner.hands.reachability import pair_code
+from ogcp.planner.infra import OgcpError
 from ogcp.planner.infra.cache import CacheEntryWarning
 from ogcp.planner.search import GraspPlanner
+
+from .hand_files import write_mesh_hand
 
 
 @pytest.fixture(scope="module")
 def hand(tmp_path_factory):
-    return SDHReachability(samples=4000, seed=1, threshold=0.35, cache_dir=tmp_path_factory.mktemp("cache"))
+    return SDHReachability(samples=4000, seed=1, threshold=1.0, cache_dir=tmp_path_factory.mktemp("cache"))
 
 
 @pytest.fixture(scope="module")
@@ -27,22 +30,31 @@ def donut(object_contacts):
     return object_contacts("donut", 18, 4)
 
 
-def test_chain_ends_at_the_forward_kinematics_tips():
-    q = random_configurations(300, 5)
-    tips, normals = forward_kinematics(q)
-    np.testing.assert_allclose(finger_chain(q)[:, :, 2], tips, atol=1e-12)
-    np.testing.assert_allclose(pad_normals(q), normals, atol=1e-12)
+def test_the_model_holds_the_kinematics_pads_and_collisions(hand):
+    kinematics = HandKinematics(hand.descriptor)
+    rows = [0, 17, 3999]
+    points, normals = kinematics.pads_many(hand.q[rows])
+    np.testing.assert_allclose(hand.sampled.points[rows], points, atol=1e-12)
+    np.testing.assert_allclose(hand.sampled.normals[rows], normals, atol=1e-12)
+    np.testing.assert_array_equal(hand.sampled.collisions[rows], kinematics.collisions(hand.q[rows]))
+    assert hand.joint_names == kinematics.joint_names
 
 
-def test_self_collision_rejects_crossed_fingers():
-    assert self_collision_free(np.zeros(7))[0]
-    crossed = np.array([0.0, 1.5, 1.5, 1.5, 1.5, 1.5, 1.5])  # every finger curled into the centre
-    assert not self_collision_free(crossed)[0]
+def test_codes_are_rigid_invariants():
+    rng = np.random.default_rng(3)
+    points, normals = rng.normal(size=(4, 3)), rng.normal(size=(4, 3))
+    normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+    turn = np.linalg.qr(rng.normal(size=(3, 3)))[0]
+    turn *= np.sign(np.linalg.det(turn))
+    np.testing.assert_allclose(
+        pair_code(points @ turn.T + 1.0, normals @ turn.T), pair_code(points, normals), atol=1e-12
+    )
+    assert pair_code(points, normals).shape == (24,)  # 4 per pair, C(4, 2) pairs
 
 
 def test_model_is_cached_and_survives_a_corrupt_entry(tmp_path):
     first = SDHReachability(samples=500, seed=2, cache_dir=tmp_path)
-    files = list(tmp_path.glob("sdh_reach_*/model.npz"))
+    files = list(tmp_path.glob("hand_reach_sdh_*/model.npz"))
     assert len(files) == 1 and [p.name for p in tmp_path.iterdir()] == [files[0].parent.name]
     again = SDHReachability(samples=500, seed=2, cache_dir=tmp_path)
     assert np.array_equal(first.q, again.q)
@@ -54,18 +66,28 @@ def test_model_is_cached_and_survives_a_corrupt_entry(tmp_path):
         assert SDHReachability(samples=500, seed=2, cache_dir=tmp_path).q.shape == first.q.shape  # repaired
 
 
+def test_a_changed_descriptor_is_a_new_model(tmp_path):
+    path = write_mesh_hand(tmp_path / "hand")
+    first = HandReachability(path, samples=300, cache_dir=tmp_path / "cache")
+    path.write_text(path.read_text().replace("kp = 4.0", "kp = 5.0"))
+    second = HandReachability(path, samples=300, cache_dir=tmp_path / "cache")
+    assert len(list((tmp_path / "cache").glob("hand_reach_claw_*"))) == 2
+    assert second.describe()["descriptor_sha256"] != first.describe()["descriptor_sha256"]
+
+
 def test_residual_ignores_contact_order_and_reports_a_configuration(hand, donut):
     reach = hand.reach((2, 7, 11), donut)
     for order in itertools.permutations((2, 7, 11)):
         assert hand.reach(order, donut).residual == pytest.approx(reach.residual, abs=1e-12)
-    assert len(reach.joint_angles) == 7 and sorted(reach.fingers) == [0, 1, 2]
+    assert len(reach.joint_angles) == 8 and sorted(reach.fingers) == [0, 1, 2]
+    assert reach.finger_names == ("finger_1", "finger_2", "thumb")
     assert hand.accepts((2, 7, 11), donut) == (reach.residual <= hand.threshold)
 
 
 def test_pruning_is_sound_against_brute_force(hand, donut):
     rng = np.random.default_rng(0)
     pruned = 0
-    for _ in range(150):
+    for _ in range(300):
         sets = [np.sort(rng.choice(18, int(rng.integers(1, 3)), replace=False)) for _ in range(3)]
         reachable = any(len({a, b, c}) == 3 and hand.accepts((a, b, c), donut) for a, b, c in itertools.product(*sets))
         admitted = hand.admits(sets, donut)
@@ -86,11 +108,33 @@ def test_cli_reports_the_hand_configuration(capsys, tmp_path, monkeypatch):
     monkeypatch.setenv("OGCP_CACHE", str(tmp_path))
     assert main(["plan", "donut", "-n", "30", "-m", "3", "--hand", "sdh", "--json"]) == 0
     record = json.loads(capsys.readouterr().out)
-    assert record["hand"]["name"] == "sdh" and len(record["hand"]["joint_angles"]) == 7
-    assert record["hand"]["residual"] <= 0.3
+    assert record["hand"]["name"] == "sdh" and len(record["hand"]["joint_angles"]) == 8
+    assert record["hand"]["residual"] <= 1.0 and record["hand"]["fingers"] == ["finger_1", "finger_2", "thumb"]
     assert sorted(record["hand"]["finger_contacts"]) == record["grasp"]
+    assert len(record["hand"]["descriptor_sha256"]) == 64 and record["hand"]["joint_names"][3] == "base_2"
     assert main(["plan", "donut", "-n", "30", "-m", "4", "--hand", "sdh"]) == 2
-    assert "3 fingers" in capsys.readouterr().err
+    assert "the sdh hand has 3 fingers; a grasp of m = 4 contacts cannot use them" in capsys.readouterr().err
+
+
+def test_fewer_contacts_than_fingers_use_the_named_fingers(capsys, tmp_path, monkeypatch):
+    monkeypatch.setenv("OGCP_CACHE", str(tmp_path))
+    args = ["plan", "donut", "-n", "30", "-m", "2", "--hand", "sdh", "--hand-fingers", "thumb,finger_2", "--json"]
+    assert main(args) == 0
+    record = json.loads(capsys.readouterr().out)
+    assert record["hand"]["fingers"] == ["thumb", "finger_2"] and len(record["hand"]["finger_contacts"]) == 2
+    assert main([*args[:-3], "--hand-fingers", "thumb"]) == 2
+    assert "1 hand fingers named (thumb) for a grasp of m = 2" in capsys.readouterr().err
+
+
+def test_a_users_descriptor_plans_with_no_code_change(capsys, tmp_path, monkeypatch):
+    monkeypatch.setenv("OGCP_CACHE", str(tmp_path / "cache"))
+    path = write_mesh_hand(tmp_path / "hand")
+    assert main(["plan", "sphere", "-n", "40", "-m", "3", "--diagonal", "0.08", "--hand", str(path), "--json"]) == 0
+    record = json.loads(capsys.readouterr().out)
+    assert record["hand"]["name"] == "claw" and record["hand"]["descriptor"] == str(path)
+    assert record["hand"]["reachable"] and record["q1"] > 0
+    with pytest.raises(OgcpError, match="the claw hand has 3 fingers"):
+        HandReachability(load_descriptor(path), samples=100, cache_dir=tmp_path / "c").chosen(4)
 
 
 def test_es_filtered_by_the_same_predicate(hand, donut):
@@ -129,3 +173,14 @@ def test_cli_es_summary_counts_admissible_grasps(capsys, tmp_path, monkeypatch):
     assert excluded + admissible == 560  # C(16, 3)
     fc, of = map(int, re.search(r"force closure: (\d+) of (\d+)", out).groups())
     assert of == admissible and fc <= admissible
+
+
+def test_contacts_for_a_hand_are_sampled_for_its_pads(capsys, tmp_path, monkeypatch):
+    monkeypatch.setenv("OGCP_CACHE", str(tmp_path))
+    out = tmp_path / "c.json"
+    assert main(["contacts", "donut", "-n", "20", "--hand", "sdh", "-o", str(out)]) == 0
+    assert json.loads(out.read_text())["source"]["tip_radius"] == 0.009  # the SDH's pad rounding
+    assert main(["contacts", "donut", "-n", "20", "--hand", "sdh", "--tip-radius", "0.004", "-o", str(out)]) == 0
+    assert json.loads(out.read_text())["source"]["tip_radius"] == 0.004
+    assert main(["contacts", "donut", "-n", "20", "--hand", "nope", "-o", str(out)]) == 2
+    assert "unknown hand 'nope'" in capsys.readouterr().err

@@ -1,0 +1,399 @@
+"""Any hand's kinematics from its compiled MuJoCo model: the one kinematic truth.
+
+:class:`HandKinematics` compiles a descriptor's model (:mod:`ogcp.planner.hands.loading`), checks
+what the descriptor names against it (the palm, each finger's tip body below the palm, its joints
+on the chain), and answers in the palm frame:
+
+- the pads' contact points and normals of a configuration or a batch (``mj_kinematics``);
+- random configurations within the joint limits, with MuJoCo's joint equalities (a joint that
+  mirrors another, as the SDH's two base joints) kept;
+- which fingers (and the palm) collide with each other in a configuration (``mj_collision`` with
+  every hand geom made collidable; pairs that already touch in the reference pose are by design).
+
+A *configuration* is the vector of the hand's finger joints, :attr:`HandKinematics.joint_names`
+order [rad or m]; joints outside the fingers (a wrist above the palm) stay at their reference.
+"""
+
+from __future__ import annotations
+
+import copy
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ogcp.planner.hands.descriptor import HandDescriptor
+from ogcp.planner.hands.loading import compile_spec, hand_spec
+from ogcp.planner.infra.errors import OgcpError
+
+#: Range given to a hinge that has none [rad].
+UNLIMITED_HINGE = (-np.pi, np.pi)
+#: Depth beyond which two hand geoms count as colliding [m].
+SELF_PENETRATION = 5e-4
+_MOVABLE = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
+
+
+@dataclass(frozen=True)
+class Finger:
+    """A finger resolved against the compiled model.
+
+    Attributes:
+        name: The descriptor's name.
+        body: Id of the tip body.
+        joints: Ids of the joints that move it (model order).
+        offset: Pad contact point in the tip body's frame, shape (3,) [m].
+        normal: Unit pad normal in the tip body's frame, shape (3,).
+        radius: Pad rounding [m].
+    """
+
+    name: str
+    body: int
+    joints: tuple[int, ...]
+    offset: NDArray[np.float64]
+    normal: NDArray[np.float64]
+    radius: float
+
+
+class HandKinematics:
+    """A hand's compiled model and its fingertip kinematics in the palm frame.
+
+    Args:
+        descriptor: The hand (see :func:`ogcp.planner.hands.descriptor.load_descriptor`).
+
+    Raises:
+        OgcpError: One line naming the descriptor for a model MuJoCo refuses, an unknown palm or
+            tip body, a tip body not below the palm, a finger with no joint, a named joint that is
+            unknown, not on the finger's chain, or not a hinge or slide.
+    """
+
+    def __init__(self, descriptor: HandDescriptor) -> None:
+        self.descriptor = descriptor
+        spec = hand_spec(descriptor)
+        for k, geom in enumerate(spec.geoms):  # scenes that attach the hand find its geoms by name
+            if not geom.name:
+                geom.name = f"ogcp_geom{k}"
+        plain = compile_spec(descriptor, spec)
+        self.palm = self._body(plain, descriptor.palm, "palm")
+        self.fingers = tuple(self._finger(plain, k) for k in range(len(descriptor.fingers)))
+        joint_ids = sorted({j for finger in self.fingers for j in finger.joints})
+        self.servos = self._add_servos(spec, plain, joint_ids)
+        self.model = compile_spec(descriptor, spec)
+        self.spec = spec
+        self.data = mujoco.MjData(self.model)
+        self.joint_ids = np.array(joint_ids, dtype=np.intp)
+        self.joint_names = tuple(mujoco.mj_id2name(self.model, mujoco.mjtObj.mjOBJ_JOINT, j) for j in joint_ids)
+        self.qpos_index = self.model.jnt_qposadr[self.joint_ids]
+        self.limits = np.array([self._range(j) for j in joint_ids])
+        self.reference_qpos = self._reference_qpos()
+        self._couplings = self._joint_couplings()
+        self.independent = np.array(
+            [k for k, j in enumerate(joint_ids) if j not in {dep for dep, _, _ in self._couplings}], dtype=np.intp
+        )
+        self.body_groups = self._body_groups()
+        self._collider = self._collision_model()
+        self._designed = self._touching(self._collider, self.reference())
+        self.root = self._root()
+        self.palm_pose = self._palm_pose()
+
+    # ----- checks against the compiled model -------------------------------------------------
+
+    def _body(self, model: mujoco.MjModel, name: str, field: str) -> int:
+        body = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, name)
+        if body < 0:
+            names = [model.body(i).name for i in range(1, model.nbody)]
+            raise OgcpError(
+                f"{self.descriptor.path}: {field} = {name!r} is not a body of {self.descriptor.model_path.name}; "
+                f"its bodies are {', '.join(names)}"
+            )
+        return int(body)
+
+    def _chain(self, model: mujoco.MjModel, body: int) -> list[int]:
+        """Bodies from the palm (excluded) down to ``body`` (included), or [] if not below the palm."""
+        chain = []
+        while body != self.palm:
+            if body == 0:
+                return []
+            chain.append(body)
+            body = int(model.body_parentid[body])
+        return chain[::-1]
+
+    def _finger(self, model: mujoco.MjModel, k: int) -> Finger:
+        spec = self.descriptor.fingers[k]
+        where = f"{self.descriptor.path}: fingers[{k}] ({spec.name})"
+        body = self._body(model, spec.tip_body, f"fingers[{k}].tip_body")
+        chain = self._chain(model, body)
+        if not chain:
+            raise OgcpError(f"{where}: tip_body {spec.tip_body!r} is not below the palm {self.descriptor.palm!r}")
+        on_chain = [j for b in chain for j in range(model.njnt) if model.jnt_bodyid[j] == b]
+        if spec.joints is None:
+            joints = on_chain
+        else:
+            joints = []
+            for name in spec.joints:
+                j = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, name)
+                if j < 0:
+                    raise OgcpError(f"{where}: joint {name!r} is not a joint of {self.descriptor.model_path.name}")
+                if j not in on_chain:
+                    raise OgcpError(f"{where}: joint {name!r} is not on the chain from the palm to {spec.tip_body!r}")
+                joints.append(j)
+        if not joints:
+            raise OgcpError(f"{where}: no joint moves {spec.tip_body!r} relative to the palm {self.descriptor.palm!r}")
+        for j in joints:
+            if model.jnt_type[j] not in _MOVABLE:
+                name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j)
+                raise OgcpError(
+                    f"{where}: joint {name!r} must be a hinge or a slide (ball and free joints are not fingers)"
+                )
+        return Finger(spec.name, body, tuple(sorted(joints)), spec.offset(), spec.normal(), spec.tip_radius)
+
+    def _range(self, joint: int) -> tuple[float, float]:
+        if self.model.jnt_limited[joint]:
+            low, high = self.model.jnt_range[joint]
+            return float(low), float(high)
+        if self.model.jnt_type[joint] == mujoco.mjtJoint.mjJNT_HINGE:
+            return UNLIMITED_HINGE
+        name = mujoco.mj_id2name(self.model, mujoco.mjtObj.mjOBJ_JOINT, joint)
+        raise OgcpError(f"{self.descriptor.path}: slide joint {name!r} has no range; give it one in the model")
+
+    def _add_servos(self, spec: mujoco.MjSpec, model: mujoco.MjModel, joints: list[int]) -> tuple[str, ...]:
+        """Position servos on the finger joints that no actuator drives; their joint names."""
+        driven = set()
+        for a in range(model.nu):
+            if model.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_JOINT:
+                driven.add(int(model.actuator_trnid[a, 0]))
+            elif model.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_TENDON:
+                tendon = int(model.actuator_trnid[a, 0])
+                start, count = model.tendon_adr[tendon], model.tendon_num[tendon]
+                for w in range(start, start + count):
+                    if model.wrap_type[w] == mujoco.mjtWrap.mjWRAP_JOINT:
+                        driven.add(int(model.wrap_objid[w]))
+        actuation = self.descriptor.actuation
+        added = []
+        for j in joints:
+            if j in driven or self._follows(model, j, driven | set(joints)):
+                continue
+            name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j)
+            inertia = float(model.dof_M0[model.jnt_dofadr[j]])
+            kv = actuation.kv if actuation.kv is not None else 2.0 * np.sqrt(actuation.kp * max(inertia, 1e-9))
+            act = spec.add_actuator(name=f"ogcp_servo_{name}", target=name, trntype=mujoco.mjtTrn.mjTRN_JOINT)
+            act.set_to_position(kp=actuation.kp, kv=kv)
+            act.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
+            act.forcerange = [-actuation.force_range, actuation.force_range]
+            added.append(name)
+        return tuple(added)
+
+    @staticmethod
+    def _follows(model: mujoco.MjModel, joint: int, drivers: set[int]) -> bool:
+        """Whether an active joint equality ties ``joint`` to one of ``drivers``: it needs no servo of its own."""
+        for e in range(model.neq):
+            if model.eq_type[e] == mujoco.mjtEq.mjEQ_JOINT and model.eq_active0[e] and model.eq_obj1id[e] == joint:
+                return int(model.eq_obj2id[e]) in drivers
+        return False
+
+    def _reference_qpos(self) -> NDArray[np.float64]:
+        qpos = self.model.qpos0.copy()
+        qpos[self.qpos_index] = np.clip(qpos[self.qpos_index], self.limits[:, 0], self.limits[:, 1])
+        return qpos
+
+    def _joint_couplings(self) -> list[tuple[int, int, NDArray[np.float64]]]:
+        """(dependent joint, driving joint or -1, polynomial coefficients) of active joint equalities."""
+        found = []
+        ids = set(self.joint_ids.tolist())
+        for e in range(self.model.neq):
+            if self.model.eq_type[e] != mujoco.mjtEq.mjEQ_JOINT or not self.model.eq_active0[e]:
+                continue
+            dependent, driver = int(self.model.eq_obj1id[e]), int(self.model.eq_obj2id[e])
+            if dependent in ids and (driver < 0 or driver in ids):
+                found.append((dependent, driver, self.model.eq_data[e, :5].copy()))
+        return found
+
+    def _body_groups(self) -> NDArray[np.intp]:
+        """Each body's finger index, or len(fingers) for the palm and bodies no single finger owns."""
+        palm_group = len(self.fingers)
+        group = np.full(self.model.nbody, palm_group, dtype=np.intp)
+        owners: dict[int, set[int]] = {}
+        for f, finger in enumerate(self.fingers):
+            first = min(self.model.jnt_bodyid[j] for j in finger.joints)
+            for b in range(self.model.nbody):
+                below_first = self._is_below(b, int(first))
+                on_path = self._is_below(finger.body, b) and below_first
+                if on_path or self._is_below(b, finger.body):
+                    owners.setdefault(b, set()).add(f)
+        for b, fs in owners.items():
+            if len(fs) == 1:
+                group[b] = fs.pop()
+        return group
+
+    def _is_below(self, body: int, ancestor: int) -> bool:
+        while body != ancestor:
+            if body == 0:
+                return False
+            body = int(self.model.body_parentid[body])
+        return True
+
+    def _collision_model(self) -> mujoco.MjModel:
+        """A copy in which every hand geom that collides with anything collides with every other."""
+        collider = copy.copy(self.model)
+        solid = (collider.geom_contype != 0) | (collider.geom_conaffinity != 0)
+        collider.geom_contype[solid] = 1
+        collider.geom_conaffinity[solid] = 1
+        # The broadphase filters bodies first, by flags the compiler ORed from their geoms.
+        collider.body_contype[:] = 1
+        collider.body_conaffinity[:] = 1
+        return collider
+
+    def _root(self) -> int:
+        """The body below the world whose subtree holds the palm (what a scene attaches)."""
+        body = self.palm
+        while self.model.body_parentid[body] != 0:
+            body = int(self.model.body_parentid[body])
+        return body
+
+    def _palm_pose(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The palm's world rotation (3, 3) and position (3,) [m] in the hand's own model, at the reference."""
+        self._pose(self.model, self.data, self.reference())
+        return self.data.xmat[self.palm].reshape(3, 3).copy(), self.data.xpos[self.palm].copy()
+
+    @property
+    def solid_geoms(self) -> NDArray[np.intp]:
+        """Hand geoms (below the root) that collide with anything: the ones the object can touch."""
+        model = self.model
+        below = np.array([self._is_below(int(model.geom_bodyid[g]), self.root) for g in range(model.ngeom)])
+        solid = (model.geom_contype != 0) | (model.geom_conaffinity != 0)
+        return np.flatnonzero(below & solid)
+
+    def geom_name(self, geom: int) -> str:
+        """A hand geom's name (unnamed geoms were given ``ogcp_geomK``)."""
+        return mujoco.mj_id2name(self.model, mujoco.mjtObj.mjOBJ_GEOM, geom) or f"geom {geom}"
+
+    def designed_pairs(self) -> set[tuple[str, str]]:
+        """Geom pairs (by name) that already penetrate in the reference pose: the model's design."""
+        return {tuple(sorted((self.geom_name(a), self.geom_name(b)))) for a, b in self._designed}  # type: ignore[misc]
+
+    # ----- configurations ----------------------------------------------------------------------
+
+    def reference(self) -> NDArray[np.float64]:
+        """The model's reference configuration, within limits, shape (J,)."""
+        return self.reference_qpos[self.qpos_index].copy()
+
+    def complete(self, angles: ArrayLike) -> NDArray[np.float64]:
+        """``angles`` with every coupled joint set from its driver, shape (..., J)."""
+        q = np.array(angles, dtype=float)
+        position = {int(j): k for k, j in enumerate(self.joint_ids)}
+        for dependent, driver, poly in self._couplings:
+            base = self.reference_qpos[self.model.jnt_qposadr[dependent]]
+            if driver < 0:
+                q[..., position[dependent]] = base + poly[0]
+                continue
+            x = q[..., position[driver]] - self.reference_qpos[self.model.jnt_qposadr[driver]]
+            q[..., position[dependent]] = base + sum(c * x**p for p, c in enumerate(poly))
+        return q
+
+    def check(self, angles: ArrayLike, tolerance: float = 1e-6) -> NDArray[np.float64]:
+        """A configuration as floats, shape (J,), checked finite and within limits.
+
+        Raises:
+            OgcpError: Naming the first joint that is not finite or is outside its range.
+        """
+        q = np.asarray(angles, dtype=float)
+        if q.shape != (len(self.joint_ids),):
+            raise OgcpError(
+                f"the {self.descriptor.name} hand's configuration has {len(self.joint_ids)} joints "
+                f"({', '.join(self.joint_names)}); got shape {q.shape}"
+            )
+        low, high = self.limits[:, 0], self.limits[:, 1]
+        bad = ~np.isfinite(q) | (q < low - tolerance) | (q > high + tolerance)
+        if bad.any():
+            k = int(np.flatnonzero(bad)[0])
+            raise OgcpError(
+                f"the {self.descriptor.name} hand's joint {self.joint_names[k]} = {q[k]:.6g} is outside its range "
+                f"[{low[k]:.6g}, {high[k]:.6g}]"
+            )
+        return q.copy()
+
+    def sample(self, count: int, seed: int) -> NDArray[np.float64]:
+        """Configurations with independent joints uniform within their limits, shape (count, J)."""
+        rng = np.random.default_rng(seed)
+        q = np.tile(self.reference(), (count, 1))
+        low, high = self.limits[self.independent, 0], self.limits[self.independent, 1]
+        q[:, self.independent] = rng.uniform(low, high, size=(count, len(self.independent)))
+        return self.complete(q)
+
+    def qpos(self, angles: ArrayLike) -> NDArray[np.float64]:
+        """The full qpos of a configuration (other joints at their reference), shape (nq,)."""
+        qpos = self.reference_qpos.copy()
+        qpos[self.qpos_index] = angles
+        return qpos
+
+    # ----- kinematics --------------------------------------------------------------------------
+
+    def _pose(self, model: mujoco.MjModel, data: mujoco.MjData, angles: ArrayLike) -> None:
+        data.qpos[:] = self.qpos(angles)
+        mujoco.mj_kinematics(model, data)
+
+    def pads(self, angles: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Every finger's pad point and pad normal in the palm frame, each shape (F, 3) [m]."""
+        self._pose(self.model, self.data, angles)
+        return self._pads_now(self.data)
+
+    def _pads_now(self, data: mujoco.MjData) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        rotation = data.xmat[self.palm].reshape(3, 3)
+        origin = data.xpos[self.palm]
+        points = np.empty((len(self.fingers), 3))
+        normals = np.empty((len(self.fingers), 3))
+        for f, finger in enumerate(self.fingers):
+            frame = data.xmat[finger.body].reshape(3, 3)
+            points[f] = (data.xpos[finger.body] + frame @ finger.offset - origin) @ rotation
+            normals[f] = (frame @ finger.normal) @ rotation
+        return points, normals
+
+    def pads_many(self, angles: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """:meth:`pads` of a batch, each shape (N, F, 3)."""
+        q = np.atleast_2d(np.asarray(angles, dtype=float))
+        points = np.empty((len(q), len(self.fingers), 3))
+        normals = np.empty_like(points)
+        for n, row in enumerate(q):
+            points[n], normals[n] = self.pads(row)
+        return points, normals
+
+    def _touching(self, model: mujoco.MjModel, angles: ArrayLike) -> set[tuple[int, int]]:
+        data = mujoco.MjData(model)
+        self._pose(model, data, angles)
+        mujoco.mj_collision(model, data)
+        pairs = set()
+        for c in data.contact[: data.ncon]:
+            if c.dist < -SELF_PENETRATION:
+                pairs.add((min(c.geom1, c.geom2), max(c.geom1, c.geom2)))
+        return pairs
+
+    def collisions(self, angles: ArrayLike) -> NDArray[np.bool_]:
+        """Which groups collide in each configuration, shape (N, G, G) with G = fingers + 1.
+
+        Group ``F`` (the last) is the palm and every body no single finger owns. Geom pairs that
+        already penetrate in the reference configuration are the model's design, not collisions.
+        """
+        q = np.atleast_2d(np.asarray(angles, dtype=float))
+        size = len(self.fingers) + 1
+        hits = np.zeros((len(q), size, size), dtype=bool)
+        data = mujoco.MjData(self._collider)
+        body = self._collider.geom_bodyid
+        for n, row in enumerate(q):
+            self._pose(self._collider, data, row)
+            mujoco.mj_collision(self._collider, data)
+            for c in data.contact[: data.ncon]:
+                pair = (min(c.geom1, c.geom2), max(c.geom1, c.geom2))
+                if c.dist < -SELF_PENETRATION and pair not in self._designed:
+                    a, b = self.body_groups[body[c.geom1]], self.body_groups[body[c.geom2]]
+                    hits[n, a, b] = hits[n, b, a] = True
+        return hits
+
+    def describe(self) -> dict[str, object]:
+        """JSON-ready summary: joints, limits, fingers, servos added."""
+        return {
+            **self.descriptor.to_dict(),
+            "joints": list(self.joint_names),
+            "limits": self.limits.tolist(),
+            "fingers": [f.name for f in self.fingers],
+            "servos_added": list(self.servos),
+        }

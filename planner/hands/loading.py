@@ -1,0 +1,102 @@
+"""A hand's MuJoCo model from its descriptor: MJCF or URDF, checked, with servos on undriven joints.
+
+MuJoCo compiles URDF itself but looks mesh files up by their base name in the model's folder and
+fuses bodies that no joint moves (a pad's link would vanish). :func:`hand_spec` therefore hands a
+URDF's meshes over by name, resolving ``package://`` and relative paths against the URDF's folder
+and the folders above it, and keeps every body. Joints on a finger that no actuator drives get a
+position servo from the descriptor's ``[actuation]``, as a user's actuator-less model must be
+closed somehow; the model's own actuators are kept as they are.
+"""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import mujoco
+
+from ogcp.planner.hands.descriptor import HandDescriptor
+from ogcp.planner.infra.errors import OgcpError
+
+#: How many folders above a URDF a ``package://`` mesh path is looked for in.
+PACKAGE_SEARCH_DEPTH = 3
+
+
+def hand_spec(descriptor: HandDescriptor) -> mujoco.MjSpec:
+    """The hand's model as an editable MjSpec (not compiled).
+
+    Raises:
+        OgcpError: If MuJoCo cannot parse the file or a URDF mesh file is missing, naming the
+            descriptor, the model file and MuJoCo's reason.
+    """
+    path = descriptor.model_path
+    try:
+        if path.suffix.lower() == ".urdf":
+            text, assets = _urdf_with_assets(path, descriptor)
+            return mujoco.MjSpec.from_string(text, assets=assets)
+        return mujoco.MjSpec.from_file(str(path))
+    except ValueError as exc:
+        raise compile_error(descriptor, exc) from exc
+
+
+def compile_error(descriptor: HandDescriptor, exc: Exception) -> OgcpError:
+    """One line for a model MuJoCo refused."""
+    reason = " ".join(str(exc).replace("Error:", "").split())
+    return OgcpError(f"{descriptor.path}: mjcf = {descriptor.model_path.name}: MuJoCo cannot compile it ({reason})")
+
+
+def compile_spec(descriptor: HandDescriptor, spec: mujoco.MjSpec) -> mujoco.MjModel:
+    """Compile, with MuJoCo's refusal as one line naming the descriptor."""
+    try:
+        return spec.compile()
+    except ValueError as exc:
+        raise compile_error(descriptor, exc) from exc
+
+
+def _urdf_with_assets(path: Path, descriptor: HandDescriptor) -> tuple[str, dict[str, bytes]]:
+    try:
+        root = ET.fromstring(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, ET.ParseError) as exc:
+        raise OgcpError(f"{descriptor.path}: mjcf = {path.name} is not a readable URDF ({exc})") from exc
+    if root.tag != "robot":
+        raise OgcpError(
+            f"{descriptor.path}: mjcf = {path.name}: a URDF's root element must be <robot>, got <{root.tag}>"
+        )
+    assets: dict[str, bytes] = {}
+    for mesh in root.iter("mesh"):
+        name = mesh.get("filename", "")
+        found = _find_mesh(path.parent, name)
+        if found is None:
+            raise OgcpError(f"{descriptor.path}: mjcf = {path.name}: mesh file {name!r} not found near {path.parent}")
+        key = found.name
+        data = found.read_bytes()
+        if key in assets and assets[key] != data:
+            raise OgcpError(
+                f"{descriptor.path}: mjcf = {path.name}: two different mesh files are named {key!r}; MuJoCo "
+                "looks URDF meshes up by name, so rename one"
+            )
+        assets[key] = data
+        mesh.set("filename", key)
+    for old in root.findall("mujoco"):
+        root.remove(old)
+    # Keep every body (a pad's link is often fixed to the last joint's link) and the collision
+    # geometry; meshes come from the assets above, by name.
+    extension = ET.SubElement(root, "mujoco")
+    ET.SubElement(extension, "compiler", fusestatic="false", discardvisual="true", strippath="true")
+    return ET.tostring(root, encoding="unicode"), assets
+
+
+def _find_mesh(folder: Path, name: str) -> Path | None:
+    relative = name
+    if name.startswith("package://"):
+        relative = name[len("package://") :].split("/", 1)[-1]
+    elif name.startswith("file://"):
+        relative = name[len("file://") :]
+    candidate = Path(relative)
+    if candidate.is_absolute():
+        return candidate if candidate.is_file() else None
+    for parent in [folder, *folder.parents][: PACKAGE_SEARCH_DEPTH + 1]:
+        for option in (parent / candidate, parent / candidate.name):
+            if option.is_file():
+                return option
+    return None

@@ -1,0 +1,367 @@
+"""Fit a hand to a grasp: pads on the contacts, within joint limits, no link inside the object.
+
+The unknowns are the hand's independent finger joints and the palm's pose. :func:`fit_hand` solves
+
+``min  sum_k |centre_k - (c_k - r_k n_k)|^2 + w^2 |pad_k - n_k|^2 + sum_g depth_g^2 + lam^2 |q_o - q_o0|^2``
+
+by bounded least squares (``scipy.optimize.least_squares``, trust region reflective; joints within
+their limits), in MuJoCo (``mj_kinematics``, ``mj_collision``). ``centre_k`` is chosen finger k's
+centre of pad rounding (the pad point moved ``r_k``, its ``tip_radius``, back along the pad normal)
+and ``c_k``, ``n_k`` the contact and its inward normal, so a pad of that rounding touches the
+contact; ``pad_k`` is the pad normal; ``depth_g`` how far hand geom g is inside the object or
+inside another link beyond :data:`LINK_TOLERANCE` (pairs that touch in the hand's reference pose
+are its design); ``q_o`` the joints of the fingers that take no contact, kept near their start.
+The first solve leaves collisions out; when a link ends up inside the object, a second solve adds
+them. The hand's own solver options never matter here: only kinematics and distances are used.
+
+A fit is *realised* when every chosen finger's residual is within :data:`RESIDUAL_TOLERANCE` and
+no link is inside the object or another link beyond :data:`LINK_TOLERANCE`; otherwise
+:attr:`HandFit.reason` names the finger and its residual, or the link and its depth.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import mujoco
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.optimize import least_squares
+from scipy.spatial.transform import Rotation
+
+from ogcp.planner.hands.kinematics import HandKinematics
+from ogcp.planner.infra.errors import OgcpError
+from ogcp.sim_eval.collision import Part
+from ogcp.sim_eval.hand.mount import MountedHand, attach_hand
+
+#: Largest pad residual of a realised fit [m].
+RESIDUAL_TOLERANCE = 1e-3
+#: Deepest a link may be inside the object or another link [m].
+LINK_TOLERANCE = 1e-3
+#: Weight of the pad-normal term, as a multiple of the pad's rounding radius [m per unit difference].
+NORMAL_WEIGHT_RADII = 0.5
+#: Weight of keeping the other fingers where they started [m per rad].
+REST_WEIGHT = 1e-3
+#: Weight of a link's depth beyond the tolerance, relative to a pad residual.
+COLLISION_WEIGHT = 3.0
+#: How far inside each joint's range a start is moved, as a fraction of the range.
+START_INSET = 1e-3
+#: How far along the pad normals the rigid start also matches the pads [in pad radii]: it turns the
+#: pads toward the surface, not only onto it.
+RIGID_REACH_RADII = 3.0
+
+
+@dataclass(frozen=True, eq=False)
+class HandFit:
+    """The hand's configuration and palm placement that best realise a grasp.
+
+    Attributes:
+        joint_angles: The hand's finger joints (kinematics order), within limits, shape (J,).
+        rotation: Palm frame to world (object) frame, shape (3, 3).
+        translation: Palm origin in the world frame, shape (3,) [m].
+        fingers: The chosen fingers' indices; finger ``fingers[k]`` takes contact k.
+        residuals: Each chosen finger's pad-centre distance from its target, shape (m,) [m].
+        normal_angles: Angle between each pad normal and its contact's inward normal, shape (m,) [rad].
+        penetration: Deepest any link is inside the object [m] (0 when none is).
+        self_penetration: Deepest any link is inside another [m], the hand's designed overlaps apart.
+        worst_link: The link (geom name) of the deepest penetration, or None.
+        finger_names: The chosen fingers' names.
+    """
+
+    joint_angles: NDArray[np.float64]
+    rotation: NDArray[np.float64]
+    translation: NDArray[np.float64]
+    fingers: tuple[int, ...]
+    residuals: NDArray[np.float64]
+    normal_angles: NDArray[np.float64]
+    penetration: float
+    self_penetration: float
+    worst_link: str | None
+    finger_names: tuple[str, ...]
+
+    @property
+    def realised(self) -> bool:
+        """Every pad within :data:`RESIDUAL_TOLERANCE` and no link beyond :data:`LINK_TOLERANCE`."""
+        deepest = max(self.penetration, self.self_penetration)
+        return bool(self.residuals.max() <= RESIDUAL_TOLERANCE and deepest <= LINK_TOLERANCE)
+
+    @property
+    def reason(self) -> str | None:
+        """Why the fit is not realised (one line), or None."""
+        worst = int(np.argmax(self.residuals))
+        if self.residuals[worst] > RESIDUAL_TOLERANCE:
+            return (
+                f"finger {self.finger_names[worst]} cannot reach its contact: {self.residuals[worst] * 1e3:.2f} mm off "
+                f"(tolerance {RESIDUAL_TOLERANCE * 1e3:g} mm)"
+            )
+        if self.penetration > LINK_TOLERANCE:
+            return f"link {self.worst_link} is {self.penetration * 1e3:.2f} mm inside the object"
+        if self.self_penetration > LINK_TOLERANCE:
+            return f"link {self.worst_link} is {self.self_penetration * 1e3:.2f} mm inside another link"
+        return None
+
+    def to_dict(self, joint_names: Sequence[str]) -> dict[str, Any]:
+        """JSON-ready record: residuals [m] per finger, joint angles by name, palm pose, collisions."""
+        return {
+            "realised": self.realised,
+            "reason": self.reason,
+            "fingers": list(self.finger_names),
+            "fit_residuals": self.residuals.tolist(),
+            "normal_angles": self.normal_angles.tolist(),
+            "joint_names": list(joint_names),
+            "joint_angles": self.joint_angles.tolist(),
+            "palm_rotation": self.rotation.tolist(),
+            "palm_position": self.translation.tolist(),
+            "penetration": self.penetration,
+            "self_penetration": self.self_penetration,
+            "worst_link": self.worst_link,
+        }
+
+
+def rigid_fit(source: ArrayLike, target: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Rotation R (3, 3) and translation t (3,) minimising sum |R source_i + t - target_i|^2 (Kabsch).
+
+    Args:
+        source: Points, shape (k, 3), k >= 1.
+        target: Points, shape (k, 3).
+    """
+    source, target = np.asarray(source, dtype=float), np.asarray(target, dtype=float)
+    cs, ct = source.mean(axis=0), target.mean(axis=0)
+    u, _, vt = np.linalg.svd((source - cs).T @ (target - ct))
+    d = np.sign(np.linalg.det(vt.T @ u.T)) or 1.0
+    rotation = vt.T @ np.diag([1.0, 1.0, d]) @ u.T
+    return rotation, ct - rotation @ cs
+
+
+class FitScene:
+    """The hand and the object's convex parts in one MuJoCo model, for kinematics and distances.
+
+    Args:
+        kinematics: The hand.
+        parts: The object's convex parts, each ``(vertices (v, 3) [m], faces (f, 3))``, in the
+            world frame; none: no collision terms.
+    """
+
+    def __init__(self, kinematics: HandKinematics, parts: Sequence[Part] = ()) -> None:
+        spec = mujoco.MjSpec()
+        # A free mount: MuJoCo never collides two bodies welded to the world, so a fixed palm
+        # would pass through a fixed object unseen.
+        attach_hand(spec, kinematics, free=True)
+        body = spec.worldbody.add_body(name="ogcp_object")
+        for k, (vertices, faces) in enumerate(parts):
+            spec.add_mesh(name=f"ogcp_part{k}", uservert=np.ravel(vertices).tolist(), userface=np.ravel(faces).tolist())
+            body.add_geom(name=f"ogcp_part{k}", type=mujoco.mjtGeom.mjGEOM_MESH, meshname=f"ogcp_part{k}")
+        self.model = spec.compile()
+        self.data = mujoco.MjData(self.model)
+        self.hand = MountedHand.find(self.model, kinematics)
+        self.kinematics = kinematics
+        self._mount_qpos = int(self.model.jnt_qposadr[self.model.body_jntadr[self.hand.mount]])
+        model = self.model
+        # Every hand geom collides with every other and with the object; nothing else does.
+        model.geom_contype[:] = 0
+        model.geom_conaffinity[:] = 0
+        self.object_geoms = np.array(
+            [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, f"ogcp_part{k}") for k in range(len(parts))],
+            dtype=np.intp,
+        )
+        for ids in (self.hand.geoms, self.object_geoms):
+            model.geom_contype[ids] = 1
+            model.geom_conaffinity[ids] = 1
+        model.body_contype[:] = 1
+        model.body_conaffinity[:] = 1
+        model.geom_margin[:] = 0.0
+        self._slot = {int(g): i for i, g in enumerate(self.hand.geoms)}
+        self._object = set(self.object_geoms.tolist())
+        designed = kinematics.designed_pairs()
+        names = self.hand.geom_names
+        self._designed = {
+            (int(a), int(b))
+            for i, a in enumerate(self.hand.geoms)
+            for j, b in enumerate(self.hand.geoms)
+            if tuple(sorted((names[i], names[j]))) in designed
+        }
+
+    def pose(self, angles: ArrayLike, rotation: NDArray[np.float64], translation: NDArray[np.float64]) -> None:
+        """Put the hand in a configuration with its palm at (rotation, translation); run kinematics."""
+        self.data.qpos[:] = self.model.qpos0
+        self.data.qpos[self._mount_qpos : self._mount_qpos + 3] = translation
+        self.data.qpos[self._mount_qpos + 3 : self._mount_qpos + 7] = _wxyz(rotation)
+        self.data.qpos[self.hand.qpos] = angles
+        mujoco.mj_kinematics(self.model, self.data)
+
+    def depths(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Per solid hand geom, its depth inside the object and inside other links, each shape (G,) [m]."""
+        mujoco.mj_collision(self.model, self.data)
+        into_object = np.zeros(len(self.hand.geoms))
+        into_hand = np.zeros(len(self.hand.geoms))
+        for c in self.data.contact[: self.data.ncon]:
+            a, b, depth = int(c.geom1), int(c.geom2), -float(c.dist)
+            if depth <= 0:
+                continue
+            if a in self._object or b in self._object:
+                g = self._slot.get(b if a in self._object else a)
+                if g is not None:
+                    into_object[g] = max(into_object[g], depth)
+            elif (min(a, b), max(a, b)) not in self._designed and a in self._slot and b in self._slot:
+                for g in (self._slot[a], self._slot[b]):
+                    into_hand[g] = max(into_hand[g], depth)
+        return into_object, into_hand
+
+
+def _wxyz(rotation: NDArray[np.float64]) -> NDArray[np.float64]:
+    x, y, z, w = Rotation.from_matrix(rotation).as_quat()
+    return np.array([w, x, y, z])
+
+
+Pose = tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]
+
+
+@dataclass(frozen=True, eq=False)
+class _Targets:
+    """What one fit aims at: the chosen fingers, their pad centres' targets and the contacts' normals."""
+
+    scene: FitScene
+    fingers: tuple[int, ...]
+    targets: NDArray[np.float64]
+    normals: NDArray[np.float64]
+    radii: NDArray[np.float64]
+
+    def centres(self, pose: Pose) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The chosen pads' centres of rounding and normals in a pose, each shape (m, 3)."""
+        self.scene.pose(*pose)
+        world, pad = self.scene.hand.pads_world(self.scene.data)
+        world, pad = world[list(self.fingers)], pad[list(self.fingers)]
+        return world - self.radii[:, None] * pad, pad
+
+    def summary(self, pose: Pose) -> HandFit:
+        """The fit of a pose: residuals, pad angles, penetrations."""
+        centre, pad = self.centres(pose)
+        scene = self.scene
+        into_object, into_hand = scene.depths() if len(scene.object_geoms) else (np.zeros(1), np.zeros(1))
+        deepest = np.maximum(into_object, into_hand)
+        worst = scene.hand.geom_names[int(np.argmax(deepest))] if deepest.max() > 0 else None
+        cosine = np.clip(np.einsum("ij,ij->i", pad, self.normals), -1.0, 1.0)
+        return HandFit(
+            joint_angles=pose[0],
+            rotation=pose[1],
+            translation=pose[2],
+            fingers=self.fingers,
+            residuals=np.linalg.norm(centre - self.targets, axis=1),
+            normal_angles=np.arccos(cosine),
+            penetration=float(into_object.max()),
+            self_penetration=float(into_hand.max()),
+            worst_link=worst,
+            finger_names=tuple(scene.kinematics.fingers[f].name for f in self.fingers),
+        )
+
+
+def fit_hand(
+    scene: FitScene,
+    fingers: Sequence[int],
+    points: ArrayLike,
+    normals: ArrayLike,
+    start: ArrayLike | None = None,
+    palm: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None,
+) -> HandFit:
+    """Fit the hand so that finger ``fingers[k]`` touches contact k.
+
+    Args:
+        scene: The hand and the object (:class:`FitScene`).
+        fingers: The chosen finger indices, one per contact.
+        points: Contacts in the world (object) frame, shape (m, 3) [m].
+        normals: Inward unit normals at the contacts, shape (m, 3).
+        start: Starting configuration, shape (J,) (the plan's nearest sample); None: the reference.
+        palm: The palm's pose (rotation (3, 3), position (3,) [m]) held fixed; None: fitted too.
+
+    Returns:
+        The best fit found (check :attr:`HandFit.realised`).
+
+    Raises:
+        OgcpError: For inputs of the wrong shape, non-finite values or fingers out of range.
+    """
+    kin = scene.kinematics
+    chosen = tuple(int(f) for f in fingers)
+    where = np.asarray(points, dtype=float)
+    inward = np.asarray(normals, dtype=float)
+    m = len(chosen)
+    if where.shape != (m, 3) or inward.shape != (m, 3) or not (np.isfinite(where).all() and np.isfinite(inward).all()):
+        raise OgcpError(
+            f"a hand fit needs finite contacts and normals of shape ({m}, 3), got {where.shape} and {inward.shape}"
+        )
+    if len(set(chosen)) != m or not all(0 <= f < len(kin.fingers) for f in chosen):
+        raise OgcpError(f"fingers {list(chosen)} must be distinct indices below {len(kin.fingers)}")
+    inward = inward / np.linalg.norm(inward, axis=1, keepdims=True)
+    q0 = kin.reference() if start is None else kin.check(start, tolerance=1e-6)
+    # Strictly inside the limits: the trust region's scaling takes no step off a bound it starts on.
+    inset = START_INSET * (kin.limits[:, 1] - kin.limits[:, 0])
+    q0 = kin.complete(np.clip(q0, kin.limits[:, 0] + inset, kin.limits[:, 1] - inset))
+    radii = np.array([kin.fingers[f].radius for f in chosen])
+    aim = _Targets(scene, chosen, where - radii[:, None] * inward, inward, radii)
+    weight = NORMAL_WEIGHT_RADII * float(radii.mean())
+    free = kin.independent
+    chosen_joints = {j for f in chosen for j in kin.fingers[f].joints}
+    resting = np.array([k for k in free if int(kin.joint_ids[k]) not in chosen_joints], dtype=np.intp)
+
+    # Rigid start: the palm placed so the start configuration's pads (and points along them) meet the targets.
+    local, pad_local = kin.pads(q0)
+    local, pad_local = local[list(chosen)], pad_local[list(chosen)]
+    local_centres = local - radii[:, None] * pad_local
+    reach = RIGID_REACH_RADII * radii[:, None]
+    if palm is None:
+        rotation0, shift0 = rigid_fit(
+            np.vstack([local_centres, local_centres + reach * pad_local]),
+            np.vstack([aim.targets, aim.targets + reach * inward]),
+        )
+    else:
+        rotation0, shift0 = np.asarray(palm[0], dtype=float), np.asarray(palm[1], dtype=float)
+    pose_variables = 6 if palm is None else 0
+
+    def unpack(x: NDArray[np.float64]) -> Pose:
+        angles = q0.copy()
+        angles[free] = x[: len(free)]
+        if not pose_variables:
+            return kin.complete(angles), rotation0, shift0
+        rotation = Rotation.from_rotvec(x[len(free) : len(free) + 3]).as_matrix() @ rotation0
+        return kin.complete(angles), rotation, shift0 + x[len(free) + 3 :]
+
+    def residual(x: NDArray[np.float64], collide: bool) -> NDArray[np.float64]:
+        pose = unpack(x)
+        centre, pad = aim.centres(pose)
+        parts = [
+            (centre - aim.targets).ravel(),
+            weight * (pad - inward).ravel(),
+            REST_WEIGHT * (pose[0][resting] - q0[resting]),
+        ]
+        if collide:
+            into_object, into_hand = scene.depths()
+            parts.append(COLLISION_WEIGHT * np.maximum(np.maximum(into_object, into_hand) - 0.5 * LINK_TOLERANCE, 0.0))
+        return np.concatenate(parts)
+
+    low = np.concatenate([kin.limits[free, 0], np.full(pose_variables, -np.inf)])
+    high = np.concatenate([kin.limits[free, 1], np.full(pose_variables, np.inf)])
+    x = np.concatenate([q0[free], np.zeros(pose_variables)])
+    x = least_squares(residual, x, bounds=(low, high), args=(False,), method="trf", x_scale="jac").x
+    fit = aim.summary(unpack(x))
+    if len(scene.object_geoms) and (fit.penetration > LINK_TOLERANCE or fit.self_penetration > LINK_TOLERANCE):
+        x = least_squares(residual, x, bounds=(low, high), args=(True,), method="trf", x_scale="jac").x
+        second = aim.summary(unpack(x))
+        fit = second if _better(second, fit) else fit
+    return fit
+
+
+def _better(a: HandFit, b: HandFit) -> bool:
+    """Whether fit a is preferable: realised first, then the smaller worst violation."""
+    if a.realised != b.realised:
+        return a.realised
+    return _violation(a) < _violation(b)
+
+
+def _violation(fit: HandFit) -> float:
+    excess = (
+        fit.residuals.max() - RESIDUAL_TOLERANCE,
+        fit.penetration - LINK_TOLERANCE,
+        fit.self_penetration - LINK_TOLERANCE,
+    )
+    return float(max(*excess, 0.0))

@@ -1,0 +1,115 @@
+"""A hand in a scene: its subtree attached to a mount body whose frame is the palm frame.
+
+:func:`attach_hand` copies the hand's model (the subtree of the body below the world that holds
+the palm, with its actuators, equalities and defaults) under a frame of a new ``mount`` body, placed
+so that the mount's frame *is* the palm frame at the hand's reference configuration. Placing the
+palm at a pose is then placing the mount: a body pose in a fit, a mocap weld in a simulation.
+:class:`MountedHand` finds the hand's joints, pads and geoms in the compiled scene by name.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+from numpy.typing import NDArray
+from scipy.spatial.transform import Rotation
+
+from ogcp.planner.hands.kinematics import HandKinematics
+
+PREFIX = "hand/"
+MOUNT = "ogcp_mount"
+
+
+def attach_hand(spec: mujoco.MjSpec, kinematics: HandKinematics, free: bool = False) -> mujoco.MjsBody:
+    """Attach the hand below a new mount body of ``spec``'s world.
+
+    Args:
+        spec: The scene being built.
+        kinematics: The hand.
+        free: Give the mount a free joint (a simulation welds it to a mocap body).
+
+    Returns:
+        The mount body.
+    """
+    mount = spec.worldbody.add_body(name=MOUNT)
+    if free:
+        mount.add_freejoint(name=f"{MOUNT}_free")
+    rotation, position = kinematics.palm_pose
+    # The root's world pose composed with this frame puts the palm at the mount's origin.
+    inverse = rotation.T
+    frame = mount.add_frame(pos=(-inverse @ position).tolist(), quat=_wxyz(inverse).tolist())
+    hand = kinematics.spec.copy()
+    root = hand.body(mujoco.mj_id2name(kinematics.model, mujoco.mjtObj.mjOBJ_BODY, kinematics.root))
+    frame.attach_body(root, PREFIX, "")
+    # A URDF's meshes came in memory (ogcp.planner.hands.loading); the scene needs them too.
+    spec.assets = {**spec.assets, **hand.assets}
+    return mount
+
+
+def _wxyz(rotation: NDArray[np.float64]) -> NDArray[np.float64]:
+    x, y, z, w = Rotation.from_matrix(rotation).as_quat()
+    return np.array([w, x, y, z])
+
+
+@dataclass(frozen=True, eq=False)
+class MountedHand:
+    """Where the hand's parts are in a compiled scene.
+
+    Attributes:
+        kinematics: The hand.
+        mount: Body id of the mount.
+        qpos: qpos address of each finger joint, in the kinematics' joint order, shape (J,).
+        pads: Body id of each finger's tip body, shape (F,).
+        geoms: Scene geom id of each of the hand's solid geoms, shape (G,).
+        geom_names: Their names in the hand's model.
+        finger_of_geom: Finger index of each solid geom, or F for the palm and shared bodies, shape (G,).
+    """
+
+    kinematics: HandKinematics
+    mount: int
+    qpos: NDArray[np.intp]
+    pads: NDArray[np.intp]
+    geoms: NDArray[np.intp]
+    geom_names: tuple[str, ...]
+    finger_of_geom: NDArray[np.intp]
+
+    @classmethod
+    def find(cls, model: mujoco.MjModel, kinematics: HandKinematics) -> MountedHand:
+        """Look the hand's parts up in a scene built with :func:`attach_hand`."""
+
+        def scene_id(kind: mujoco.mjtObj, name: str) -> int:
+            found = mujoco.mj_name2id(model, kind, PREFIX + name)
+            if found < 0:
+                raise LookupError(f"{PREFIX + name} is missing from the scene")
+            return int(found)
+
+        hand = kinematics.model
+        joints = [scene_id(mujoco.mjtObj.mjOBJ_JOINT, n) for n in kinematics.joint_names]
+        pads = [
+            scene_id(mujoco.mjtObj.mjOBJ_BODY, mujoco.mj_id2name(hand, mujoco.mjtObj.mjOBJ_BODY, f.body))
+            for f in kinematics.fingers
+        ]
+        solid = kinematics.solid_geoms
+        names = tuple(kinematics.geom_name(int(g)) for g in solid)
+        groups = kinematics.body_groups[hand.geom_bodyid[solid]]
+        return cls(
+            kinematics,
+            int(mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, MOUNT)),
+            model.jnt_qposadr[joints].astype(np.intp),
+            np.array(pads, dtype=np.intp),
+            np.array([scene_id(mujoco.mjtObj.mjOBJ_GEOM, n) for n in names], dtype=np.intp),
+            names,
+            np.asarray(groups, dtype=np.intp),
+        )
+
+    def pads_world(self, data: mujoco.MjData) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Every finger's pad point and pad normal in the world, each shape (F, 3), after kinematics."""
+        points = np.empty((len(self.pads), 3))
+        normals = np.empty((len(self.pads), 3))
+        for f, (body, finger) in enumerate(zip(self.pads, self.kinematics.fingers, strict=True)):
+            frame = data.xmat[body].reshape(3, 3)
+            points[f] = data.xpos[body] + frame @ finger.offset
+            normals[f] = frame @ finger.normal
+        return points, normals

@@ -1,0 +1,245 @@
+"""Analytic resistance of a closed hand: its realised contacts, friction, and its actuators' limits.
+
+For fingertips (:mod:`ogcp.sim_eval.predict`) each finger's normal force is capped; a hand's
+fingers are capped by its actuators instead, through its Jacobian. With the hand's realised
+contacts k (point p_k on hand body b_k, inward normal n_k) and the friction cone linearised by the
+planner's edges e_kj (normal component 1), a disturbance ``s d`` (``d`` a unit 6-vector in the
+planner's scaled wrench space ``[force, torque / rho]``) is resisted when
+
+    sum_kj lambda_kj w_kj + s d = 0                              (the object balances)
+    sum_kj lambda_kj J_k^T e_kj = M^T u + E^T eta                 (the hand balances)
+    lambda >= 0,  u_lo <= u <= u_hi
+
+where ``J_k`` is the translational Jacobian of p_k on b_k over the hand's joints, ``M`` the
+actuators' moment arms with their force ranges ``u``, and ``E`` the rows of the hand's joint
+equalities (a coupled joint is held by its driver), with free multipliers ``eta``. The palm is
+held by the weld and takes whatever it must. The prediction is the largest ``s``: a linear
+program per direction, the same meaning of "fidelity" as for fingertips.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+from numpy.typing import NDArray
+from scipy.optimize import linprog
+
+from ogcp.planner.grasp.wrench import cone_edges, contact_wrenches
+from ogcp.sim_eval.hand.mount import MountedHand
+
+_MOVABLE = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
+
+
+@dataclass(frozen=True, eq=False)
+class RealisedContacts:
+    """The hand's contacts with the object at one state.
+
+    Attributes:
+        points: Contact points, shape (K, 3) [m].
+        normals: Inward unit normals (into the object), shape (K, 3).
+        bodies: The hand body each contact is on, shape (K,).
+        geoms: The hand geom, shape (K,).
+        forces: Normal force of each, shape (K,) [N].
+    """
+
+    points: NDArray[np.float64]
+    normals: NDArray[np.float64]
+    bodies: NDArray[np.intp]
+    geoms: NDArray[np.intp]
+    forces: NDArray[np.float64]
+
+
+def realised_contacts(
+    model: mujoco.MjModel, data: mujoco.MjData, hand: MountedHand, object_geoms: NDArray[np.intp]
+) -> RealisedContacts:
+    """The hand-object contacts of a state (after ``mj_forward``), each MuJoCo contact point its own.
+
+    A flat pad touches at several points (a patch), which is what lets two pads resist a torque
+    about the line between them; one point per pad would predict none.
+    """
+    objects = {int(g) for g in object_geoms}
+    hand_geoms = {int(g) for g in hand.geoms}
+    wrench = np.zeros(6)
+    points, normals, bodies, geoms, forces = [], [], [], [], []
+    for c in range(data.ncon):
+        contact = data.contact[c]
+        a, b = int(contact.geom1), int(contact.geom2)
+        if not ((a in objects and b in hand_geoms) or (b in objects and a in hand_geoms)):
+            continue
+        mujoco.mj_contactForce(model, data, c, wrench)
+        normal = contact.frame[:3].copy()  # from geom1 to geom2
+        geom = b if a in objects else a
+        points.append(contact.pos.copy())
+        normals.append(-normal if a in objects else normal)  # from the hand into the object
+        bodies.append(int(model.geom_bodyid[geom]))
+        geoms.append(geom)
+        forces.append(max(float(wrench[0]), 0.0))
+    return RealisedContacts(
+        np.array(points).reshape(-1, 3),
+        np.array(normals).reshape(-1, 3),
+        np.array(bodies, dtype=np.intp),
+        np.array(geoms, dtype=np.intp),
+        np.array(forces),
+    )
+
+
+def hand_resistance(
+    model: mujoco.MjModel,
+    data: mujoco.MjData,
+    hand: MountedHand,
+    contacts: RealisedContacts,
+    com: NDArray[np.float64],
+    torque_scale: float,
+    mu: float,
+    cone_edge_count: int,
+    directions: NDArray[np.float64],
+) -> NDArray[np.float64]:
+    """Largest resisted disturbance along each direction, shape (D,) [N in scaled wrench space].
+
+    Args:
+        model: The scene.
+        data: Its state (kinematics computed), where the contacts were realised.
+        hand: The hand's parts in the scene.
+        contacts: The realised contacts.
+        com: Object centre of mass, shape (3,) [m].
+        torque_scale: rho [m] of the scaled wrench space.
+        mu: Friction coefficient.
+        cone_edge_count: Edges of the linearised cone.
+        directions: Unit disturbance directions, shape (D, 6).
+
+    Returns:
+        The resistance per direction; 0 with no contact, NaN where the solver failed.
+    """
+    if len(contacts.points) == 0:
+        return np.zeros(len(directions))
+    statics = hand_statics(
+        model, data, hand, contacts.points, contacts.normals, contacts.bodies, com, torque_scale, mu, cone_edge_count
+    )
+    cost = np.zeros(statics.size + 1)
+    cost[-1] = -1.0
+    bounds = [*statics.bounds, (0.0, None)]
+    bottom = np.hstack([statics.hand_balance, np.zeros((len(statics.hand_balance), 1))])
+    resistance = np.full(len(directions), math.nan)
+    for i, d in enumerate(directions):
+        top = np.hstack([statics.object_balance, d[:, None]])
+        rows = np.vstack([top, bottom])
+        result = linprog(cost, A_eq=rows, b_eq=np.zeros(len(rows)), bounds=bounds, method="highs")
+        if result.status == 0:
+            resistance[i] = float(result.x[-1])
+        elif result.status == 3:  # unbounded: some direction needs no actuator (an unlimited servo)
+            resistance[i] = math.inf
+    return resistance
+
+
+@dataclass(frozen=True, eq=False)
+class HandStatics:
+    """The linear statics of a hand pressing on an object at K contacts, for linear programs.
+
+    The variables are ``[lambda (K E cone-edge weights), u (nu actuator forces), eta (joint
+    equality forces)]``, ``size`` in all; a program appends its own (a load magnitude, a grip).
+
+    Attributes:
+        object_balance: The object's wrench (scaled space) per variable, shape (6, size).
+        hand_balance: The hand's joint-space balance per variable, shape (J, size): the contact
+            forces' joint torques minus the actuators' and the equalities'.
+        bounds: Each variable's (low, high), None where unbounded.
+        edges: Cone edges per contact E.
+    """
+
+    object_balance: NDArray[np.float64]
+    hand_balance: NDArray[np.float64]
+    bounds: list[tuple[float | None, float | None]]
+    edges: int
+
+    @property
+    def size(self) -> int:
+        """Number of variables."""
+        return len(self.bounds)
+
+
+def hand_statics(
+    model: mujoco.MjModel,
+    data: mujoco.MjData,
+    hand: MountedHand,
+    points: NDArray[np.float64],
+    normals: NDArray[np.float64],
+    bodies: NDArray[np.intp] | Sequence[int],
+    com: NDArray[np.float64],
+    torque_scale: float,
+    mu: float,
+    edge_count: int,
+) -> HandStatics:
+    """The statics of contacts ``points`` (K, 3) [m] with inward ``normals`` on hand ``bodies``, in a state."""
+    count = len(points)
+    edges = cone_edges(normals, mu, edge_count)  # (K, E, 3)
+    wrenches = contact_wrenches(points, normals, com, torque_scale, mu, edge_count).reshape(count * edge_count, 6).T
+    dofs = model.jnt_dofadr[hand_joints(model, hand)]
+    contact_torques = np.zeros((len(dofs), count * edge_count))
+    jacobian = np.zeros((3, model.nv))
+    for k in range(count):
+        mujoco.mj_jac(model, data, jacobian, None, points[k], int(bodies[k]))
+        contact_torques[:, k * edge_count : (k + 1) * edge_count] = jacobian[:, dofs].T @ edges[k].T
+    moment = actuator_moments(model, data)[:, dofs].T  # (J, nu)
+    couplings = equality_rows(model, hand, dofs)  # (n_eq, J)
+    low, high = force_ranges(model)
+    extra = model.nu + len(couplings)
+    return HandStatics(
+        np.hstack([wrenches, np.zeros((6, extra))]),
+        np.hstack([contact_torques, -moment, -couplings.T]),
+        [(0.0, None)] * (count * edge_count) + list(zip(low, high, strict=True)) + [(None, None)] * len(couplings),
+        edge_count,
+    )
+
+
+def hand_joints(model: mujoco.MjModel, hand: MountedHand) -> list[int]:
+    """Every hinge and slide joint of the hand (its subtree below the mount), in model order."""
+    joints = []
+    for j in range(model.njnt):
+        body = int(model.jnt_bodyid[j])
+        while body not in (0, hand.mount):
+            body = int(model.body_parentid[body])
+        if body == hand.mount and int(model.jnt_type[j]) in _MOVABLE:
+            joints.append(j)
+    return joints
+
+
+def actuator_moments(model: mujoco.MjModel, data: mujoco.MjData) -> NDArray[np.float64]:
+    """The actuators' moment arms, dense, shape (nu, nv)."""
+    dense = np.zeros((model.nu, model.nv))
+    mujoco.mju_sparse2dense(dense, data.actuator_moment, data.moment_rownnz, data.moment_rowadr, data.moment_colind)
+    return dense
+
+
+def force_ranges(model: mujoco.MjModel) -> tuple[list[float | None], list[float | None]]:
+    low: list[float | None] = []
+    high: list[float | None] = []
+    for a in range(model.nu):
+        if model.actuator_forcelimited[a]:
+            low.append(float(model.actuator_forcerange[a, 0]))
+            high.append(float(model.actuator_forcerange[a, 1]))
+        else:
+            low.append(None)
+            high.append(None)
+    return low, high
+
+
+def equality_rows(model: mujoco.MjModel, hand: MountedHand, dofs: NDArray[np.intp]) -> NDArray[np.float64]:
+    """Linearised active joint equalities among the hand's joints, shape (n_eq, J)."""
+    index = {int(d): i for i, d in enumerate(dofs)}
+    rows = []
+    for e in range(model.neq):
+        if model.eq_type[e] != mujoco.mjtEq.mjEQ_JOINT or not model.eq_active0[e]:
+            continue
+        dependent, driver = int(model.eq_obj1id[e]), int(model.eq_obj2id[e])
+        row = np.zeros(len(dofs))
+        if int(model.jnt_dofadr[dependent]) not in index:
+            continue
+        row[index[int(model.jnt_dofadr[dependent])]] = 1.0
+        if driver >= 0 and int(model.jnt_dofadr[driver]) in index:
+            row[index[int(model.jnt_dofadr[driver])]] = -float(model.eq_data[e, 1])  # the slope at the reference
+        rows.append(row)
+    return np.array(rows).reshape(-1, len(dofs))

@@ -1,0 +1,258 @@
+"""A hand grasp in MuJoCo: the object free, the hand's palm held by a stiff mocap weld, closed by its servos.
+
+:func:`build_hand_scene` compiles the object (convex parts, mass properties of the watertight mesh,
+as for fingertips) and the hand (:func:`ogcp.sim_eval.hand.mount.attach_hand`) with ogcp's solver
+options, whatever the hand's own file sets (a model tuned for MJX has one CG iteration). The
+mount is welded to a mocap body at the fitted palm pose. Every colliding hand geom collides with
+the object, with the grasp's friction and contact parameters, and never with the hand itself.
+
+:func:`close_hand` runs the closing sequence from the pregrasp (pads backed off along their
+normals, the palm where the fit put it): the servo targets move to the grasp configuration, then
+to the squeeze (:mod:`ogcp.sim_eval.hand.squeeze`: targets under which the servos press balanced
+contact forces, a share of the largest the actuators allow; where no balanced squeeze exists, the
+pads' targets :data:`SQUEEZE_RADII` pad radii past the surface), each over :data:`STAGE_TIME`. The
+state it ends in becomes the scene's start, so the protocol's settling, gates and ramps
+(:mod:`ogcp.sim_eval.protocol`) run on it as on fingertips, the squeeze targets held as preload.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.spatial.transform import Rotation
+
+from ogcp.planner.hands.kinematics import HandKinematics
+from ogcp.sim_eval.collision import Part
+from ogcp.sim_eval.hand.fit import FitScene, HandFit, fit_hand
+from ogcp.sim_eval.hand.mount import MOUNT, PREFIX, MountedHand, attach_hand
+from ogcp.sim_eval.hand.squeeze import balanced_squeeze
+from ogcp.sim_eval.scene import GraspScene, add_object, contact_friction, set_options
+from ogcp.sim_eval.settings import SimSettings
+
+WRIST = "ogcp_wrist"
+#: The weld holding the palm: a stiff constraint (time constant [s], damping ratio).
+WELD_SOLREF = (0.002, 1.0)
+#: How far the pregrasp backs each pad off its contact, in pad radii (BODex: 1 cm).
+PREGRASP_RADII = 2.0
+#: The shares of the largest balanced grip a trial squeezes with, strongest first: the first whose
+#: settled grasp passes the gates is tested (a full grip can squeeze an object out of rolling pads).
+SQUEEZE_LADDER = (1.0, 0.5, 0.25)
+#: Where no balanced squeeze exists: how far past its contact, along the normal, each pad's
+#: target lies, in pad radii.
+SQUEEZE_RADII = 0.5
+#: The approach's waypoints, as fractions of the pregrasp's distance from the contacts.
+APPROACH = (1.0, 0.75, 0.5, 0.25, 0.0)
+#: Duration of each closing stage, pregrasp to grasp and grasp to squeeze [s] (DexGraspBench: 0.4 s).
+STAGE_TIME = 0.4
+
+
+@dataclass(frozen=True, eq=False)
+class HandScene:
+    """A compiled hand grasp: the protocol's scene, and where the hand is in it.
+
+    Attributes:
+        scene: The model as the protocol takes it (pads as the fingers, squeeze targets as preload).
+        hand: The hand's parts in the model.
+        fingers: The chosen fingers' indices (finger ``fingers[k]`` takes contact k).
+        pregrasp: Pregrasp configuration, shape (J,).
+        approach: Configurations from the pregrasp to the grasp whose pads move straight along the
+            contact normals, shape (K, J): the closing follows them, so that no link sweeps
+            through the object on the way.
+        grasp: Fitted configuration, shape (J,).
+        squeeze_forces: The normal force each pad is to press with [N] (zeros: no balanced squeeze
+            exists, the pads were pushed past the surface instead), shape (m,).
+    """
+
+    scene: GraspScene
+    hand: MountedHand
+    fingers: tuple[int, ...]
+    pregrasp: NDArray[np.float64]
+    approach: NDArray[np.float64]
+    grasp: NDArray[np.float64]
+    squeeze_forces: NDArray[np.float64]
+
+    def ctrl(self, angles: ArrayLike) -> NDArray[np.float64]:
+        """Servo targets that hold a configuration (other actuators at their reference), shape (nu,)."""
+        return servo_targets(self.scene.model, self.hand, angles)
+
+
+def servo_targets(model: mujoco.MjModel, hand: MountedHand, angles: ArrayLike) -> NDArray[np.float64]:
+    """Each position actuator's target at a configuration: its length there, within its ctrl range."""
+    data = mujoco.MjData(model)
+    data.qpos[:] = model.qpos0
+    data.qpos[hand.qpos] = angles
+    mujoco.mj_fwdPosition(model, data)
+    ctrl = data.actuator_length.copy()  # a servo's force is kp (ctrl - length): gear included
+    limited = model.actuator_ctrllimited.astype(bool)
+    ctrl[limited] = np.clip(ctrl[limited], model.actuator_ctrlrange[limited, 0], model.actuator_ctrlrange[limited, 1])
+    return ctrl
+
+
+def moved_configuration(
+    kinematics: HandKinematics,
+    fit: HandFit,
+    points: ArrayLike,
+    normals: ArrayLike,
+    radii_inward: float,
+    parts: Sequence[Part] = (),
+) -> NDArray[np.float64]:
+    """The fingers with their pads moved along the contact normals (inward > 0, in pad radii), the palm held.
+
+    With the object's parts, the links are kept out of it too (a pregrasp that already touches the
+    object pushes it away while the hand closes).
+    """
+    radii = np.array([kinematics.fingers[f].radius for f in fit.fingers])
+    inward = np.asarray(normals, dtype=float)
+    moved = np.asarray(points, dtype=float) + radii_inward * radii[:, None] * inward
+    palm = (fit.rotation, fit.translation)
+    return fit_hand(FitScene(kinematics, parts), fit.fingers, moved, inward, fit.joint_angles, palm=palm).joint_angles
+
+
+def build_hand_scene(
+    kinematics: HandKinematics,
+    fit: HandFit,
+    points: ArrayLike,
+    normals: ArrayLike,
+    parts: Sequence[Part],
+    com: NDArray[np.float64],
+    inertia: NDArray[np.float64],
+    settings: SimSettings,
+    mu: float,
+    torque_scale: float,
+    torsion: float = 0.0,
+    share: float = 1.0,
+) -> HandScene:
+    """Compile the object and the hand at its fitted palm pose, in the pregrasp.
+
+    Args:
+        kinematics: The hand.
+        fit: The fit of the grasp (palm pose, joint angles, chosen fingers).
+        points: The contacts the fit aimed at, shape (m, 3) [m].
+        normals: Their inward normals, shape (m, 3).
+        parts: The object's convex parts.
+        com: Object centre of mass, shape (3,) [m].
+        inertia: Inertia about the COM, shape (3, 3) [kg·m²].
+        settings: Simulation settings (lengths scaled to the object).
+        mu: Friction coefficient of hand-object contacts.
+        torque_scale: rho [m] of the scaled wrench space (the squeeze's balance).
+        share: Fraction of the largest balanced grip to squeeze with, in (0, 1].
+        torsion: Torsional friction [m]; 0: condim 3.
+
+    Returns:
+        The scene, not yet closed (:func:`close_hand`).
+    """
+    spec = mujoco.MjSpec()
+    spec.modelname = "ogcp_hand_grasp"
+    set_options(spec, settings, settings.gravity)
+    add_object(spec, parts, com, inertia, settings.body_mass, settings, mu, torsion)
+    attach_hand(spec, kinematics, free=True)
+    quat = _wxyz(fit.rotation)
+    spec.worldbody.add_body(name=WRIST, mocap=True, pos=fit.translation.tolist(), quat=quat.tolist())
+    weld = spec.add_equality(name="ogcp_palm_weld", type=mujoco.mjtEq.mjEQ_WELD, name1=WRIST, name2=MOUNT)
+    weld.objtype = mujoco.mjtObj.mjOBJ_BODY
+    weld.solref = list(WELD_SOLREF)
+    # Anchor, relative pose (position, quaternion) and torque scale: the mount *on* the mocap body.
+    # Left unset, MuJoCo would keep the offset they have at compile time (the mount at the origin).
+    weld.data = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]
+    solid = {PREFIX + kinematics.geom_name(int(g)) for g in kinematics.solid_geoms}
+    for geom in spec.geoms:
+        if geom.name in solid:
+            geom.contype, geom.conaffinity = 0, 1  # the object's parts have contype 1
+            for key, value in contact_friction(mu, torsion).items():
+                setattr(geom, key, value)
+            geom.solref = list(settings.contact_solref)
+            geom.solimp = [*settings.contact_solimp, 0.5, 2.0]
+    for equality in spec.equalities:  # a coupled joint follows its driver, as stiffly as the palm's weld
+        if equality.type == mujoco.mjtEq.mjEQ_JOINT:
+            equality.solref = list(WELD_SOLREF)
+    model = spec.compile()
+    hand = MountedHand.find(model, kinematics)
+    approach = np.array(
+        [moved_configuration(kinematics, fit, points, normals, -f * PREGRASP_RADII, parts) for f in APPROACH[:-1]]
+        + [fit.joint_angles]
+    )
+    approach = approach[_first_clear(kinematics, fit, approach, parts) :]
+    pregrasp = approach[0]
+    mount_qpos = int(model.jnt_qposadr[model.body_jntadr[hand.mount]])
+    start = model.qpos0.copy()
+    start[mount_qpos : mount_qpos + 3] = fit.translation
+    start[mount_qpos + 3 : mount_qpos + 7] = quat
+    grasp_qpos = start.copy()
+    grasp_qpos[hand.qpos] = fit.joint_angles
+    start[hand.qpos] = pregrasp
+    ordered = (np.asarray(points, dtype=float), np.asarray(normals, dtype=float))
+    squeeze, forces = balanced_squeeze(
+        model, hand, grasp_qpos, fit.fingers, *ordered, com, torque_scale, mu, settings.max_normal_force, share
+    )
+    if not forces.any():
+        squeeze = servo_targets(model, hand, moved_configuration(kinematics, fit, *ordered, SQUEEZE_RADII))
+    object_body = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "object")
+    object_joint = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, "object_free")
+    object_geoms = np.flatnonzero(model.geom_bodyid == object_body).astype(np.intp)
+    # A finger's pad is every geom rigidly attached to its tip body (a URDF pad is often a
+    # geometry-less link fixed to the last moving one).
+    weld = model.body_weldid[model.geom_bodyid[hand.geoms]]
+    pad_geoms = tuple(hand.geoms[weld == model.body_weldid[hand.pads[f]]].astype(np.intp) for f in fit.fingers)
+    scene = GraspScene(
+        model,
+        int(object_body),
+        int(model.jnt_qposadr[object_joint]),
+        object_geoms,
+        np.array([geoms[0] if len(geoms) else -1 for geoms in pad_geoms], dtype=np.intp),
+        squeeze,
+        float(max(kinematics.fingers[f].radius for f in fit.fingers)),
+        float(mu),
+        float(torsion),
+        finger_geoms=pad_geoms,
+        watched_qpos=np.arange(mount_qpos, mount_qpos + 3, dtype=np.intp),
+        start_qpos=start,
+    )
+    return HandScene(scene, hand, fit.fingers, pregrasp, approach, fit.joint_angles.copy(), forces)
+
+
+def _first_clear(kinematics: HandKinematics, fit: HandFit, approach: NDArray[np.float64], parts: Sequence[Part]) -> int:
+    """The first waypoint in which no link touches the object (the grasp itself, the last, if none).
+
+    A hand that starts overlapping the object kicks it away: with gravity off it drifts off the grasp.
+    """
+    scene = FitScene(kinematics, parts)
+    for k, angles in enumerate(approach[:-1]):
+        scene.pose(angles, fit.rotation, fit.translation)
+        if scene.depths()[0].max() <= 0.0:
+            return k
+    return len(approach) - 1
+
+
+def close_hand(hand_scene: HandScene) -> HandScene:
+    """Close the hand: pregrasp to grasp to squeeze.
+
+    Returns:
+        The scene starting from the closed hand (its ``start_qpos``), for the protocol; a closing
+        that diverged leaves the start where it was (the settling then reports it).
+    """
+    scene, model = hand_scene.scene, hand_scene.scene.model
+    data = mujoco.MjData(model)
+    data.qpos[:] = scene.start()
+    mujoco.mj_forward(model, data)
+    steps = max(1, round(STAGE_TIME / model.opt.timestep))
+    approach = [hand_scene.ctrl(angles) for angles in hand_scene.approach]
+    legs = [*itertools.pairwise(approach), (approach[-1], scene.preload_ctrl)]
+    for leg, (start, end) in enumerate(legs):
+        count = max(1, steps // (len(legs) - 1)) if leg < len(legs) - 1 else steps
+        for k in range(count):
+            data.ctrl[:] = start + (end - start) * min(1.0, (k + 1) / (0.5 * count))
+            mujoco.mj_step(model, data)
+    if not np.all(np.isfinite(data.qpos)):
+        return hand_scene
+    return dataclasses.replace(hand_scene, scene=dataclasses.replace(scene, start_qpos=data.qpos.copy()))
+
+
+def _wxyz(rotation: NDArray[np.float64]) -> NDArray[np.float64]:
+    x, y, z, w = Rotation.from_matrix(rotation).as_quat()
+    return np.array([w, x, y, z])

@@ -1,0 +1,106 @@
+"""The squeeze: servo targets under which the hand presses balanced forces on the object.
+
+Squeezing by geometry (targets past the surface) presses with whatever forces the servos' errors
+give, generally unbalanced: the object slides until the fingers' geometry balances them, and a
+pad that rolls can push it out. Instead, the squeeze solves a grasp-force linear program at the
+fitted pose: contact forces f_k in the linearised friction cones at the pads (the grasp's
+contacts), with
+
+    sum_k [f_k, (p_k - c) x f_k / rho] = 0           (no net wrench: the object stays put)
+    sum_k J_k^T f_k = M^T u + E^T eta,  u within the actuators' force ranges
+
+maximising the smallest normal force (capped at ``max_normal_force`` only when no actuator limits it).
+Each position servo's target is then its length at the pose plus ``u / kp``: at equilibrium it
+pushes exactly ``u``, so the hand holds the object with those balanced forces, at its actuators'
+limits where the program needs them (as fingertips press at F_max).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import mujoco
+import numpy as np
+from numpy.typing import NDArray
+from scipy.optimize import linprog
+
+from ogcp.sim_eval.hand.mount import MountedHand
+from ogcp.sim_eval.hand.predict import hand_statics
+
+#: Cone edges of the program (the planner's default count).
+EDGES = 8
+
+
+def balanced_squeeze(
+    model: mujoco.MjModel,
+    hand: MountedHand,
+    grasp_qpos: NDArray[np.float64],
+    fingers: Sequence[int],
+    points: NDArray[np.float64],
+    normals: NDArray[np.float64],
+    com: NDArray[np.float64],
+    torque_scale: float,
+    mu: float,
+    max_normal_force: float,
+    share: float = 1.0,
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Servo targets (nu,) that press balanced forces, and each chosen pad's normal force (m,) [N].
+
+    Args:
+        model: The scene.
+        hand: The hand in it.
+        grasp_qpos: The scene's qpos with the hand in the fitted grasp, shape (nq,).
+        fingers: The chosen fingers, one per contact.
+        points: The contacts, shape (m, 3) [m].
+        normals: Their inward normals, shape (m, 3).
+        com: The object's centre of mass, shape (3,) [m].
+        torque_scale: rho [m].
+        mu: Friction coefficient.
+        max_normal_force: Cap on the smallest normal force where no actuator limit binds [N].
+        share: The fraction of the largest balanced forces to press with, in (0, 1].
+
+    Returns:
+        The targets, and the pads' planned normal forces (zeros, and the grasp targets, when no
+        balanced squeeze exists: the grasp is not in force closure for this hand).
+    """
+    data = mujoco.MjData(model)
+    data.qpos[:] = grasp_qpos
+    mujoco.mj_fwdPosition(model, data)
+    length = data.actuator_length.copy()
+    m = len(fingers)
+    bodies = [int(hand.pads[finger]) for finger in fingers]
+    statics = hand_statics(model, data, hand, points, normals, bodies, com, torque_scale, mu, EDGES)
+    n_lambda, n_u = m * EDGES, model.nu
+    # Variables [statics', t]: maximise t, every pad's normal force (its edges' weights) >= t.
+    cost = np.zeros(statics.size + 1)
+    cost[-1] = -1.0
+    equalities = np.vstack([statics.object_balance, statics.hand_balance])
+    equalities = np.hstack([equalities, np.zeros((len(equalities), 1))])
+    at_least = np.zeros((m, statics.size + 1))
+    for k in range(m):
+        at_least[k, k * EDGES : (k + 1) * EDGES] = -1.0
+    at_least[:, -1] = 1.0
+    bounds = statics.bounds
+    problem = {"A_ub": at_least, "b_ub": np.zeros(m), "A_eq": equalities, "b_eq": np.zeros(len(equalities))}
+    result = linprog(cost, bounds=[*bounds, (0.0, None)], method="highs", **problem)
+    if result.status == 3:  # unbounded: no actuator limits the grip, so the settings' F_max does
+        result = linprog(cost, bounds=[*bounds, (0.0, max_normal_force)], method="highs", **problem)
+    gains = model.actuator_gainprm[:, 0]
+    if result.status != 0 or result.x[-1] <= 0:
+        return length, np.zeros(m)
+    u = share * result.x[n_lambda : n_lambda + n_u]
+    forces = share * result.x[:n_lambda].reshape(m, EDGES).sum(axis=1)
+    position = (model.actuator_biasprm[:, 1] < 0) & (gains > 0)  # force = kp (ctrl - length) - kv velocity
+    # An actuator the program puts at its limit aims twice as far: the pads sink a little into the
+    # soft contacts, and it still presses at its limit (where its force is clamped).
+    at_limit = model.actuator_forcelimited.astype(bool) & (
+        np.abs(u) >= (1 - 1e-6) * np.abs(model.actuator_forcerange).max(axis=1)
+    )
+    reach = np.where(at_limit, 2.0, 1.0)
+    targets = length.copy()
+    targets[position] += reach[position] * u[position] / gains[position]
+    limited = model.actuator_ctrllimited.astype(bool)
+    targets[limited] = np.clip(
+        targets[limited], model.actuator_ctrlrange[limited, 0], model.actuator_ctrlrange[limited, 1]
+    )
+    return targets, forces

@@ -1,0 +1,249 @@
+"""One grasp tested with a real hand: fitted, closed by its servos, settled, gated, ramped to failure.
+
+The pads aim at the realised contacts, the points where pads of their rounding touch the parts
+actually simulated (:func:`ogcp.sim_eval.collision.place_tips`), as fingertips do. The hand is
+fitted there from the reachability model's nearest samples (:mod:`ogcp.sim_eval.hand.fit`); a
+grasp it cannot realise is recorded as unreachable with the finger and its residual, or the link
+and its depth, and not simulated. A realised one is closed (:mod:`ogcp.sim_eval.hand.scene`) with
+the strongest balanced grip of :data:`~ogcp.sim_eval.hand.scene.SQUEEZE_LADDER` that settles
+steadily, and gated by the fingertip protocol, with one more gate: each chosen pad must press on
+the object with its centre of pressure within :data:`PAD_REACH_RADII` pad radii of its contact.
+Contacts of other links are kept in the record (``hand.extra_contacts``), never hidden. The prediction is the same hand's
+(:mod:`ogcp.sim_eval.hand.predict`): its realised contacts, friction and actuator limits.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Sequence
+from typing import Any
+
+import mujoco
+import numpy as np
+from numpy.typing import NDArray
+
+from ogcp.planner.grasp.contact_set import ContactSet
+from ogcp.planner.grasp.quality import q1_certificate
+from ogcp.planner.hands.kinematics import HandKinematics
+from ogcp.planner.hands.reachability import HandReachability
+from ogcp.sim_eval.collision import place_tips
+from ogcp.sim_eval.collision_fit import ContactFit
+from ogcp.sim_eval.directions import direction_set
+from ogcp.sim_eval.gates import gate_failures
+from ogcp.sim_eval.hand.fit import FitScene, HandFit, fit_hand
+from ogcp.sim_eval.hand.predict import hand_resistance, realised_contacts
+from ogcp.sim_eval.hand.scene import SQUEEZE_LADDER, HandScene, build_hand_scene, close_hand
+from ogcp.sim_eval.metrics import fidelity
+from ogcp.sim_eval.protocol import FULL_STATE, Settled, settle
+from ogcp.sim_eval.result import GraspSimResult
+from ogcp.sim_eval.settings import SimSettings
+from ogcp.sim_eval.trial import FIDELITY_FLOOR, ObjectBody, failed_result, ramp_to_failure, realized_summary
+
+#: Samples a fit starts from, nearest first, until one fit is realised.
+FIT_STARTS = 8
+#: A pad counts as on its contact when its centre of pressure lies within this many pad radii of it.
+PAD_REACH_RADII = 3.0
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class HandSetup:
+    """The hand that simulates a set of grasps.
+
+    Attributes:
+        kinematics: The hand, compiled.
+        model: Its reachability model (the fit's starts).
+        fingers: Names of the fingers that take the contacts; None: the first m.
+    """
+
+    kinematics: HandKinematics
+    model: HandReachability
+    fingers: tuple[str, ...] | None = None
+
+    @classmethod
+    def of(cls, hand: HandKinematics, fingers: Sequence[str] | None = None) -> HandSetup:
+        """A setup for a compiled hand."""
+        names = tuple(fingers) if fingers is not None else None
+        return cls(hand, HandReachability(hand.descriptor, names), names)
+
+
+def fit_grasp(
+    setup: HandSetup,
+    scene: FitScene,
+    contacts: ContactSet,
+    grasp: tuple[int, ...],
+    points: NDArray[np.float64],
+    normals: NDArray[np.float64],
+) -> tuple[HandFit, tuple[int, ...]]:
+    """The best fit from the grasp's nearest samples, and the order in which the fingers take its contacts.
+
+    ``points`` and ``normals`` (shape (m, 3)) are the targets of the grasp's contacts, in grasp order.
+    """
+    fingers = setup.model.chosen(len(grasp))
+    best: tuple[HandFit, tuple[int, ...]] | None = None
+    for start in setup.model.starts(grasp, contacts, FIT_STARTS):
+        order = tuple(start.fingers)
+        fit = fit_hand(scene, fingers, points[list(order)], normals[list(order)], start.joint_angles)
+        if best is None or _rank(fit) < _rank(best[0]):
+            best = (fit, order)
+        if fit.realised:
+            break
+    assert best is not None
+    return best
+
+
+def _rank(fit: HandFit) -> tuple[bool, float]:
+    deepest = max(fit.penetration, fit.self_penetration)
+    return (not fit.realised, float(max(fit.residuals.max(), deepest)))
+
+
+def simulate_hand_grasp(
+    contacts: ContactSet,
+    grasp: tuple[int, ...],
+    label: str,
+    fit: ContactFit,
+    body: ObjectBody,
+    settings: SimSettings,
+    setup: HandSetup,
+    mu: float,
+    torsion: float,
+) -> GraspSimResult:
+    """Fit, close and test the hand on one grasp.
+
+    Args:
+        contacts: The contact set the grasp indexes.
+        grasp: Contact indices, length m.
+        label: Where the grasp came from.
+        fit: The decomposition chosen for the grasp (its parts are what collides).
+        body: Mass properties and size of the object.
+        settings: Simulation settings, lengths scaled to the object.
+        setup: The hand.
+        mu: Friction coefficient of hand-object contacts.
+        torsion: Torsional friction [m]; 0: hard contacts.
+
+    Returns:
+        The result; an unreachable grasp's has ``error`` and ``hand.fit`` saying why.
+    """
+    kinematics = setup.kinematics
+    idx = np.asarray(grasp, dtype=np.intp)
+    positions, normals = contacts.positions[idx], contacts.normals[idx]
+    radius = max(f.radius for f in kinematics.fingers)
+    placement = place_tips(fit.surface, positions, normals, radius, max_inward=radius)
+    points = np.where(placement.placed[:, None], placement.points, positions)
+    inward = np.where(placement.placed[:, None], placement.normals, normals)
+    parts = fit.decomposition.parts
+    posed, order = fit_grasp(setup, FitScene(kinematics, parts), contacts, grasp, points, inward)
+    hand: dict[str, Any] = {
+        **kinematics.descriptor.to_dict(),
+        "finger_contacts": [grasp[i] for i in order],
+        "fit": posed.to_dict(kinematics.joint_names),
+    }
+    hand["fit_residuals"] = hand["fit"]["fit_residuals"]
+    hand["joint_angles"] = hand["fit"]["joint_angles"]
+    if not posed.realised:
+        reason = f"unreachable for the {kinematics.descriptor.name} hand: {posed.reason}"
+        failed = failed_result(contacts, grasp, label, reason, "")
+        return dataclasses.replace(failed, gates={"valid": False, "reachable": False}, hand=hand)
+    ordered_points, ordered_normals = points[list(order)], inward[list(order)]
+    scene_args = (kinematics, posed, ordered_points, ordered_normals, parts, body.com, body.inertia, settings, mu)
+    for share in SQUEEZE_LADDER:  # the strongest balanced grip that settles steadily
+        opened = build_hand_scene(*scene_args, contacts.torque_scale, torsion, share)
+        closed = close_hand(opened)
+        settled = settle(closed.scene, settings)
+        if settled.gates["valid"]:
+            break
+    planned = q1_certificate(contacts.subset_wrenches(idx))
+    moved = dataclasses.replace(contacts, positions=placement.points, normals=placement.normals, source={})
+    achieved = q1_certificate(moved.wrenches.reshape(-1, 6)).q1
+    dirs = direction_set(
+        settings.directions, settings.direction_seed, planned.direction if planned.force_closure else None
+    )
+    model = closed.scene.model
+    data = _settled_data(closed, settled)
+    realised = realised_contacts(model, data, closed.hand, closed.scene.object_geoms)
+    predicted = hand_resistance(
+        model,
+        data,
+        closed.hand,
+        realised,
+        body.com,
+        contacts.torque_scale,
+        mu,
+        settings.prediction_cone_edges,
+        dirs.vectors,
+    )
+    pads_ok, extra = _pad_gate(closed, realised, ordered_points, model)
+    gates = dict(settled.gates)
+    gates["pads_on_contacts"] = pads_ok.tolist()
+    gates["valid"] = bool(gates["valid"] and pads_ok.all())
+    nan = np.full(len(predicted), math.nan)
+    measured, censored, fid = nan.copy(), np.zeros(len(predicted), dtype=bool), nan.copy()
+    if not settled.gates["diverged"]:
+        measured, censored = ramp_to_failure(
+            closed.scene, settled, dirs.vectors, predicted, contacts.torque_scale, settings
+        )
+        fid = fidelity(measured, predicted, FIDELITY_FLOOR * settings.max_normal_force)
+        fid[censored] = math.nan
+    hand.update(
+        {
+            "extra_contacts": extra,
+            "settled_joint_angles": data.qpos[closed.hand.qpos].tolist(),
+            "palm_rotation": posed.rotation.tolist(),
+            "palm_position": posed.translation.tolist(),
+            "pregrasp": closed.pregrasp.tolist(),
+            "squeeze_forces": closed.squeeze_forces.tolist(),
+            "squeeze_share": share,
+        }
+    )
+    reasons = list(gate_failures(settled.gates, settled.normal_forces, settings))
+    return GraspSimResult(
+        grasp,
+        label,
+        planned.q1,
+        dirs.vectors,
+        tuple(dirs.labels),
+        predicted,
+        measured,
+        censored,
+        fid,
+        gates,
+        settled.normal_forces,
+        fit.surface.signed_distance(positions, nearest=False)[0],
+        {},
+        invalid_reasons=tuple(r.to_dict() for r in reasons),
+        realized=realized_summary(placement, planned.q1, achieved),
+        collision={**fit.to_dict(), "note": fit.note(body.diagonal)},
+        hand=hand,
+    )
+
+
+def _settled_data(closed: HandScene, settled: Settled) -> mujoco.MjData:
+    model = closed.scene.model
+    data = mujoco.MjData(model)
+    mujoco.mj_setState(model, data, settled.state, FULL_STATE)
+    data.ctrl[:] = closed.scene.preload_ctrl
+    mujoco.mj_forward(model, data)
+    return data
+
+
+def _pad_gate(
+    closed: HandScene, realised: Any, targets: NDArray[np.float64], model: mujoco.MjModel
+) -> tuple[NDArray[np.bool_], list[dict[str, Any]]]:
+    """Whether each chosen pad presses near its contact; the other links' contacts (geom name, force [N])."""
+    finger_geoms = closed.scene.finger_geoms or ()
+    radii = np.array([closed.hand.kinematics.fingers[f].radius for f in closed.fingers])
+    ok = np.zeros(len(finger_geoms), dtype=bool)
+    pad_geoms = {int(g) for geoms in finger_geoms for g in geoms}
+    for k, geoms in enumerate(finger_geoms):
+        mine = np.isin(realised.geoms, geoms) & (realised.forces > 0)
+        if mine.any():
+            # A flat pad touches in a patch whose corners MuJoCo reports: its centre of pressure counts.
+            weights = realised.forces[mine] / realised.forces[mine].sum()
+            centre = weights @ realised.points[mine]
+            ok[k] = np.linalg.norm(centre - targets[k]) <= PAD_REACH_RADII * radii[k]
+    extra: dict[str, float] = {}
+    for geom, force in zip(realised.geoms, realised.forces, strict=True):
+        if int(geom) not in pad_geoms:
+            name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_GEOM, int(geom)) or f"geom {int(geom)}"
+            extra[name] = extra.get(name, 0.0) + float(force)
+    return ok, [{"link": name, "force": force} for name, force in sorted(extra.items())]

@@ -1,0 +1,116 @@
+"""Hands written for the tests, as a user would write them: MJCF or URDF plus an ogcp.hand/1 descriptor."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import trimesh
+
+#: A three-finger hand nobody here described before: mesh links, no actuator, a palm that sits
+#: off the world origin and turned, every finger a two-hinge chain.
+MESH_HAND = """<mujoco model="claw">
+  <compiler angle="radian" meshdir="meshes"/>
+  <asset><mesh name="link" file="link.stl"/><mesh name="tip" file="tip.stl"/></asset>
+  <worldbody>
+    <body name="base" pos="0.3 -0.2 0.5" euler="0.4 0.2 1.0">
+      <geom type="box" size="0.03 0.03 0.01"/>
+      <body name="palm" pos="0 0 0.02">
+        {fingers}
+      </body>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+FINGER = """<body name="f{k}" pos="{x} {y} 0" euler="0 0 {yaw}">
+          <joint name="f{k}_a" axis="0 1 0" range="-0.3 1.4"/>
+          <geom type="mesh" mesh="link" pos="0 0 0.025"/>
+          <body name="f{k}_tip" pos="0 0 0.05">
+            <joint name="f{k}_b" axis="0 1 0" range="0 1.4"/>
+            <geom type="mesh" mesh="tip" pos="0 0 0.02"/>
+          </body>
+        </body>"""
+MESH_HAND_DESCRIPTOR = """schema = "ogcp.hand/1"
+name = "claw"
+mjcf = "claw.xml"
+palm = "palm"
+{fingers}
+[actuation]
+kp = 4.0
+force_range = 1.5
+"""
+FINGER_ENTRY = """[[fingers]]
+name = "f{k}"
+tip_body = "f{k}_tip"
+tip_offset = [0.008, 0.0, 0.03]
+pad_normal = [1.0, 0.0, 0.0]
+tip_radius = 0.008
+"""
+
+
+def write_mesh_hand(folder: Path) -> Path:
+    """The three-finger mesh hand and its descriptor in ``folder``; returns the descriptor's path."""
+    (folder / "meshes").mkdir(parents=True, exist_ok=True)
+    trimesh.creation.box(extents=(0.016, 0.016, 0.05)).export(folder / "meshes" / "link.stl")
+    trimesh.creation.capsule(height=0.024, radius=0.008).export(folder / "meshes" / "tip.stl")
+    spots = ((0.035, 0.0, 3.14159), (-0.02, 0.03, -0.9), (-0.02, -0.03, 0.9))
+    fingers = "\n        ".join(FINGER.format(k=k, x=x, y=y, yaw=yaw) for k, (x, y, yaw) in enumerate(spots))
+    (folder / "claw.xml").write_text(MESH_HAND.format(fingers=fingers))
+    entries = "\n".join(FINGER_ENTRY.format(k=k) for k in range(3))
+    path = folder / "claw.toml"
+    path.write_text(MESH_HAND_DESCRIPTOR.format(fingers=entries))
+    return path
+
+
+URDF_GRIPPER = """<robot name="urdf_gripper">
+  <link name="palm">
+    <inertial><mass value="0.2"/><inertia ixx="1e-4" iyy="1e-4" izz="1e-4" ixy="0" ixz="0" iyz="0"/></inertial>
+    <collision><geometry><mesh filename="package://urdf_gripper/meshes/palm.stl"/></geometry></collision>
+  </link>
+  <link name="left">
+    <inertial><mass value="0.02"/><inertia ixx="1e-6" iyy="1e-6" izz="1e-6" ixy="0" ixz="0" iyz="0"/></inertial>
+    <collision><origin xyz="0 0 0.035"/><geometry><box size="0.02 0.008 0.07"/></geometry></collision>
+  </link>
+  <link name="right">
+    <inertial><mass value="0.02"/><inertia ixx="1e-6" iyy="1e-6" izz="1e-6" ixy="0" ixz="0" iyz="0"/></inertial>
+    <collision><origin xyz="0 0 0.035"/><geometry><box size="0.02 0.008 0.07"/></geometry></collision>
+  </link>
+  <link name="left_pad"/>
+  <link name="right_pad"/>
+  <joint name="left" type="prismatic"><parent link="palm"/><child link="left"/><origin xyz="0 0.045 0.01"/>
+    <axis xyz="0 -1 0"/><limit lower="0" upper="0.04" effort="20" velocity="0.1"/></joint>
+  <joint name="right" type="prismatic"><parent link="palm"/><child link="right"/><origin xyz="0 -0.045 0.01"/>
+    <axis xyz="0 1 0"/><limit lower="0" upper="0.04" effort="20" velocity="0.1"/></joint>
+  <joint name="left_pad" type="fixed"><parent link="left"/><child link="left_pad"/><origin xyz="0 -0.004 0.06"/></joint>
+  <joint name="right_pad" type="fixed"><parent link="right"/><child link="right_pad"/><origin xyz="0 0.004 0.06"/></joint>
+</robot>
+"""
+URDF_DESCRIPTOR = """schema = "ogcp.hand/1"
+name = "urdf_gripper"
+mjcf = "urdf_gripper.urdf"
+palm = "palm"
+[[fingers]]
+name = "left"
+tip_body = "left_pad"
+tip_offset = [0.0, 0.0, 0.0]
+pad_normal = [0.0, -1.0, 0.0]
+tip_radius = 0.004
+[[fingers]]
+name = "right"
+tip_body = "right_pad"
+tip_offset = [0.0, 0.0, 0.0]
+pad_normal = [0.0, 1.0, 0.0]
+tip_radius = 0.004
+[actuation]
+kp = 20000.0
+force_range = 15.0
+"""
+
+
+def write_urdf_gripper(folder: Path) -> Path:
+    """A URDF parallel gripper (mesh palm found through package://, pads on fixed links); the descriptor's path."""
+    (folder / "meshes").mkdir(parents=True, exist_ok=True)
+    trimesh.creation.box(extents=(0.04, 0.11, 0.02)).export(folder / "meshes" / "palm.stl")
+    (folder / "urdf_gripper.urdf").write_text(URDF_GRIPPER)
+    path = folder / "urdf_gripper.toml"
+    path.write_text(URDF_DESCRIPTOR)
+    return path

@@ -1,0 +1,190 @@
+"""Any hand's kinematics from MuJoCo: the SDH against its old closed form, a user's MJCF and URDF, the checks."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from ogcp.planner.hands import HandKinematics, load_descriptor, resolve_hand
+from ogcp.planner.infra import OgcpError
+
+from .hand_files import write_mesh_hand, write_urdf_gripper
+
+# The SDH's fingertip points and pad normals from the closed-form numpy model ogcp had before
+# MuJoCo became the one kinematic truth (its forward_kinematics), for configurations in its
+# order (base, prox_1, dist_1, prox_2, dist_2, prox_3, dist_3) [rad]: the end of each distal link
+# (MJCF site tip_k) and the distal link's +x, in the palm frame [m].
+OLD_CONFIGURATIONS = [
+    [0, 0, 0, 0, 0, 0, 0],
+    [0.3, 0.2, 0.5, -0.4, 0.9, 0.7, -0.3],
+    [1.5, 1.2, -1.1, 0.1, 0.2, -1.5, 1.5],
+    [0.8, -0.6, 0.4, 0.6, -0.2, 0.3, 0.3],
+]
+OLD_TIPS = [
+    [[0.01905, 0.033, 0.246], [0.01905, -0.033, 0.246], [-0.03811, 0.0, 0.246]],
+    [
+        [0.0054577386, -0.0267882394, 0.2281674488],
+        [0.0192371091, -0.0338230364, 0.2307861815],
+        [0.0442899864, 0.0, 0.2202515273],
+    ],
+    [
+        [0.0915123313, -0.015974043, 0.1905017311],
+        [0.0429766, -0.0168290831, 0.2425084098],
+        [-0.1243933163, 0.0, 0.1656187679],
+    ],
+    [
+        [0.0020040824, 0.0930790483, 0.2295260913],
+        [0.0396623817, 0.0396492002, 0.2254842088],
+        [0.0261305073, 0.0, 0.2301720959],
+    ],
+]
+OLD_NORMALS = [
+    [[-0.4999496325, -0.8660544815, 0.0], [-0.4999496325, 0.8660544815, 0.0], [1.0, 0.0, 0.0]],
+    [
+        [-0.1695529139, -0.7458118937, -0.6442176872],
+        [-0.1945455978, 0.8557471375, -0.4794255386],
+        [0.921060994, 0.0, -0.3894183423],
+    ],
+    [[0.8243808166, -0.5571620573, -0.0998334166], [0.791515355, 0.5349497643, -0.2955202067], [1.0, 0.0, 0.0]],
+    [
+        [0.2675103427, -0.9428513741, 0.1986693308],
+        [0.2514046981, 0.8860863572, -0.3894183423],
+        [0.8253356149, 0.0, -0.5646424734],
+    ],
+]
+
+
+@pytest.fixture(scope="module")
+def sdh():
+    return HandKinematics(resolve_hand("sdh"))
+
+
+def test_mujoco_forward_kinematics_equals_the_old_sdh_figures(tmp_path):
+    # The tip sites of the old model: the descriptor's pad put at the end of each distal link.
+    text = (
+        resolve_hand("sdh").path.read_text().replace("tip_offset = [0.009, 0.0, 0.0595]", "tip_offset = [0, 0, 0.0685]")
+    )
+    (tmp_path / "old.toml").write_text(text.replace('mjcf = "sdh.xml"', f'mjcf = "{resolve_hand("sdh").model_path}"'))
+    kinematics = HandKinematics(load_descriptor(tmp_path / "old.toml"))
+    assert kinematics.joint_names == ("base_1", "prox_1", "dist_1", "base_2", "prox_2", "dist_2", "prox_3", "dist_3")
+    for old, tips, normals in zip(OLD_CONFIGURATIONS, OLD_TIPS, OLD_NORMALS, strict=True):
+        base, *flexions = old
+        angles = kinematics.complete([base, *flexions[:2], 0.0, *flexions[2:]])  # base_2 follows base_1
+        assert angles[3] == base
+        points, pads = kinematics.pads(angles)
+        np.testing.assert_allclose(points, tips, atol=1e-9)
+        np.testing.assert_allclose(pads, normals, atol=1e-9)
+
+
+def test_the_sdh_is_closed_by_its_own_actuators_and_keeps_its_base_coupling(sdh):
+    assert sdh.servos == ()  # its MJCF has a servo per motor
+    assert sdh.model.nu == 7 and [sdh.joint_names[k] for k in sdh.independent] == [
+        "base_1", "prox_1", "dist_1", "prox_2", "dist_2", "prox_3", "dist_3"
+    ]  # fmt: skip
+    samples = sdh.sample(200, seed=4)
+    assert np.array_equal(samples[:, 0], samples[:, 3])
+    assert ((samples >= sdh.limits[:, 0]) & (samples <= sdh.limits[:, 1])).all()
+    assert np.array_equal(samples, sdh.sample(200, seed=4)) and not np.array_equal(samples, sdh.sample(200, seed=5))
+
+
+def test_batched_pads_equal_one_by_one_and_are_in_the_palm_frame(sdh):
+    q = sdh.sample(20, seed=1)
+    points, normals = sdh.pads_many(q)
+    for k in (0, 7, 19):
+        one = sdh.pads(q[k])
+        np.testing.assert_array_equal(points[k], one[0])
+        np.testing.assert_array_equal(normals[k], one[1])
+    np.testing.assert_allclose(np.linalg.norm(normals, axis=-1), 1.0, atol=1e-12)
+
+
+def test_collisions_find_fingers_curled_into_each_other(sdh):
+    straight = sdh.reference()
+    curled = sdh.complete(np.array([0.0, 1.5, 1.5, 0.0, 1.5, 1.5, 1.5, 1.5]))
+    hits = sdh.collisions(np.vstack([straight, curled]))
+    assert not hits[0].any()
+    assert hits[1, 0, 1] and hits[1, 1, 0] and hits[1, 0, 2]  # every finger pair meets at the centre
+
+
+def test_a_users_mesh_hand_without_actuators_gets_servos_and_a_palm_off_the_origin(tmp_path):
+    kinematics = HandKinematics(load_descriptor(write_mesh_hand(tmp_path)))
+    assert kinematics.servos == ("f0_a", "f0_b", "f1_a", "f1_b", "f2_a", "f2_b")
+    assert kinematics.model.nu == 6 and kinematics.model.actuator_forcerange[:, 1].tolist() == [1.5] * 6
+    # The palm sits turned and shifted in the world; pads are reported in its own frame.
+    points, normals = kinematics.pads(kinematics.reference())
+    np.testing.assert_allclose(points[0], [0.035 - 0.008, 0.0, 0.08], atol=1e-6)
+    np.testing.assert_allclose(normals[0], [-1.0, 0.0, 0.0], atol=1e-5)  # finger 0 turned by pi: faces the centre
+
+
+def test_a_urdf_hand_compiles_with_mesh_paths_and_pads_on_fixed_links(tmp_path):
+    kinematics = HandKinematics(load_descriptor(write_urdf_gripper(tmp_path)))
+    assert kinematics.joint_names == ("left", "right") and kinematics.servos == ("left", "right")
+    points, normals = kinematics.pads([0.03, 0.03])
+    np.testing.assert_allclose(points, [[0.0, 0.011, 0.07], [0.0, -0.011, 0.07]], atol=1e-9)
+    np.testing.assert_allclose(normals, [[0, -1, 0], [0, 1, 0]], atol=1e-12)
+
+
+def _descriptor(tmp_path, model: str, **finger: str) -> object:
+    (tmp_path / "m.xml").write_text(model)
+    entry = {
+        "name": '"f"',
+        "tip_body": '"tip"',
+        "tip_offset": "[0, 0, 0]",
+        "pad_normal": "[1, 0, 0]",
+        "tip_radius": "0.01",
+    }
+    entry.update(finger)
+    lines = "\n".join(f"{k} = {v}" for k, v in entry.items())
+    palm = finger.pop("palm", '"palm"') if "palm" in finger else '"palm"'
+    text = f'schema = "ogcp.hand/1"\nname = "t"\nmjcf = "m.xml"\npalm = {palm}\n[[fingers]]\n{lines}\n'
+    (tmp_path / "t.toml").write_text(text)
+    return load_descriptor(tmp_path / "t.toml")
+
+
+MODEL = """<mujoco><worldbody><body name="palm"><geom size="0.01"/>
+  <body name="link"><joint name="hinge" axis="0 1 0" range="-1 1"/><geom size="0.01"/>
+    <body name="tip" pos="0 0 0.05"><geom size="0.01"/></body></body>
+  <body name="fixed" pos="0.05 0 0"><geom size="0.01"/></body>
+  <body name="balled" pos="-0.05 0 0"><joint name="ball" type="ball"/><geom size="0.01"/></body>
+</body><body name="elsewhere" pos="1 0 0"><joint name="other" axis="0 0 1"/><geom size="0.01"/></body></worldbody></mujoco>"""
+
+
+@pytest.mark.parametrize(
+    "finger,message",
+    [
+        ({"tip_body": '"nail"'}, "fingers[0].tip_body = 'nail' is not a body of m.xml; its bodies are palm, link, tip"),
+        ({"tip_body": '"elsewhere"'}, "tip_body 'elsewhere' is not below the palm 'palm'"),
+        ({"tip_body": '"fixed"'}, "no joint moves 'fixed' relative to the palm 'palm'"),
+        ({"joints": '["knuckle"]'}, "joint 'knuckle' is not a joint of m.xml"),
+        ({"joints": '["other"]'}, "joint 'other' is not on the chain from the palm to 'tip'"),
+        ({"tip_body": '"balled"'}, "joint 'ball' must be a hinge or a slide"),
+    ],
+)
+def test_what_the_model_must_have_is_checked_in_one_line(tmp_path, finger, message):
+    descriptor = _descriptor(tmp_path, MODEL, **finger)
+    with pytest.raises(OgcpError) as info:
+        HandKinematics(descriptor)
+    assert message in str(info.value) and str(info.value).startswith(str(tmp_path / "t.toml"))
+
+
+def test_an_unknown_palm_and_a_model_mujoco_refuses_are_one_line(tmp_path):
+    descriptor = _descriptor(tmp_path, MODEL.replace('name="palm"', 'name="hand"'))
+    with pytest.raises(OgcpError, match="palm = 'palm' is not a body of m.xml"):
+        HandKinematics(descriptor)
+    descriptor = _descriptor(tmp_path, MODEL.replace("<geom size", '<geom type="mesh" mesh="gone" size', 1))
+    with pytest.raises(OgcpError, match="mjcf = m.xml: MuJoCo cannot compile it") as info:
+        HandKinematics(descriptor)
+    assert "\n" not in str(info.value)
+
+
+def test_a_urdf_whose_mesh_is_missing_names_it(tmp_path):
+    path = write_urdf_gripper(tmp_path)
+    (tmp_path / "meshes" / "palm.stl").unlink()
+    with pytest.raises(OgcpError, match="mesh file 'package://urdf_gripper/meshes/palm.stl' not found"):
+        HandKinematics(load_descriptor(path))
+
+
+def test_configurations_out_of_range_name_the_joint(sdh):
+    with pytest.raises(OgcpError, match="joint prox_1 = 2 is outside its range"):
+        sdh.check([0, 2, 0, 0, 0, 0, 0, 0])
+    with pytest.raises(OgcpError, match="has 8 joints"):
+        sdh.check([0.0] * 7)

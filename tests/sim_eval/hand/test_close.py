@@ -1,0 +1,69 @@
+"""A hand closed on the object in MuJoCo: the pinch against its closed form, the protocol on a hand."""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+import pytest
+import trimesh
+
+from ogcp.planner.hands import HandKinematics, load_descriptor, resolve_hand
+from ogcp.sim_eval.body import object_inertia
+from ogcp.sim_eval.hand.fit import FitScene, fit_hand
+from ogcp.sim_eval.hand.scene import PREGRASP_RADII, build_hand_scene, close_hand
+from ogcp.sim_eval.protocol import ramp_trials, settle
+from ogcp.sim_eval.settings import SimSettings
+from tests.planner.hands.hand_files import write_urdf_gripper
+
+MU = 0.5
+BOX = trimesh.creation.box(extents=(0.04, 0.03, 0.04))
+POINTS = np.array([[0.0, 0.015, 0.0], [0.0, -0.015, 0.0]])
+NORMALS = np.array([[0.0, -1.0, 0.0], [0.0, 1.0, 0.0]])
+
+
+def _closed(kinematics: HandKinematics, settings: SimSettings):
+    parts = [(BOX.vertices, BOX.faces)]
+    fit = fit_hand(FitScene(kinematics, parts), [0, 1], POINTS, NORMALS)
+    assert fit.realised
+    com, inertia = object_inertia(BOX)
+    opened = build_hand_scene(kinematics, fit, POINTS, NORMALS, parts, com, inertia, settings, MU, 0.05)
+    return opened, close_hand(opened)
+
+
+@pytest.mark.parametrize("hand", ["parallel_gripper", "urdf"])
+def test_a_pinch_resists_slip_as_two_mu_f(hand, tmp_path):
+    """Along the jaws, a pinch holds until 2 mu F, F each jaw's force: its servo's limit over a lever of 1 (slides)."""
+    kinematics = HandKinematics(resolve_hand(hand) if hand != "urdf" else load_descriptor(write_urdf_gripper(tmp_path)))
+    limit = kinematics.descriptor.actuation.force_range
+    settings = SimSettings()
+    opened, closed = _closed(kinematics, settings)
+    assert opened.scene.start_qpos is not None and closed.scene.start_qpos is not None
+    assert (opened.grasp > opened.pregrasp).all()
+    np.testing.assert_allclose(opened.squeeze_forces, limit)  # the balanced squeeze presses at the limit
+    settled = settle(closed.scene, settings)
+    assert settled.gates["valid"] and settled.gates["tips_in_contact"] == 2
+    np.testing.assert_allclose(settled.normal_forces, limit, rtol=0.01)  # the squeeze saturates both servos
+    closed_form = 2 * MU * limit
+    directions = np.array([[0, 0, 1, 0, 0, 0], [0, 0, -1, 0, 0, 0]], dtype=float)
+    rate = np.full(2, 2 * closed_form / settings.ramp_time)
+    trials = ramp_trials(
+        closed.scene, settled, directions, rate, settings.ramp_extent * settings.ramp_time, 1.0, settings
+    )
+    assert trials.failed.all() and not trials.diverged.any()
+    np.testing.assert_allclose(trials.failure_load, closed_form, rtol=0.05)
+
+
+def test_the_hand_starts_in_the_pregrasp_touching_nothing_with_pads_backed_off():
+    kinematics = HandKinematics(resolve_hand("parallel_gripper"))
+    opened, closed = _closed(kinematics, SimSettings())
+    model = opened.scene.model
+    data = mujoco.MjData(model)
+    data.qpos[:] = opened.scene.start()
+    mujoco.mj_forward(model, data)
+    assert data.ncon == 0
+    pads, _ = opened.hand.pads_world(data)
+    gaps = np.linalg.norm(pads - POINTS, axis=1)
+    np.testing.assert_allclose(gaps, PREGRASP_RADII * kinematics.fingers[0].radius, rtol=1e-3)
+    data.qpos[:] = closed.scene.start()
+    mujoco.mj_forward(model, data)
+    assert data.ncon >= 2  # the closed hand touches the box
