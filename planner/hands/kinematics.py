@@ -255,6 +255,26 @@ class HandKinematics:
         self._pose(self.model, self.data, self.reference())
         return self.data.xmat[self.palm].reshape(3, 3).copy(), self.data.xpos[self.palm].copy()
 
+    def idle_joints(self) -> tuple[str, ...]:
+        """Hinges and slides of the hand below its root that move no finger and no actuator drives.
+
+        A scene welds them at their reference (a wrist between the root and the palm, say).
+        """
+        model = self.model
+        driven = {
+            int(model.actuator_trnid[a, 0])
+            for a in range(model.nu)
+            if model.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_JOINT
+        }
+        fingers = set(self.joint_ids.tolist())
+        idle = []
+        for j in range(model.njnt):
+            if j in fingers or j in driven or int(model.jnt_type[j]) not in _MOVABLE:
+                continue
+            if self._is_below(int(model.jnt_bodyid[j]), self.root):
+                idle.append(mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j))
+        return tuple(idle)
+
     @property
     def solid_geoms(self) -> NDArray[np.intp]:
         """Hand geoms (below the root) that collide with anything: the ones the object can touch."""

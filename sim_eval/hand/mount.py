@@ -1,8 +1,9 @@
 """A hand in a scene: its subtree attached to a mount body whose frame is the palm frame.
 
 :func:`attach_hand` copies the hand's model (the subtree of the body below the world that holds
-the palm, with its actuators, equalities and defaults) under a frame of a new ``mount`` body, placed
-so that the mount's frame *is* the palm frame at the hand's reference configuration. Placing the
+the palm, with its actuators, equalities and defaults; without a free joint, and with its idle
+joints welded) under a frame of a new ``mount`` body, placed so that the mount's frame *is* the
+palm frame at the hand's reference configuration. Placing the
 palm at a pose is then placing the mount: a body pose in a fit, a mocap weld in a simulation.
 :class:`MountedHand` finds the hand's joints, pads and geoms in the compiled scene by name.
 """
@@ -42,6 +43,14 @@ def attach_hand(spec: mujoco.MjSpec, kinematics: HandKinematics, free: bool = Fa
     frame = mount.add_frame(pos=(-inverse @ position).tolist(), quat=_wxyz(inverse).tolist())
     hand = kinematics.spec.copy()
     root = hand.body(mujoco.mj_id2name(kinematics.model, mujoco.mjtObj.mjOBJ_BODY, kinematics.root))
+    # The mount carries a floating hand model instead of its free joint, and joints that move no
+    # finger and no actuator drives (a wrist between the root and the palm) are welded where they
+    # are: the palm must be as rigidly held as the mount.
+    idle = set(kinematics.idle_joints())
+    for body in [root, *root.find_all(mujoco.mjtObj.mjOBJ_BODY)]:
+        for joint in list(body.joints):
+            if joint.type == mujoco.mjtJoint.mjJNT_FREE or joint.name in idle:
+                hand.delete(joint)
     frame.attach_body(root, PREFIX, "")
     # A URDF's meshes came in memory (ogcp.planner.hands.loading); the scene needs them too.
     spec.assets = {**spec.assets, **hand.assets}

@@ -67,3 +67,24 @@ def test_the_hand_starts_in_the_pregrasp_touching_nothing_with_pads_backed_off()
     data.qpos[:] = closed.scene.start()
     mujoco.mj_forward(model, data)
     assert data.ncon >= 2  # the closed hand touches the box
+
+
+def test_a_wrist_between_root_and_palm_is_welded_at_its_reference(tmp_path):
+    source = resolve_hand("parallel_gripper")
+    model = (
+        source.model_path.read_text()
+        .replace(
+            '<body name="palm">',
+            '<body name="arm"><joint name="wrist" axis="1 0 0"/><geom size="0.01"/><body name="palm">',
+        )
+        .replace("    </body>\n  </worldbody>", "    </body>\n    </body>\n  </worldbody>")
+    )
+    (tmp_path / "g.xml").write_text(model)
+    (tmp_path / "g.toml").write_text(source.path.read_text().replace('"parallel_gripper.xml"', '"g.xml"'))
+    kinematics = HandKinematics(load_descriptor(tmp_path / "g.toml"))
+    assert kinematics.idle_joints() == ("wrist",)
+    settings = SimSettings()
+    _, closed = _closed(kinematics, settings)
+    assert mujoco.mj_name2id(closed.scene.model, mujoco.mjtObj.mjOBJ_JOINT, "hand/wrist") == -1
+    settled = settle(closed.scene, settings)
+    assert settled.gates["valid"] and settled.gates["tips_in_contact"] == 2

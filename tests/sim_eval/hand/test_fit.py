@@ -94,3 +94,19 @@ def test_bad_inputs_are_refused(sdh):
         fit_hand(scene, [0, 0, 2], np.zeros((3, 3)), np.ones((3, 3)))
     with pytest.raises(OgcpError, match="joint prox_1"):
         fit_hand(scene, [0, 1, 2], np.zeros((3, 3)), np.ones((3, 3)), [0, 3, 0, 0, 0, 0, 0, 0])
+
+
+def test_a_floating_hand_model_is_mounted_without_its_free_joint(tmp_path):
+    model = (
+        resolve_hand("parallel_gripper")
+        .model_path.read_text()
+        .replace('<body name="palm">', '<body name="palm" pos="0.1 0.2 0.3"><freejoint name="float"/>')
+    )
+    (tmp_path / "g.xml").write_text(model)
+    text = resolve_hand("parallel_gripper").path.read_text().replace('"parallel_gripper.xml"', '"g.xml"')
+    (tmp_path / "g.toml").write_text(text)
+    gripper = HandKinematics(load_descriptor(tmp_path / "g.toml"))
+    points = np.array([[0.0, 0.015, 0.0], [0.0, -0.015, 0.0]])
+    normals = np.array([[0.0, -1.0, 0.0], [0.0, 1.0, 0.0]])
+    fit = fit_hand(FitScene(gripper), [0, 1], points, normals)
+    assert fit.realised and fit.residuals.max() < 1e-6
