@@ -188,3 +188,16 @@ def test_configurations_out_of_range_name_the_joint(sdh):
         sdh.check([0, 2, 0, 0, 0, 0, 0, 0])
     with pytest.raises(OgcpError, match="has 8 joints"):
         sdh.check([0.0] * 7)
+
+
+def test_a_urdf_mujoco_cannot_compile_is_one_line_naming_the_file(tmp_path):
+    path = write_urdf_gripper(tmp_path)
+    urdf = tmp_path / "urdf_gripper.urdf"
+    urdf.write_text(urdf.read_text().replace('<child link="left_pad"/>', '<child link="nowhere"/>'))
+    with pytest.raises(OgcpError) as info:
+        HandKinematics(load_descriptor(path))
+    text = str(info.value)
+    assert text.startswith(f"{path}: mjcf = urdf_gripper.urdf: MuJoCo cannot compile it") and "\n" not in text
+    urdf.write_text("<robot name='x'><link name='palm'>")  # cut short
+    with pytest.raises(OgcpError, match="urdf_gripper.urdf is not a readable URDF"):
+        HandKinematics(load_descriptor(path))
