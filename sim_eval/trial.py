@@ -188,7 +188,7 @@ def simulate_grasp(
             weightless = build_scene(*args, body.tip_radius, gravity=False, torsion=torsion)
             if compat:
                 use_object_defaults(weightless)
-            holds["weight"] = _weight(weightless, settings)
+            holds["weight"] = weight_test(weightless, settings)
     return GraspSimResult(
         grasp,
         label,
@@ -254,7 +254,7 @@ def _dexgraspbench(scene: GraspScene, settled: Settled, settings: SimSettings) -
     return hold_test(scene, settled, settings)
 
 
-def _weight(scene: GraspScene, settings: SimSettings) -> dict[str, Any]:
+def weight_test(scene: GraspScene, settings: SimSettings) -> dict[str, Any]:
     """Weight m g along the six force axes: gravity off, the weight applied as an external force."""
     settled = settle(scene, settings)
     loads, labels = _axis_loads(settings.object_mass * GRAVITY)

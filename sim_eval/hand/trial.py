@@ -38,7 +38,14 @@ from ogcp.sim_eval.metrics import fidelity
 from ogcp.sim_eval.protocol import FULL_STATE, Settled, settle
 from ogcp.sim_eval.result import GraspSimResult
 from ogcp.sim_eval.settings import SimSettings
-from ogcp.sim_eval.trial import FIDELITY_FLOOR, ObjectBody, failed_result, ramp_to_failure, realized_summary
+from ogcp.sim_eval.trial import (
+    FIDELITY_FLOOR,
+    ObjectBody,
+    failed_result,
+    ramp_to_failure,
+    realized_summary,
+    weight_test,
+)
 
 #: Samples a fit starts from, nearest first, until one fit is realised.
 FIT_STARTS = 8
@@ -178,6 +185,9 @@ def simulate_hand_grasp(
     gates["valid"] = bool(gates["valid"] and pads_ok.all())
     nan = np.full(len(predicted), math.nan)
     measured, censored, fid = nan.copy(), np.zeros(len(predicted), dtype=bool), nan.copy()
+    holds: dict[str, Any] = {}
+    if not settled.gates["diverged"] and settings.weight_test and not settings.gravity:
+        holds["weight"] = weight_test(closed.scene, settings)  # gravity is off: m g along each axis as a load
     if not settled.gates["diverged"]:
         measured, censored = ramp_to_failure(
             closed.scene, settled, dirs.vectors, predicted, contacts.torque_scale, settings
@@ -209,7 +219,7 @@ def simulate_hand_grasp(
         gates,
         settled.normal_forces,
         fit.surface.signed_distance(positions, nearest=False)[0],
-        {},
+        holds,
         invalid_reasons=tuple(r.to_dict() for r in reasons),
         realized=realized_summary(placement, planned.q1, achieved),
         collision={**fit.to_dict(), "note": fit.note(body.diagonal)},

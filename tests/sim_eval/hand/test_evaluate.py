@@ -112,3 +112,10 @@ def test_a_plan_of_the_old_sdh_model_still_reads_and_evaluates(sdh_plan):
     assert hand is not None and hand.descriptor is None and hand.fingers == () and len(hand.joint_angles) == 7
     (grasp,) = evaluate_plan(old, {"directions": 4}, HULL).grasps
     assert grasp.hand["name"] == "sdh" and len(grasp.hand["joint_angles"]) == 8
+
+
+def test_the_weight_test_runs_with_a_hand(sdh_plan):
+    (grasp,) = evaluate_plan(sdh_plan, {"directions": 4, "weight_test": True}, HULL).grasps
+    weight = grasp.hold_tests["weight"]
+    assert weight["axes"] == ["+x", "-x", "+y", "-y", "+z", "-z"] and len(weight["passed"]) == 6
+    assert weight["success"] == all(weight["passed"]) and weight["load"] > 0
