@@ -95,23 +95,18 @@ def servo_targets(model: mujoco.MjModel, hand: MountedHand, angles: ArrayLike) -
 
 
 def moved_configuration(
-    kinematics: HandKinematics,
-    fit: HandFit,
-    points: ArrayLike,
-    normals: ArrayLike,
-    radii_inward: float,
-    parts: Sequence[Part] = (),
+    scene: FitScene, fit: HandFit, points: ArrayLike, normals: ArrayLike, radii_inward: float
 ) -> NDArray[np.float64]:
     """The fingers with their pads moved along the contact normals (inward > 0, in pad radii), the palm held.
 
-    With the object's parts, the links are kept out of it too (a pregrasp that already touches the
-    object pushes it away while the hand closes).
+    With the object's parts in ``scene``, the links are kept out of it too (a pregrasp that already
+    touches the object pushes it away while the hand closes).
     """
-    radii = np.array([kinematics.fingers[f].radius for f in fit.fingers])
+    radii = np.array([scene.kinematics.fingers[f].radius for f in fit.fingers])
     inward = np.asarray(normals, dtype=float)
     moved = np.asarray(points, dtype=float) + radii_inward * radii[:, None] * inward
     palm = (fit.rotation, fit.translation)
-    return fit_hand(FitScene(kinematics, parts), fit.fingers, moved, inward, fit.joint_angles, palm=palm).joint_angles
+    return fit_hand(scene, fit.fingers, moved, inward, fit.joint_angles, palm=palm).joint_angles
 
 
 def build_hand_scene(
@@ -173,11 +168,12 @@ def build_hand_scene(
             equality.solref = list(WELD_SOLREF)
     model = spec.compile()
     hand = MountedHand.find(model, kinematics)
+    around = FitScene(kinematics, parts)
     approach = np.array(
-        [moved_configuration(kinematics, fit, points, normals, -f * PREGRASP_RADII, parts) for f in APPROACH[:-1]]
+        [moved_configuration(around, fit, points, normals, -f * PREGRASP_RADII) for f in APPROACH[:-1]]
         + [fit.joint_angles]
     )
-    approach = approach[_first_clear(kinematics, fit, approach, parts) :]
+    approach = approach[_first_clear(around, fit, approach) :]
     pregrasp = approach[0]
     mount_qpos = int(model.jnt_qposadr[model.body_jntadr[hand.mount]])
     start = model.qpos0.copy()
@@ -191,14 +187,14 @@ def build_hand_scene(
         model, hand, grasp_qpos, fit.fingers, *ordered, com, torque_scale, mu, settings.max_normal_force, share
     )
     if not forces.any():
-        squeeze = servo_targets(model, hand, moved_configuration(kinematics, fit, *ordered, SQUEEZE_RADII))
+        squeeze = servo_targets(model, hand, moved_configuration(FitScene(kinematics), fit, *ordered, SQUEEZE_RADII))
     object_body = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "object")
     object_joint = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, "object_free")
     object_geoms = np.flatnonzero(model.geom_bodyid == object_body).astype(np.intp)
     # A finger's pad is every geom rigidly attached to its tip body (a URDF pad is often a
     # geometry-less link fixed to the last moving one).
-    weld = model.body_weldid[model.geom_bodyid[hand.geoms]]
-    pad_geoms = tuple(hand.geoms[weld == model.body_weldid[hand.pads[f]]].astype(np.intp) for f in fit.fingers)
+    welded = model.body_weldid[model.geom_bodyid[hand.geoms]]
+    pad_geoms = tuple(hand.geoms[welded == model.body_weldid[hand.pads[f]]].astype(np.intp) for f in fit.fingers)
     scene = GraspScene(
         model,
         int(object_body),
@@ -216,12 +212,11 @@ def build_hand_scene(
     return HandScene(scene, hand, fit.fingers, pregrasp, approach, fit.joint_angles.copy(), forces)
 
 
-def _first_clear(kinematics: HandKinematics, fit: HandFit, approach: NDArray[np.float64], parts: Sequence[Part]) -> int:
+def _first_clear(scene: FitScene, fit: HandFit, approach: NDArray[np.float64]) -> int:
     """The first waypoint in which no link touches the object (the grasp itself, the last, if none).
 
     A hand that starts overlapping the object kicks it away: with gravity off it drifts off the grasp.
     """
-    scene = FitScene(kinematics, parts)
     for k, angles in enumerate(approach[:-1]):
         scene.pose(angles, fit.rotation, fit.translation)
         if scene.depths()[0].max() <= 0.0:
