@@ -31,7 +31,7 @@ from ogcp.planner.hands.kinematics import HandKinematics
 from ogcp.sim_eval.collision import Part
 from ogcp.sim_eval.hand.fit import FitScene, HandFit, fit_hand
 from ogcp.sim_eval.hand.mount import MOUNT, PREFIX, MountedHand, attach_hand
-from ogcp.sim_eval.hand.squeeze import balanced_squeeze
+from ogcp.sim_eval.hand.squeeze import Grip, balanced_grip
 from ogcp.sim_eval.scene import GraspScene, add_object, contact_friction, set_options
 from ogcp.sim_eval.settings import SimSettings
 
@@ -67,6 +67,7 @@ class HandScene:
         grasp: Fitted configuration, shape (J,).
         squeeze_forces: The normal force each pad is to press with [N] (zeros: no balanced squeeze
             exists, the pads were pushed past the surface instead), shape (m,).
+        grip: The largest balanced grip (None where none exists); :func:`squeezed` takes shares of it.
     """
 
     scene: GraspScene
@@ -76,6 +77,7 @@ class HandScene:
     approach: NDArray[np.float64]
     grasp: NDArray[np.float64]
     squeeze_forces: NDArray[np.float64]
+    grip: Grip | None = None
 
     def ctrl(self, angles: ArrayLike) -> NDArray[np.float64]:
         """Servo targets that hold a configuration (other actuators at their reference), shape (nu,)."""
@@ -121,7 +123,6 @@ def build_hand_scene(
     mu: float,
     torque_scale: float,
     torsion: float = 0.0,
-    share: float = 1.0,
 ) -> HandScene:
     """Compile the object and the hand at its fitted palm pose, in the pregrasp.
 
@@ -136,11 +137,11 @@ def build_hand_scene(
         settings: Simulation settings (lengths scaled to the object).
         mu: Friction coefficient of hand-object contacts.
         torque_scale: rho [m] of the scaled wrench space (the squeeze's balance).
-        share: Fraction of the largest balanced grip to squeeze with, in (0, 1].
         torsion: Torsional friction [m]; 0: condim 3.
 
     Returns:
-        The scene, not yet closed (:func:`close_hand`).
+        The scene, not yet closed (:func:`close_hand`), squeezing with the full grip (:func:`squeezed`
+        takes a share of it).
     """
     spec = mujoco.MjSpec()
     spec.modelname = "ogcp_hand_grasp"
@@ -183,10 +184,13 @@ def build_hand_scene(
     grasp_qpos[hand.qpos] = fit.joint_angles
     start[hand.qpos] = pregrasp
     ordered = (np.asarray(points, dtype=float), np.asarray(normals, dtype=float))
-    squeeze, forces = balanced_squeeze(
-        model, hand, grasp_qpos, fit.fingers, *ordered, com, torque_scale, mu, settings.max_normal_force, share
+    grip = balanced_grip(
+        model, hand, grasp_qpos, fit.fingers, *ordered, com, torque_scale, mu, settings.max_normal_force
     )
-    if not forces.any():
+    if grip is not None:
+        squeeze, forces = grip.targets(model, 1.0)
+    else:
+        forces = np.zeros(len(fit.fingers))
         squeeze = servo_targets(model, hand, moved_configuration(FitScene(kinematics), fit, *ordered, SQUEEZE_RADII))
     object_body = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "object")
     object_joint = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, "object_free")
@@ -209,7 +213,16 @@ def build_hand_scene(
         watched_qpos=np.arange(mount_qpos, mount_qpos + 3, dtype=np.intp),
         start_qpos=start,
     )
-    return HandScene(scene, hand, fit.fingers, pregrasp, approach, fit.joint_angles.copy(), forces)
+    return HandScene(scene, hand, fit.fingers, pregrasp, approach, fit.joint_angles.copy(), forces, grip)
+
+
+def squeezed(hand_scene: HandScene, share: float) -> HandScene:
+    """The same scene squeezing with ``share`` (in (0, 1]) of its balanced grip (unchanged without one)."""
+    if hand_scene.grip is None:
+        return hand_scene
+    targets, forces = hand_scene.grip.targets(hand_scene.scene.model, share)
+    scene = dataclasses.replace(hand_scene.scene, preload_ctrl=targets)
+    return dataclasses.replace(hand_scene, scene=scene, squeeze_forces=forces)
 
 
 def _first_clear(scene: FitScene, fit: HandFit, approach: NDArray[np.float64]) -> int:

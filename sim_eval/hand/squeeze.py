@@ -18,6 +18,7 @@ limits where the program needs them (as fingertips press at F_max).
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import mujoco
 import numpy as np
@@ -31,7 +32,43 @@ from ogcp.sim_eval.hand.predict import hand_statics
 EDGES = 8
 
 
-def balanced_squeeze(
+@dataclass(frozen=True, eq=False)
+class Grip:
+    """The largest balanced grip at the fitted pose.
+
+    Attributes:
+        length: Each actuator's length at the pose, shape (nu,).
+        forces: Each actuator's force in the grip, shape (nu,) [N or N·m].
+        pad_forces: Each chosen pad's normal force, shape (m,) [N].
+    """
+
+    length: NDArray[np.float64]
+    forces: NDArray[np.float64]
+    pad_forces: NDArray[np.float64]
+
+    def targets(self, model: mujoco.MjModel, share: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Servo targets (nu,) that press ``share`` of the grip, and the pads' normal forces (m,) [N].
+
+        Each position servo's target is its length plus ``u / kp``; one the grip puts at its force
+        limit aims twice as far, since the pads sink a little into the soft contacts and it still
+        presses at its limit (where its force is clamped).
+        """
+        u = share * self.forces
+        gains = model.actuator_gainprm[:, 0]
+        position = (model.actuator_biasprm[:, 1] < 0) & (gains > 0)  # force = kp (ctrl - length) - kv velocity
+        limit = np.abs(model.actuator_forcerange).max(axis=1)
+        at_limit = model.actuator_forcelimited.astype(bool) & (np.abs(u) >= (1 - 1e-6) * limit)
+        reach = np.where(at_limit, 2.0, 1.0)
+        targets = self.length.copy()
+        targets[position] += reach[position] * u[position] / gains[position]
+        limited = model.actuator_ctrllimited.astype(bool)
+        targets[limited] = np.clip(
+            targets[limited], model.actuator_ctrlrange[limited, 0], model.actuator_ctrlrange[limited, 1]
+        )
+        return targets, share * self.pad_forces
+
+
+def balanced_grip(
     model: mujoco.MjModel,
     hand: MountedHand,
     grasp_qpos: NDArray[np.float64],
@@ -42,9 +79,8 @@ def balanced_squeeze(
     torque_scale: float,
     mu: float,
     max_normal_force: float,
-    share: float = 1.0,
-) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Servo targets (nu,) that press balanced forces, and each chosen pad's normal force (m,) [N].
+) -> Grip | None:
+    """The largest balanced grip on the contacts, or None when none exists (not in force closure for this hand).
 
     Args:
         model: The scene.
@@ -57,16 +93,10 @@ def balanced_squeeze(
         torque_scale: rho [m].
         mu: Friction coefficient.
         max_normal_force: Cap on the smallest normal force where no actuator limit binds [N].
-        share: The fraction of the largest balanced forces to press with, in (0, 1].
-
-    Returns:
-        The targets, and the pads' planned normal forces (zeros, and the grasp targets, when no
-        balanced squeeze exists: the grasp is not in force closure for this hand).
     """
     data = mujoco.MjData(model)
     data.qpos[:] = grasp_qpos
     mujoco.mj_fwdPosition(model, data)
-    length = data.actuator_length.copy()
     m = len(fingers)
     bodies = [int(hand.pads[finger]) for finger in fingers]
     statics = hand_statics(model, data, hand, points, normals, bodies, com, torque_scale, mu, EDGES)
@@ -85,22 +115,10 @@ def balanced_squeeze(
     result = linprog(cost, bounds=[*bounds, (0.0, None)], method="highs", **problem)
     if result.status == 3:  # unbounded: no actuator limits the grip, so the settings' F_max does
         result = linprog(cost, bounds=[*bounds, (0.0, max_normal_force)], method="highs", **problem)
-    gains = model.actuator_gainprm[:, 0]
     if result.status != 0 or result.x[-1] <= 0:
-        return length, np.zeros(m)
-    u = share * result.x[n_lambda : n_lambda + n_u]
-    forces = share * result.x[:n_lambda].reshape(m, EDGES).sum(axis=1)
-    position = (model.actuator_biasprm[:, 1] < 0) & (gains > 0)  # force = kp (ctrl - length) - kv velocity
-    # An actuator the program puts at its limit aims twice as far: the pads sink a little into the
-    # soft contacts, and it still presses at its limit (where its force is clamped).
-    at_limit = model.actuator_forcelimited.astype(bool) & (
-        np.abs(u) >= (1 - 1e-6) * np.abs(model.actuator_forcerange).max(axis=1)
+        return None
+    return Grip(
+        data.actuator_length.copy(),
+        result.x[n_lambda : n_lambda + n_u].copy(),
+        result.x[:n_lambda].reshape(m, EDGES).sum(axis=1),
     )
-    reach = np.where(at_limit, 2.0, 1.0)
-    targets = length.copy()
-    targets[position] += reach[position] * u[position] / gains[position]
-    limited = model.actuator_ctrllimited.astype(bool)
-    targets[limited] = np.clip(
-        targets[limited], model.actuator_ctrlrange[limited, 0], model.actuator_ctrlrange[limited, 1]
-    )
-    return targets, forces

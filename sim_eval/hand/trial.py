@@ -33,7 +33,7 @@ from ogcp.sim_eval.directions import direction_set
 from ogcp.sim_eval.gates import gate_failures
 from ogcp.sim_eval.hand.fit import FitScene, HandFit, fit_hand
 from ogcp.sim_eval.hand.predict import hand_resistance, realised_contacts
-from ogcp.sim_eval.hand.scene import SQUEEZE_LADDER, HandScene, build_hand_scene, close_hand
+from ogcp.sim_eval.hand.scene import SQUEEZE_LADDER, HandScene, build_hand_scene, close_hand, squeezed
 from ogcp.sim_eval.metrics import fidelity
 from ogcp.sim_eval.protocol import FULL_STATE, Settled, settle
 from ogcp.sim_eval.result import GraspSimResult
@@ -153,9 +153,9 @@ def simulate_hand_grasp(
         return dataclasses.replace(failed, gates={"valid": False, "reachable": False}, hand=hand)
     ordered_points, ordered_normals = points[list(order)], inward[list(order)]
     scene_args = (kinematics, posed, ordered_points, ordered_normals, parts, body.com, body.inertia, settings, mu)
+    opened = build_hand_scene(*scene_args, contacts.torque_scale, torsion)
     for share in SQUEEZE_LADDER:  # the strongest balanced grip that settles steadily
-        opened = build_hand_scene(*scene_args, contacts.torque_scale, torsion, share)
-        closed = close_hand(opened)
+        closed = close_hand(squeezed(opened, share))
         settled = settle(closed.scene, settings)
         if settled.gates["valid"]:
             break
