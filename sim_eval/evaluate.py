@@ -39,6 +39,7 @@ from ogcp.sim_eval.settings import SimSettings, scaled_lengths
 from ogcp.sim_eval.trial import ObjectBody, contact_torsion, failed_result, simulate_grasp
 
 if TYPE_CHECKING:
+    from ogcp.sim_eval.hand.given import GivenPose
     from ogcp.sim_eval.hand.trial import HandSetup
 
 
@@ -75,6 +76,7 @@ class GraspEvaluator:
         grasps: Sequence[Sequence[int]],
         labels: Sequence[str] | None = None,
         parts: Decomposition | None = None,
+        poses: Sequence[GivenPose | None] | None = None,
     ) -> SimResult:
         """Simulate every grasp.
 
@@ -84,6 +86,8 @@ class GraspEvaluator:
             grasps: Grasps as contact indices, each of length m >= 2.
             labels: Optional label per grasp (default ``grasp-<i>``).
             parts: A decomposition to reuse (default: decomposed here, through the cache).
+            poses: Per grasp, the hand as another planner posed it (not fitted), or None: fitted
+                here; only with a hand.
 
         Returns:
             Per-grasp results and set-level metrics. A grasp that cannot be simulated gets its
@@ -102,6 +106,9 @@ class GraspEvaluator:
         labels = list(labels) if labels is not None else [f"grasp-{i}" for i in range(len(chosen))]
         if len(labels) != len(chosen):
             raise OgcpError(f"got {len(labels)} labels for {len(chosen)} grasps")
+        given_poses = list(poses) if poses is not None else [None] * len(chosen)
+        if len(given_poses) != len(chosen) or (self.hand is None and any(p is not None for p in given_poses)):
+            raise OgcpError(f"got {len(given_poses)} hand poses for {len(chosen)} grasps (poses need a hand)")
         for g in chosen:
             if len(g) < 2 or min(g) < 0 or max(g) >= len(contacts) or len(set(g)) != len(g):
                 raise OgcpError(f"grasp {list(g)} must hold >= 2 distinct indices in 0..{len(contacts) - 1}")
@@ -112,15 +119,11 @@ class GraspEvaluator:
         radius = tip_radius(mesh, settings)
         body = ObjectBody(com, inertia, radius, diagonal)
         ladder = DecompositionLadder(mesh, decomposition, diagonal, radius, self.cache, self.progress, first=parts)
-        if self.hand is not None and settings.protocol == "dexgraspbench":
-            raise OgcpError(
-                "the dexgraspbench protocol presses fingertips; with a hand use the ogcp protocol (or --tips)"
-            )
         # A hand's fit decides what it reaches; the fingertip's own check is for spheres.
         unreachable = _unreachable_contacts(mesh, contacts, chosen, radius) if self.hand is None else set()
         results = []
         bar = tqdm(total=len(chosen), desc="simulate", unit="grasp", disable=not self.progress)
-        for grasp, label in zip(chosen, labels, strict=True):
+        for grasp, label, pose in zip(chosen, labels, given_poses, strict=True):
             fingers = tuple(f for f, i in enumerate(grasp) if i in unreachable)
             if fingers:
                 results.append(_unreachable(contacts, grasp, label, fingers, radius))
@@ -137,7 +140,9 @@ class GraspEvaluator:
                     mu = settings.mu if settings.mu is not None else contacts.mu
                     torsion = contact_torsion(contacts, settings)
                     results.append(
-                        simulate_hand_grasp(contacts, grasp, label, fit, body, settings, self.hand, mu, torsion)
+                        simulate_hand_grasp(
+                            contacts, grasp, label, fit, body, settings, self.hand, mu, torsion, given=pose
+                        )
                     )
             except Exception as exc:  # noqa: BLE001 - one bad grasp must not sink the batch
                 reason = f"{type(exc).__name__}: {exc}"

@@ -30,7 +30,7 @@ import itertools
 import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import trimesh
@@ -46,6 +46,10 @@ from ogcp.sim_eval.decomposition.decompose import DecompositionSettings
 from ogcp.sim_eval.evaluate import GraspEvaluator, object_diagonal, tip_radius
 from ogcp.sim_eval.result import SimResult
 from ogcp.sim_eval.settings import SimSettings
+
+if TYPE_CHECKING:
+    from ogcp.planner.hands.kinematics import HandKinematics
+    from ogcp.sim_eval.hand.given import GivenPose
 
 #: ``on_surface`` choices: what happens to a contact off the mesh's surface.
 ON_SURFACE = ("project", "refuse")
@@ -169,6 +173,7 @@ class ExternalInput:
         q1: ogcp's Q1 of each grasp at the simulated contacts [N].
         external: The grasps as given.
         radius: The fingertip radius the tolerances are fractions of [m].
+        poses: Per grasp, the hand as the record posed it, or None (fingertips, or fitted by ogcp).
     """
 
     mesh: trimesh.Trimesh
@@ -179,6 +184,7 @@ class ExternalInput:
     q1: tuple[float, ...]
     external: ExternalGrasps
     radius: float
+    poses: tuple[GivenPose | None, ...] = ()
 
     def record(self, on_surface: str) -> dict[str, Any]:
         """The ``external`` block of the ``ogcp.sim/2`` record's object: per grasp its label,
@@ -220,6 +226,7 @@ def external_input(
     radius: float,
     on_surface: str = "project",
     source: dict[str, Any] | None = None,
+    hand: HandKinematics | None = None,
 ) -> ExternalInput:
     """Measure, project or refuse the contacts, and build the contact set the grasps index.
 
@@ -229,13 +236,35 @@ def external_input(
         radius: The simulated fingertip radius [m].
         on_surface: ``project`` or ``refuse`` contacts off the surface (see :func:`surface_fit`).
         source: Description of the object, recorded in the set's source.
+        hand: The record's hand, compiled (required when a grasp has a ``hand`` block): a grasp
+            without contacts gets its chosen pads' points and normals.
 
     Raises:
-        OgcpError: See :func:`surface_fit`, and for a mesh ogcp cannot take mass properties of.
+        OgcpError: See :func:`surface_fit` and :func:`~ogcp.sim_eval.hand.given.resolve_pose`,
+            and for a mesh ogcp cannot take mass properties of.
     """
-    positions = np.vstack([g.positions for g in grasps.grasps])
-    normals = np.vstack([g.normals for g in grasps.grasps])
-    names = [f"grasps[{i}].contacts[{j}]" for i, g in enumerate(grasps.grasps) for j in range(len(g.positions))]
+    poses: list[GivenPose | None] = []
+    given_points, given_normals = [], []
+    where = "grasps" if grasps.path is None else str(grasps.path)
+    for i, g in enumerate(grasps.grasps):
+        points, normals_i = g.positions, g.normals
+        if g.hand is not None:
+            if hand is None:
+                raise OgcpError(f"{where}: grasps[{i}].hand: simulating a posed hand needs the record's hand")
+            from ogcp.sim_eval.hand.given import resolve_pose
+
+            own = g.positions if len(g.positions) else None
+            pose, pads, pad_normals = resolve_pose(hand, g.hand, mesh, f"{where}: grasps[{i}].hand", own)
+            poses.append(pose)
+            if own is None:
+                points, normals_i = pads, pad_normals
+        else:
+            poses.append(None)
+        given_points.append(points)
+        given_normals.append(normals_i)
+    positions = np.vstack(given_points)
+    normals = np.vstack(given_normals)
+    names = [f"grasps[{i}].contacts[{j}]" for i, p in enumerate(given_points) for j in range(len(p))]
     fit = surface_fit(mesh, positions, normals, radius, on_surface, names)
     com, rho = mass_properties(mesh)
     file = None if grasps.path is None else str(grasps.path)
@@ -250,11 +279,11 @@ def external_input(
         {**(source or {}), **origin},
         grasps.torsional_friction,
     )
-    sizes = np.cumsum([0] + [len(g.positions) for g in grasps.grasps])
+    sizes = np.cumsum([0] + [len(p) for p in given_points])
     indices = tuple(tuple(range(int(a), int(b))) for a, b in itertools.pairwise(sizes.tolist()))
     q1 = tuple(q1_certificate(contacts.subset_wrenches(np.asarray(g, dtype=np.intp))).q1 for g in indices)
     labels = tuple(g.label for g in grasps.grasps)
-    return ExternalInput(mesh, contacts, indices, labels, fit, q1, grasps, radius)
+    return ExternalInput(mesh, contacts, indices, labels, fit, q1, grasps, radius, tuple(poses))
 
 
 def evaluate_grasps(
@@ -270,6 +299,7 @@ def evaluate_grasps(
     progress: bool = False,
     max_grasps: int | None = None,
     source: dict[str, Any] | None = None,
+    tips: bool = False,
 ) -> SimResult:
     """Simulate grasps from any planner, with ogcp's Q1 conventions and physics.
 
@@ -287,6 +317,8 @@ def evaluate_grasps(
         progress: Show progress bars on stderr.
         max_grasps: Simulate at most this many grasps, in the given order.
         source: Description of a given ``mesh``, recorded as the result's object.
+        tips: Simulate fingertip spheres even when the record names a hand (its posed grasps
+            then need contacts, or give their pads' points).
 
     Returns:
         The ``ogcp.sim/2`` result; its ``object["external"]`` holds each grasp's label, method,
@@ -316,7 +348,16 @@ def evaluate_grasps(
     if decomposition is not None and not isinstance(decomposition, DecompositionSettings):
         decomposition = DecompositionSettings(**dict(decomposition))
     radius = tip_radius(mesh, settings.scaled(object_diagonal(mesh)))
-    given = external_input(mesh, external, radius, on_surface, source)
-    evaluator = GraspEvaluator(settings, decomposition, progress=progress)
-    result = evaluator.evaluate(mesh, given.contacts, given.grasps, given.labels)
+    kinematics = setup = None
+    if external.hand_spec is not None:
+        from ogcp.planner.hands.kinematics import HandKinematics
+        from ogcp.planner.hands.registry import resolve_hand
+        from ogcp.sim_eval.hand.trial import HandSetup
+
+        kinematics = HandKinematics(resolve_hand(external.hand_spec))
+        setup = None if tips else HandSetup.of(kinematics)
+    given = external_input(mesh, external, radius, on_surface, source, kinematics)
+    evaluator = GraspEvaluator(settings, decomposition, progress=progress, hand=setup)
+    poses = given.poses if setup is not None else None
+    result = evaluator.evaluate(mesh, given.contacts, given.grasps, given.labels, poses=poses)
     return dataclasses.replace(result, object={**result.object, "external": given.record(on_surface)})

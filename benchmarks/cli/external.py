@@ -88,8 +88,8 @@ def run_external(
 
     Args:
         args: The ``evaluate`` command's arguments: ``plan`` (the grasps file), ``max_grasps``,
-            ``output``, ``json``, ``render``, and ``on_surface`` if the command has that flag
-            (default ``project``).
+            ``output``, ``json``, ``render``, ``tips`` (fingertips even for a record that names
+            a hand), and ``on_surface`` if the command has that flag (default ``project``).
         settings: The simulation settings built from the same flags.
         decomposition: The decomposition settings built from them.
         summary: The table of an ``ogcp.sim/2`` record, printed after the grasps' own lines.
@@ -116,6 +116,7 @@ def run_external(
         on_surface=getattr(args, "on_surface", None) or ON_SURFACE_CHOICES[0],
         progress=sys.stderr.isatty(),
         max_grasps=getattr(args, "max_grasps", None),
+        tips=bool(getattr(args, "tips", False)),
     )
     data = result.to_dict()
     if args.output is not None:

@@ -1,6 +1,8 @@
-"""Fig. 10: each plan's hand on its best reachable grasp, for any hand.
+"""Fig. 10: each plan's hand on its best reachable grasp, for any hand: as it settled in simulation, else fitted.
 
-The plan record's ``hand`` block holds the reachability model's nearest sampled configuration and
+A cell simulated with its hand (a suite with ``simulate``) records the hand as it settled on the
+object (``hand.settled_joint_angles`` and the palm pose): the figure draws that. Otherwise the plan
+record's ``hand`` block holds the reachability model's nearest sampled configuration and
 the contact each finger takes (:class:`ogcp.planner.records.plan.PlanHand`); it holds no palm pose,
 since the model matches the pads' rigid invariants, not their place. The figure fits the hand to
 the contacts (:func:`ogcp.sim_eval.hand.fit.fit_hand`: joint angles within their limits and the
@@ -25,7 +27,8 @@ from ogcp.planner.hands.reachability import HandReachability
 from ogcp.planner.hands.registry import resolve_hand
 from ogcp.planner.infra.errors import OgcpError
 from ogcp.planner.records.plan import PlanHand
-from ogcp.sim_eval.hand.fit import FitScene, HandFit, fit_hand
+from ogcp.sim_eval.hand.fit import HandFit, fit_hand, measure_pose
+from ogcp.sim_eval.hand.fit_scene import FitScene
 from ogcp.sim_eval.hand.geometry import posed_triangles
 from ogcp.sim_eval.plan_input import PlanInput
 
@@ -52,10 +55,12 @@ class PanelFit:
     Attributes:
         title: The panel's problem and cell.
         fit: The pose that is drawn; its ``residuals`` are per chosen finger [m].
+        settled: Whether the pose is the one the hand settled in, in simulation (else fitted).
     """
 
     title: str
     fit: HandFit
+    settled: bool = False
 
 
 #: The hand fits of the last figure's panels, in panel order.
@@ -138,7 +143,8 @@ def fig10_hand_grasps(data: RunData, notes: list[str] | None = None) -> Figure:
     HAND_FITS.clear()
     for ax, (cell, hand, rebuilt, kinematics) in zip(axes, hands, strict=True):
         started = time.perf_counter()
-        posed = draw_hand(ax, rebuilt, hand, kinematics, method_colour(cell.method), pixels)
+        settled = settled_pose(cell, hand)
+        posed = draw_hand(ax, rebuilt, hand, kinematics, method_colour(cell.method), pixels, settled)
         RENDER_SECONDS.append(time.perf_counter() - started)
         HAND_FITS.append(dataclasses.replace(posed, title=f"{names[cell.problem]}: {cell.label}"))
         quality = f", $Q_1$={cell.q1:.3f}" if cell.q1 is not None else ""
@@ -147,9 +153,49 @@ def fig10_hand_grasps(data: RunData, notes: list[str] | None = None) -> Figure:
 
 
 def fit_caption(posed: PanelFit) -> str:
-    """One short line on the drawn pose: the largest pad distance from its contact, and collisions."""
+    """One short line on the drawn pose: settled or fitted, the largest pad distance from its contact, collisions."""
     clash = ", links touch" if posed.fit.self_penetration > 0 else ""
-    return f"pads within {posed.fit.residuals.max() * 1e3:.1f} mm{clash}"
+    how = "settled" if posed.settled else "fitted"
+    return f"{how}, pads within {posed.fit.residuals.max() * 1e3:.1f} mm{clash}"
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class SettledHand:
+    """The hand as it settled in simulation.
+
+    Attributes:
+        pose: Joint angles (J,), palm rotation (3, 3) and palm position (3,) [m].
+        finger_contacts: The contact each chosen finger took, in the fingers' order.
+    """
+
+    pose: tuple[np.ndarray, np.ndarray, np.ndarray]
+    finger_contacts: tuple[int, ...]
+
+
+def settled_pose(cell: CellData, hand: PlanHand) -> SettledHand | None:
+    """The hand as it settled on the cell's grasp in simulation, or None when the cell was not
+    simulated with its hand (or its record lacks the pose)."""
+    if cell.simulation is None:
+        return None
+    wanted = sorted(int(i) for i in hand.finger_contacts)
+    for grasp in cell.simulation.grasps:
+        block = grasp.hand or {}
+        if grasp.grasp is None or sorted(grasp.grasp) != wanted or "settled_joint_angles" not in block:
+            continue
+        try:
+            angles, rotation, position = (
+                np.asarray(block[k], dtype=float) for k in ("settled_joint_angles", "palm_rotation", "palm_position")
+            )
+            order = tuple(int(i) for i in block.get("finger_contacts") or hand.finger_contacts)
+        except (KeyError, TypeError, ValueError):
+            return None
+        if (
+            rotation.shape == (3, 3)
+            and position.shape == (3,)
+            and np.isfinite(np.concatenate([angles, position])).all()
+        ):
+            return SettledHand((angles, rotation, position), order)
+    return None
 
 
 def fitted(kinematics: HandKinematics, hand: PlanHand, rebuilt: PlanInput) -> HandFit:
@@ -178,7 +224,13 @@ def fitted(kinematics: HandKinematics, hand: PlanHand, rebuilt: PlanInput) -> Ha
 
 
 def draw_hand(
-    ax: Axes, rebuilt: PlanInput, hand: PlanHand, kinematics: HandKinematics, colour: str, pixels: int = 800
+    ax: Axes,
+    rebuilt: PlanInput,
+    hand: PlanHand,
+    kinematics: HandKinematics,
+    colour: str,
+    pixels: int = 800,
+    settled: SettledHand | None = None,
 ) -> PanelFit:
     """Draw the object, the grasp's contacts and the fitted hand into ``ax``.
 
@@ -189,13 +241,22 @@ def draw_hand(
         kinematics: The hand, compiled.
         colour: Colour of the grasp's contacts.
         pixels: Side of the square rendered image [px].
+        settled: The hand as it settled in simulation (:func:`settled_pose`); None: fitted here.
 
     Returns:
         The drawn pose (title left empty).
     """
     mesh, contacts = rebuilt.mesh, rebuilt.contacts
-    fit = fitted(kinematics, hand, rebuilt)
     points, normals = contacts.positions[list(hand.finger_contacts)], contacts.normals[list(hand.finger_contacts)]
+    if settled is not None and len(settled.pose[0]) == len(kinematics.joint_names):
+        names = hand.fingers or kinematics.descriptor.finger_names[: len(points)]
+        fingers = kinematics.descriptor.choose_fingers(len(points), names)
+        order = list(settled.finger_contacts)
+        fit = measure_pose(
+            FitScene(kinematics), fingers, contacts.positions[order], contacts.normals[order], settled.pose
+        )
+    else:
+        settled, fit = None, fitted(kinematics, hand, rebuilt)
     scene = FitScene(kinematics)
     scene.pose(fit.joint_angles, fit.rotation, fit.translation)
     vertices, faces = posed_triangles(scene.model, scene.data, scene.hand.geoms)
@@ -212,4 +273,4 @@ def draw_hand(
     ax.set_ylim(pixels, 0)
     ax.set_aspect("equal")
     ax.axis("off")
-    return PanelFit("", fit)
+    return PanelFit("", fit, settled is not None)

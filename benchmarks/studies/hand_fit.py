@@ -1,15 +1,21 @@
-"""Grasps planned with a hand: how many the fit realises, and how many of those hold when the hand closes.
+"""Grasps planned with a hand: how many the fit realises, how many hold when the hand closes, and the same grasps with fingertips.
 
 Run: ``python -m ogcp.benchmarks.studies.hand_fit [--cases sdh:box:3,sdh:donut:3,parallel_gripper:box:2]
-[--contacts 100] [--seeds 6] [--diagonal 0.2] [--directions 16]``.
+[--contacts 100] [--seeds 6] [--diagonal 0.2] [--directions 16] [--out DIR]``.
 
 Per case (hand, object, m) and contact seed: sample the contacts, plan the A* optimum under the hand
 (``--hand``), fit the hand to it against the object's convex parts (the CoACD decomposition,
 cached; one hull for the box and the sphere) from its nearest samples until a fit is realised, and
 close the hand on the realised ones and test them (:mod:`ogcp.sim_eval.hand.trial`, ``--directions``
-random directions plus the axes). Printed per case: the share of the model's accepted grasps
-among all (seed 0), fits realised, the median worst pad residual, grasps valid after closing, the
-median fidelity of the valid ones, the most frequent reason of the invalid ones, seconds per grasp.
+random directions plus the axes); the same grasp is also tested with fingertip spheres. Printed
+per case: the share of the model's accepted grasps among all (seed 0), fits realised, the median
+worst pad residual, grasps valid after closing, the median fidelity of the valid ones, the most
+frequent reason of the invalid ones, seconds per hand grasp, and the tips' side: grasps valid
+with fingertips, how many of those the hand realised and held, the tips' median fidelity, and the
+median ratio of a valid grasp's hand trial (fit, close, protocol) to its fingertip trial, timed
+in the same run.
+With ``--out``, every grasp's row goes to ``DIR/hand_fit.json`` and the tips-versus-hand figure
+(:func:`ogcp.benchmarks.plots.tips_hand.fig_tips_vs_hand`) to ``DIR/tips_vs_hand.{pdf,png}``.
 """
 
 from __future__ import annotations
@@ -17,8 +23,11 @@ from __future__ import annotations
 import argparse
 import collections
 import itertools
+import json
 import statistics
 import time
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -32,62 +41,113 @@ from ogcp.sim_eval.settings import SimSettings
 CONVEX = ("box", "sphere")
 
 
-def run_case(hand: str, name: str, m: int, args: argparse.Namespace) -> str:
+def _fidelity(result: Any) -> float | None:
+    value = float(result.median_fidelity)
+    return value if result.valid and np.isfinite(value) else None
+
+
+def run_case(hand: str, name: str, m: int, args: argparse.Namespace) -> dict[str, Any]:
+    """Every seed's grasp of one case, tested with the hand and with fingertips."""
     mesh, _ = resolve_object(name, args.diagonal)
     model = HandReachability(hand)
     setup = HandSetup(HandKinematics(model.descriptor), model)
     method = "convex_hull" if name in CONVEX else "coacd"
     parts = decompose(mesh, DecompositionSettings(method=method), name=name)
-    evaluator = GraspEvaluator(
-        SimSettings(directions=args.directions), DecompositionSettings(method=method), hand=setup
-    )
+    settings = SimSettings(directions=args.directions)
+    with_hand = GraspEvaluator(settings, DecompositionSettings(method=method), hand=setup)
+    with_tips = GraspEvaluator(settings, DecompositionSettings(method=method))
     first = sample_contacts(mesh, n=args.contacts, seed=0)
     grasps = np.array(list(itertools.combinations(range(args.contacts), m)))
     accepted = float(model.accepts_many(grasps, first).mean()) if len(grasps) <= 2_000_000 else float("nan")
-    realised, residuals, valid, fidelities, seconds = 0, [], 0, [], []
-    reasons: collections.Counter[str] = collections.Counter()
+    rows = []
     for seed in range(args.seeds):
         contacts = sample_contacts(mesh, n=args.contacts, seed=seed)
-        optimum = GraspPlanner(constraints=[model]).plan(contacts, m)
+        grasp = tuple(GraspPlanner(constraints=[model]).plan(contacts, m).grasp)
         started = time.perf_counter()
-        (result,) = evaluator.evaluate(mesh, contacts, [tuple(optimum.grasp)], parts=parts).grasps
-        seconds.append(time.perf_counter() - started)
-        fit = result.hand.get("fit", {})
-        if fit.get("realised"):
-            realised += 1
-            residuals.append(max(result.hand["fit_residuals"]))
-        if result.valid:
-            valid += 1
-            if np.isfinite(result.median_fidelity):
-                fidelities.append(result.median_fidelity)
-        elif fit.get("realised"):
-            gate = [r["gate"] for r in result.invalid_reasons] or (["pads"] if result.error is None else ["error"])
-            reasons[gate[0]] += 1
-    residual = f"{statistics.median(residuals) * 1e3:.3f}" if residuals else "-"
-    fidelity = f"{statistics.median(fidelities):.2f}" if fidelities else "-"
+        (held,) = with_hand.evaluate(mesh, contacts, [grasp], parts=parts).grasps
+        seconds = time.perf_counter() - started
+        started = time.perf_counter()
+        (tips,) = with_tips.evaluate(mesh, contacts, [grasp], parts=parts).grasps
+        tips_seconds = time.perf_counter() - started
+        fit = held.hand.get("fit", {})
+        reason = None
+        if fit.get("realised") and not held.valid:
+            gates = [r["gate"] for r in held.invalid_reasons] or (["pads"] if held.error is None else ["error"])
+            reason = gates[0]
+        rows.append(
+            {
+                "seed": seed,
+                "grasp": list(grasp),
+                "q1": held.q1,
+                "realised": bool(fit.get("realised")),
+                "worst_residual": max(held.hand["fit_residuals"]) if fit.get("realised") else None,
+                "hand_valid": bool(held.valid),
+                "hand_fidelity": _fidelity(held),
+                "invalid_because": reason,
+                "hand_seconds": seconds,
+                "tips_valid": bool(tips.valid),
+                "tips_fidelity": _fidelity(tips),
+                "tips_seconds": tips_seconds,
+            }
+        )
+    return {"hand": hand, "object": name, "m": m, "accepted": accepted, "rows": rows}
+
+
+def _median(values: list[float], digits: int, scale: float = 1.0) -> str:
+    return f"{statistics.median(values) * scale:.{digits}f}" if values else "-"
+
+
+def table_row(case: dict[str, Any]) -> str:
+    """One markdown row of a case (the columns of :data:`HEADER`)."""
+    rows = case["rows"]
+    realised = [r for r in rows if r["realised"]]
+    valid = [r for r in realised if r["hand_valid"]]
+    reasons = collections.Counter(r["invalid_because"] for r in realised if r["invalid_because"])
     common = ", ".join(f"{gate} {count}" for gate, count in reasons.most_common(2)) or "-"
+    tips = [r for r in rows if r["tips_valid"]]
     return (
-        f"| {hand}, {name}, {m} | {accepted:.2%} | {realised} of {args.seeds} | {residual} | {valid} of {realised} "
-        f"| {fidelity} | {common} | {statistics.median(seconds):.1f} |"
+        f"| {case['hand']}, {case['object']}, {case['m']} | {case['accepted']:.2%} | {len(realised)} of {len(rows)} "
+        f"| {_median([r['worst_residual'] for r in realised], 3, 1e3)} | {len(valid)} of {len(realised)} "
+        f"| {_median([r['hand_fidelity'] for r in valid if r['hand_fidelity'] is not None], 2)} | {common} "
+        f"| {_median([r['hand_seconds'] for r in rows], 1)} | {len(tips)} of {len(rows)} "
+        f"| {sum(r['realised'] for r in tips)}, {sum(r['hand_valid'] for r in tips)} "
+        f"| {_median([r['tips_fidelity'] for r in tips if r['tips_fidelity'] is not None], 2)} "
+        f"| {_median([r['hand_seconds'] / r['tips_seconds'] for r in valid], 1)} |"
     )
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+HEADER = (
+    "| hand, object, m | accepted (seed 0) | A* optima realised | median worst residual [mm] | valid when closed "
+    "| median fidelity | invalid because | s per grasp | valid with tips | of those: realised, held "
+    "| tips' median fidelity | hand / tips time (valid) |\n|---|---|---|---|---|---|---|---|---|---|---|---|"
+)
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(description=(__doc__ or "").split("\n")[0])
     parser.add_argument("--cases", default="sdh:box:3,sdh:sphere:3,sdh:donut:3,parallel_gripper:box:2")
     parser.add_argument("--contacts", type=int, default=100)
     parser.add_argument("--seeds", type=int, default=6)
     parser.add_argument("--diagonal", type=float, default=0.2)
     parser.add_argument("--directions", type=int, default=16)
-    args = parser.parse_args()
-    print(
-        "| hand, object, m | accepted (seed 0) | A* optima realised | median worst residual [mm] | valid when closed "
-        "| median fidelity | invalid because | s per grasp |"
-    )
-    print("|---|---|---|---|---|---|---|---|")
-    for case in args.cases.split(","):
-        hand, name, m = case.split(":")
-        print(run_case(hand, name, int(m), args), flush=True)
+    parser.add_argument("--out", type=Path, default=None, help="write hand_fit.json and the tips-versus-hand figure")
+    args = parser.parse_args(argv)
+    print(HEADER)
+    cases = []
+    for spec in args.cases.split(","):
+        hand, name, m = spec.rsplit(":", 2)
+        cases.append(run_case(hand, name, int(m), args))
+        print(table_row(cases[-1]), flush=True)
+    if args.out is not None:
+        from ogcp.benchmarks.plots.style import save_figure
+        from ogcp.benchmarks.plots.tips_hand import fig_tips_vs_hand
+
+        args.out.mkdir(parents=True, exist_ok=True)
+        (args.out / "hand_fit.json").write_text(
+            json.dumps({"args": vars(args) | {"out": str(args.out)}, "cases": cases})
+        )
+        for path in save_figure(fig_tips_vs_hand(cases), args.out, "tips_vs_hand"):
+            print(f"wrote {path}")
 
 
 if __name__ == "__main__":

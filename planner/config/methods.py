@@ -29,7 +29,7 @@ HEURISTICS = (*SUCCESSORS, "none")
 DEFAULT_WASTAR_EPS = 0.4
 #: Built-in hands a grasp can be constrained to by name (ogcp.planner.hands.registry has their
 #: descriptors); any other hand is named by the path of its ogcp.hand/1 descriptor (*.toml).
-HANDS = ("sdh", "parallel_gripper")
+HANDS = ("sdh", "shadow_hand", "parallel_gripper")
 #: Largest reachability residual of a reachable grasp (normalised code distance).
 DEFAULT_HAND_THRESHOLD = 1.0
 #: Grasps per chunk of exhaustive search (the unit of parallel work and of checkpoints).

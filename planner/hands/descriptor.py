@@ -6,6 +6,7 @@ A descriptor is a TOML file beside the hand's model::
     name = "my_gripper"
     mjcf = "gripper.xml"          # relative to this file; .xml (MJCF) or .urdf
     palm = "palm"                 # body the simulated wrist holds
+    # fetched = "shadow_hand"     # optional: mjcf is inside this hand's `ogcp assets fetch` folder
     [[fingers]]
     name = "left"
     tip_body = "left_tip"
@@ -36,6 +37,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from ogcp.planner.hands.fetch import fetched_folder
 from ogcp.planner.infra.errors import OgcpError
 
 SCHEMA = "ogcp.hand/1"
@@ -44,7 +46,7 @@ MODEL_SUFFIXES = (".xml", ".urdf")
 UNIT_TOLERANCE = 1e-3
 #: Largest pad rounding and pad offset accepted [m]: a hand bigger than 2 m is a unit error.
 MAX_LENGTH = 2.0
-_TOP_KEYS = ("schema", "name", "mjcf", "palm", "fingers", "actuation")
+_TOP_KEYS = ("schema", "name", "mjcf", "palm", "fingers", "actuation", "fetched")
 _FINGER_KEYS = ("name", "tip_body", "tip_offset", "pad_normal", "tip_radius", "joints")
 _ACTUATION_KEYS = ("kp", "force_range", "kv")
 #: Defaults of ``[actuation]`` (DexGraspBench's gains for the Shadow hand, a 2 N·m limit).
@@ -201,7 +203,7 @@ def load_descriptor(path: str | Path) -> HandDescriptor:
     name = _text(table, "name", where)
     palm = _text(table, "palm", where)
     model_name = _text(table, "mjcf", where)
-    model_path = (path.parent / model_name).resolve()
+    model_path = (_model_folder(table, where, path) / model_name).resolve()
     if model_path.suffix.lower() not in MODEL_SUFFIXES:
         raise OgcpError(f"{where}: mjcf = {model_name!r} must be an MJCF (.xml) or URDF (.urdf) file")
     if not model_path.is_file():
@@ -222,6 +224,17 @@ def load_descriptor(path: str | Path) -> HandDescriptor:
         sha256=hashlib.sha256(raw).hexdigest(),
         model_sha256=hashlib.sha256(model_path.read_bytes()).hexdigest(),
     )
+
+
+def _model_folder(table: Mapping[str, Any], where: str, path: Path) -> Path:
+    """Where ``mjcf`` is taken from: the descriptor's folder, or a fetched hand's verified cache folder."""
+    if "fetched" not in table:
+        return path.parent
+    name = _text(table, "fetched", where)
+    try:
+        return fetched_folder(name)
+    except OgcpError as exc:
+        raise OgcpError(f"{where}: fetched = {name!r}: {exc}") from None
 
 
 def _known_keys(table: Mapping[str, Any], known: Sequence[str], where: str) -> None:

@@ -286,10 +286,12 @@ class HandReachability:
         return Reach(float(distance[best]), tuple(float(v) for v in angles), assignments[best], names)
 
     def starts(self, grasp: Sequence[int], contacts: ContactSet, count: int) -> list[Reach]:
-        """The ``count`` nearest samples over every assignment, nearest first: starts for a fit.
+        """``count`` near samples, each assignment's nearest first: starts for a fit.
 
         A fit from the single nearest sample can end in a local minimum (a finger through the
-        object); the next samples, often under another assignment, are other ways to hold it.
+        object, a pad a few millimetres short); the sampled code is approximate, so the nearest
+        samples of one assignment often share its failure. The starts therefore take every
+        assignment's nearest sample (assignments by that distance), then every second nearest, etc.
         """
         m = len(grasp)
         model = self._model(m)
@@ -299,7 +301,8 @@ class HandReachability:
         k = min(count, len(model.rows))
         distance, nearest = model.tree.query(codes, k=k)
         distance, nearest = distance.reshape(len(assignments), k), nearest.reshape(len(assignments), k)
-        order = np.argsort(distance, axis=None, kind="stable")[:count]
+        ranked = np.argsort(distance[:, 0], kind="stable")
+        order = [int(a) * k + j for j in range(k) for a in ranked][:count]
         names = tuple(self.descriptor.finger_names[f] for f in self.chosen(m))
         found = []
         for flat in order:

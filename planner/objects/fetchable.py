@@ -11,20 +11,24 @@ from __future__ import annotations
 
 import dataclasses
 import re
-import subprocess
-import sys
 import tomllib
-import zipfile
-from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path, PurePosixPath
-from typing import Any
 
+from ogcp.planner.infra import wheels
 from ogcp.planner.infra.assets import asset_path
 from ogcp.planner.infra.errors import OgcpError
+from ogcp.planner.infra.wheels import check_table_keys, pip_target_args, read_member
 
-# The largest mesh we extract; guards against a corrupt or hostile archive inflating in memory.
-MAX_MEMBER_BYTES = 256 << 20
+__all__ = [
+    "FETCHABLE_OBJECTS",
+    "FETCH_GROUPS",
+    "PAPER_OBJECTS",
+    "FetchableObject",
+    "download_wheel",
+    "pip_target_args",
+    "read_member",
+]
 
 
 @dataclass(frozen=True)
@@ -70,37 +74,6 @@ class FetchableObject:
         return f"{self.package}=={self.version}"
 
 
-def pip_target_args(wheel: str) -> list[str]:
-    """pip options that make ``pip download`` choose a wheel with the tags of ``wheel``.
-
-    A pure-python wheel (``py3-none-any``) needs none. For a platform wheel the interpreter,
-    ABI and platform tags are pinned so that the same file is fetched on any machine.
-
-    Args:
-        wheel: Wheel file name, ``NAME-VERSION[-BUILD]-PYTHON-ABI-PLATFORM.whl``.
-
-    Returns:
-        Extra command-line options for ``pip download``.
-
-    Raises:
-        OgcpError: If ``wheel`` is not a wheel file name.
-    """
-    parts = wheel.removesuffix(".whl").split("-")
-    if not wheel.endswith(".whl") or len(parts) < 5:
-        raise OgcpError(f"not a wheel file name: {wheel!r}")
-    python, abi, platform = parts[-3], parts[-2], parts[-1]
-    if platform == "any":
-        return []
-    implementation, digits = python[:2], python[2:]
-    if implementation != "cp" or not digits.isdigit():
-        raise OgcpError(f"cannot pin interpreter tag {python!r} of wheel {wheel!r}")
-    args = ["--implementation", implementation, "--python-version", f"{digits[0]}.{digits[1:]}", "--abi", abi]
-    # A compressed tag set such as manylinux_2_17_x86_64.manylinux2014_x86_64 names one platform twice.
-    for tag in platform.split("."):
-        args += ["--platform", tag]
-    return args
-
-
 MANIFEST = "objects.toml"
 """The manifest of fetchable objects, inside ``assets/`` (see :func:`ogcp.planner.infra.assets.asset_path`)."""
 MANIFEST_SCHEMA_VERSION = 1
@@ -124,23 +97,13 @@ class Manifest:
     paper_objects: tuple[str, ...]
 
 
-def _check_keys(table: dict[str, Any], required: Iterable[str], where: str) -> None:
-    required = tuple(required)
-    missing = [key for key in required if key not in table]
-    if missing:
-        raise OgcpError(f"{where}: missing key {missing[0]!r}")
-    unknown = sorted(set(table) - set(required))
-    if unknown:
-        raise OgcpError(f"{where}: unknown key {unknown[0]!r}; valid keys: {', '.join(required)}")
-
-
 def _parse_object(name: str, table: object, where: str) -> FetchableObject:
     if not isinstance(table, dict):
         raise OgcpError(f"{where}: expected a table, got {table!r}")
     if not _NAME.fullmatch(name):
         raise OgcpError(f"{where}: object names are lower-case letters, digits, '-' and '_'")
     fields = [field for field in _FIELDS if field != "name"]
-    _check_keys(table, fields, where)
+    check_table_keys(table, fields, where)
     for field in fields:
         expected = _FIELD_TYPES.get(field, str)
         value = table[field]
@@ -185,7 +148,7 @@ def parse_manifest(text: str, source: str = MANIFEST) -> Manifest:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise OgcpError(f"{source}: invalid TOML: {exc}") from exc
-    _check_keys(data, ("schema_version", "paper_objects", "objects"), source)
+    check_table_keys(data, ("schema_version", "paper_objects", "objects"), source)
     if data["schema_version"] != MANIFEST_SCHEMA_VERSION:
         raise OgcpError(f"{source}: schema_version: expected {MANIFEST_SCHEMA_VERSION}, got {data['schema_version']!r}")
     tables = data["objects"]
@@ -236,60 +199,5 @@ FETCH_GROUPS: dict[str, tuple[str, ...]] = {
 
 
 def download_wheel(entry: FetchableObject, dest: Path, progress: bool = False) -> Path:
-    """Download the pinned wheel of ``entry`` with pip into ``dest`` (no dependencies, no build).
-
-    Args:
-        entry: Registry entry naming package, version and wheel tags.
-        dest: Empty folder that receives the wheel.
-        progress: Let pip print its progress bar on our stderr instead of capturing its output.
-
-    Returns:
-        Path of the downloaded wheel.
-
-    Raises:
-        OgcpError: If pip fails or does not produce exactly one wheel.
-    """
-    command = [
-        sys.executable,
-        "-m",
-        "pip",
-        "download",
-        "--no-deps",
-        "--only-binary=:all:",
-        "--disable-pip-version-check",
-        "--dest",
-        str(dest),
-        *pip_target_args(entry.wheel),
-        entry.requirement,
-    ]
-    # With progress, pip's bar and messages go to our stderr (stdout would corrupt --json output).
-    stdout, stderr = (sys.stderr, None) if progress else (subprocess.PIPE, subprocess.PIPE)
-    done = subprocess.run(command, stdout=stdout, stderr=stderr, text=True, check=False)
-    if done.returncode != 0:
-        lines = [line.strip() for line in (done.stderr or "").splitlines() if line.strip()]
-        errors = [line for line in lines if line.startswith("ERROR")]
-        reason = (errors or lines or ["see pip's messages above"])[-1]
-        raise OgcpError(f"pip could not download {entry.requirement} (exit {done.returncode}): {reason}")
-    wheels = sorted(dest.glob("*.whl"))
-    if len(wheels) != 1:
-        raise OgcpError(f"pip download of {entry.requirement} gave {len(wheels)} wheels in {dest}, expected 1")
-    return wheels[0]
-
-
-def read_member(wheel: Path, member: str) -> bytes:
-    """Bytes of one file of a wheel, found at ``member`` or under the wheel's ``.data`` folders.
-
-    Raises:
-        OgcpError: If the wheel is not a zip archive, or holds the member zero or several times.
-    """
-    pattern = re.compile(r"(?:[^/]+\.data/(?:purelib|platlib)/)?" + re.escape(member))
-    try:
-        with zipfile.ZipFile(wheel) as archive:
-            found = [info for info in archive.infolist() if pattern.fullmatch(info.filename)]
-            if len(found) != 1:
-                raise OgcpError(f"{wheel.name} holds {len(found)} files named {member}, expected 1")
-            if found[0].file_size > MAX_MEMBER_BYTES:
-                raise OgcpError(f"{wheel.name}: {member} is {found[0].file_size} bytes, more than a mesh should be")
-            return archive.read(found[0])
-    except (zipfile.BadZipFile, OSError) as exc:
-        raise OgcpError(f"cannot read {wheel.name} as a wheel: {exc}") from exc
+    """Download the pinned wheel of ``entry`` with pip into ``dest`` (see :func:`ogcp.planner.infra.wheels.download_wheel`)."""
+    return wheels.download_wheel(entry.requirement, entry.wheel, dest, progress)

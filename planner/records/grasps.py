@@ -10,8 +10,9 @@ same physics and the same metrics as its own methods (``ogcp.sim_eval.evaluate_g
 Positions are in the object's frame [m]; normals are unit vectors pointing *into* the object
 (ogcp's convention). Every field is checked here, and a bad one is refused in one line that
 names its JSON path (``grasps[3].contacts[1].normal: expected 3 finite numbers, got ...``).
-Keys this reader does not know are ignored, so a planner may add its own (joint angles, a hand
-pose). docs/external_grasps.md describes every field.
+Keys this reader does not know are ignored, so a planner may add its own. A record that names a
+``hand`` may give each grasp a palm pose and joint angles instead of, or with, its contacts
+(:mod:`ogcp.planner.records.hand_poses`). docs/external_grasps.md describes every field.
 """
 
 from __future__ import annotations
@@ -30,9 +31,11 @@ from numpy.typing import ArrayLike, NDArray
 
 from ogcp.planner.grasp.contact_model import torsion_of
 from ogcp.planner.grasp.defaults import CONE_EDGES, DEFAULT_CONE_EDGES, DIAGONAL, MU
+from ogcp.planner.hands.registry import is_descriptor_path
 from ogcp.planner.infra.atomic import read_json, write_json_atomic
 from ogcp.planner.infra.errors import OgcpError
 from ogcp.planner.objects import BUILTIN_OBJECTS, FETCHABLE_OBJECTS, file_sha256, resolve_object
+from ogcp.planner.records.hand_poses import HandPose, parse_hand_name, parse_hand_pose
 
 GRASPS_SCHEMA = "ogcp.grasps/1"
 #: A normal's length may differ from 1 by this much; it is then normalised. Farther off, it is
@@ -87,6 +90,8 @@ class ExternalGrasp:
         label: Name of the grasp (need not be unique; default ``grasp-<i>``).
         method: The planner that made it; None: the record's top-level ``method``.
         score: The planner's own score of it (any scale), None when not given.
+        hand: The hand's palm pose and joint angles (a record that names a hand); its contacts
+            may then be absent (``positions`` of shape (0, 3)): the pads' are used.
     """
 
     positions: NDArray[np.float64]
@@ -94,6 +99,7 @@ class ExternalGrasp:
     label: str
     method: str | None = None
     score: float | None = None
+    hand: HandPose | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """JSON form of the grasp (absent method and score left out)."""
@@ -102,9 +108,13 @@ class ExternalGrasp:
             entry["method"] = self.method
         if self.score is not None:
             entry["score"] = self.score
-        entry["contacts"] = [
-            {"position": p.tolist(), "normal": n.tolist()} for p, n in zip(self.positions, self.normals, strict=True)
-        ]
+        if len(self.positions):
+            entry["contacts"] = [
+                {"position": p.tolist(), "normal": n.tolist()}
+                for p, n in zip(self.positions, self.normals, strict=True)
+            ]
+        if self.hand is not None:
+            entry["hand"] = self.hand.to_dict()
         return entry
 
 
@@ -127,6 +137,8 @@ class ExternalGrasps:
         path: The file the record was read from, None when not read from a file.
         torsional_friction: Torsional friction coefficient of soft fingers [m] (the record's
             ``contact_model = "soft"`` and ``torsional_friction``); 0 = hard fingers.
+        hand: The hand of the grasps' ``hand`` blocks: a built-in name or a descriptor path
+            (relative to :attr:`base`); None: fingertip grasps.
     """
 
     grasps: tuple[ExternalGrasp, ...]
@@ -139,6 +151,7 @@ class ExternalGrasps:
     base: Path | None = None
     path: Path | None = None
     torsional_friction: float = 0.0
+    hand: str | None = None
 
     def method_of(self, grasp: ExternalGrasp) -> str | None:
         """The planner of a grasp: its own ``method``, else the record's."""
@@ -150,6 +163,14 @@ class ExternalGrasps:
         if self.mesh is None or is_object_name(self.mesh):
             return self.mesh
         path = Path(self.mesh)
+        return str(path if path.is_absolute() or self.base is None else self.base / path)
+
+    @property
+    def hand_spec(self) -> str | None:
+        """The hand as ``--hand`` takes it: a built-in name, or a descriptor path resolved against ``base``."""
+        if self.hand is None or not is_descriptor_path(self.hand):
+            return self.hand
+        path = Path(self.hand)
         return str(path if path.is_absolute() or self.base is None else self.base / path)
 
     def load_object(self) -> tuple[trimesh.Trimesh, dict[str, object]]:
@@ -186,6 +207,8 @@ class ExternalGrasps:
             record.update(contact_model="soft", torsional_friction=self.torsional_friction)
         if self.method is not None:
             record["method"] = self.method
+        if self.hand is not None:
+            record["hand"] = self.hand
         record["grasps"] = [g.to_dict() for g in self.grasps]
         return record
 
@@ -227,11 +250,12 @@ class ExternalGrasps:
         )
         method = data.get("method")
         method = None if method is None else _text(where, "method", method)
+        hand = None if data.get("hand") is None else parse_hand_name(where, data["hand"])
         grasps = data.get("grasps")
         if not isinstance(grasps, list) or not grasps:
             raise OgcpError(f"{where}: grasps: expected a non-empty list of grasps, got {_short(grasps)}")
         return cls(
-            grasps=tuple(_grasp(where, i, g) for i, g in enumerate(grasps)),
+            grasps=tuple(_grasp(where, i, g, hand is not None) for i, g in enumerate(grasps)),
             mu=mu,
             cone_edges=cone_edges,
             mesh=mesh,
@@ -240,6 +264,7 @@ class ExternalGrasps:
             method=method,
             base=base,
             torsional_friction=torsion,
+            hand=hand,
         )
 
     @classmethod
@@ -302,8 +327,8 @@ def _optional(where: str, block: dict[str, Any], key: str, path: str) -> float |
     return float(value)
 
 
-def _grasp(where: str, index: int, data: Any) -> ExternalGrasp:
-    """One entry of ``grasps``, checked."""
+def _grasp(where: str, index: int, data: Any, with_hand: bool = False) -> ExternalGrasp:
+    """One entry of ``grasps``, checked (``with_hand``: the record names a hand)."""
     path = f"grasps[{index}]"
     if not isinstance(data, dict):
         raise OgcpError(f"{where}: {path}: expected an object with contacts, got {_short(data)}")
@@ -312,7 +337,16 @@ def _grasp(where: str, index: int, data: Any) -> ExternalGrasp:
     method = data.get("method")
     method = None if method is None else _text(where, f"{path}.method", method)
     score = _optional(where, data, "score", f"{path}.score")
+    hand = None
+    if data.get("hand") is not None:
+        if not with_hand:
+            raise OgcpError(f'{where}: {path}.hand: the record names no hand; add a top-level "hand"')
+        hand = parse_hand_pose(where, f"{path}.hand", data["hand"])
     contacts = data.get("contacts")
+    if hand is not None and contacts is None:
+        empty = np.empty((0, 3))
+        empty.setflags(write=False)
+        return ExternalGrasp(empty, empty, label, method, score, hand)
     if not isinstance(contacts, list) or len(contacts) < 2:
         count = f"{len(contacts)} contact(s)" if isinstance(contacts, list) else _short(contacts)
         raise OgcpError(f"{where}: {path}.contacts: expected a list of at least 2 contacts, got {count}")
@@ -334,7 +368,7 @@ def _grasp(where: str, index: int, data: Any) -> ExternalGrasp:
             )
     positions.setflags(write=False)
     normals.setflags(write=False)
-    return ExternalGrasp(positions, normals, label, method, score)
+    return ExternalGrasp(positions, normals, label, method, score, hand)
 
 
 def _unit(where: str, path: str, value: Any) -> NDArray[np.float64]:

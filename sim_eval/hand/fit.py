@@ -25,16 +25,13 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
-import mujoco
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
-from ogcp.planner.hands.kinematics import HandKinematics
 from ogcp.planner.infra.errors import OgcpError
-from ogcp.sim_eval.collision import Part
-from ogcp.sim_eval.hand.mount import MountedHand, attach_hand
+from ogcp.sim_eval.hand.fit_scene import FitScene
 
 #: Largest pad residual of a realised fit [m].
 RESIDUAL_TOLERANCE = 1e-3
@@ -133,86 +130,6 @@ def rigid_fit(source: ArrayLike, target: ArrayLike) -> tuple[NDArray[np.float64]
     d = np.sign(np.linalg.det(vt.T @ u.T)) or 1.0
     rotation = vt.T @ np.diag([1.0, 1.0, d]) @ u.T
     return rotation, ct - rotation @ cs
-
-
-class FitScene:
-    """The hand and the object's convex parts in one MuJoCo model, for kinematics and distances.
-
-    Args:
-        kinematics: The hand.
-        parts: The object's convex parts, each ``(vertices (v, 3) [m], faces (f, 3))``, in the
-            world frame; none: no collision terms.
-    """
-
-    def __init__(self, kinematics: HandKinematics, parts: Sequence[Part] = ()) -> None:
-        spec = mujoco.MjSpec()
-        # A free mount: MuJoCo never collides two bodies welded to the world, so a fixed palm
-        # would pass through a fixed object unseen.
-        attach_hand(spec, kinematics, free=True)
-        body = spec.worldbody.add_body(name="ogcp_object")
-        for k, (vertices, faces) in enumerate(parts):
-            spec.add_mesh(name=f"ogcp_part{k}", uservert=np.ravel(vertices).tolist(), userface=np.ravel(faces).tolist())
-            body.add_geom(name=f"ogcp_part{k}", type=mujoco.mjtGeom.mjGEOM_MESH, meshname=f"ogcp_part{k}")
-        self.model = spec.compile()
-        self.data = mujoco.MjData(self.model)
-        self.hand = MountedHand.find(self.model, kinematics)
-        self.kinematics = kinematics
-        self._mount_qpos = int(self.model.jnt_qposadr[self.model.body_jntadr[self.hand.mount]])
-        model = self.model
-        # Every hand geom collides with every other and with the object; nothing else does.
-        model.geom_contype[:] = 0
-        model.geom_conaffinity[:] = 0
-        self.object_geoms = np.array(
-            [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, f"ogcp_part{k}") for k in range(len(parts))],
-            dtype=np.intp,
-        )
-        for ids in (self.hand.geoms, self.object_geoms):
-            model.geom_contype[ids] = 1
-            model.geom_conaffinity[ids] = 1
-        model.body_contype[:] = 1
-        model.body_conaffinity[:] = 1
-        model.geom_margin[:] = 0.0
-        self._slot = {int(g): i for i, g in enumerate(self.hand.geoms)}
-        self._object = set(self.object_geoms.tolist())
-        designed = kinematics.designed_pairs()
-        names = self.hand.geom_names
-        self._designed = {
-            (int(a), int(b))
-            for i, a in enumerate(self.hand.geoms)
-            for j, b in enumerate(self.hand.geoms)
-            if tuple(sorted((names[i], names[j]))) in designed
-        }
-
-    def pose(self, angles: ArrayLike, rotation: NDArray[np.float64], translation: NDArray[np.float64]) -> None:
-        """Put the hand in a configuration with its palm at (rotation, translation); run kinematics."""
-        self.data.qpos[:] = self.model.qpos0
-        self.data.qpos[self._mount_qpos : self._mount_qpos + 3] = translation
-        self.data.qpos[self._mount_qpos + 3 : self._mount_qpos + 7] = _wxyz(rotation)
-        self.data.qpos[self.hand.qpos] = angles
-        mujoco.mj_kinematics(self.model, self.data)
-
-    def depths(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """Per solid hand geom, its depth inside the object and inside other links, each shape (G,) [m]."""
-        mujoco.mj_collision(self.model, self.data)
-        into_object = np.zeros(len(self.hand.geoms))
-        into_hand = np.zeros(len(self.hand.geoms))
-        for c in self.data.contact[: self.data.ncon]:
-            a, b, depth = int(c.geom1), int(c.geom2), -float(c.dist)
-            if depth <= 0:
-                continue
-            if a in self._object or b in self._object:
-                g = self._slot.get(b if a in self._object else a)
-                if g is not None:
-                    into_object[g] = max(into_object[g], depth)
-            elif (min(a, b), max(a, b)) not in self._designed and a in self._slot and b in self._slot:
-                for g in (self._slot[a], self._slot[b]):
-                    into_hand[g] = max(into_hand[g], depth)
-        return into_object, into_hand
-
-
-def _wxyz(rotation: NDArray[np.float64]) -> NDArray[np.float64]:
-    x, y, z, w = Rotation.from_matrix(rotation).as_quat()
-    return np.array([w, x, y, z])
 
 
 Pose = tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]
@@ -317,17 +234,20 @@ def fit_hand(
     else:
         rotation0, shift0 = np.asarray(palm[0], dtype=float), np.asarray(palm[1], dtype=float)
     pose_variables = 6 if palm is None else 0
+    # The fingers that touch nothing move only to clear a collision: without the collision terms
+    # they are not variables (a five-finger hand fitted by three fingers has half the columns).
+    moving = np.array([k for k in free if int(kin.joint_ids[k]) in chosen_joints], dtype=np.intp)
 
-    def unpack(x: NDArray[np.float64]) -> Pose:
+    def unpack(x: NDArray[np.float64], variables: NDArray[np.intp]) -> Pose:
         angles = q0.copy()
-        angles[free] = x[: len(free)]
+        angles[variables] = x[: len(variables)]
         if not pose_variables:
             return kin.complete(angles), rotation0, shift0
-        rotation = Rotation.from_rotvec(x[len(free) : len(free) + 3]).as_matrix() @ rotation0
-        return kin.complete(angles), rotation, shift0 + x[len(free) + 3 :]
+        rotation = _rotvec_matrix(x[len(variables) : len(variables) + 3]) @ rotation0
+        return kin.complete(angles), rotation, shift0 + x[len(variables) + 3 :]
 
-    def residual(x: NDArray[np.float64], collide: bool) -> NDArray[np.float64]:
-        pose = unpack(x)
+    def residual(x: NDArray[np.float64], variables: NDArray[np.intp], collide: bool) -> NDArray[np.float64]:
+        pose = unpack(x, variables)
         centre, pad = aim.centres(pose)
         parts = [
             (centre - aim.targets).ravel(),
@@ -339,16 +259,65 @@ def fit_hand(
             parts.append(COLLISION_WEIGHT * np.maximum(np.maximum(into_object, into_hand) - 0.5 * LINK_TOLERANCE, 0.0))
         return np.concatenate(parts)
 
-    low = np.concatenate([kin.limits[free, 0], np.full(pose_variables, -np.inf)])
-    high = np.concatenate([kin.limits[free, 1], np.full(pose_variables, np.inf)])
-    x = np.concatenate([q0[free], np.zeros(pose_variables)])
-    x = least_squares(residual, x, bounds=(low, high), args=(False,), method="trf", x_scale="jac").x
-    fit = aim.summary(unpack(x))
+    def solve(start: NDArray[np.float64], variables: NDArray[np.intp], collide: bool) -> NDArray[np.float64]:
+        low = np.concatenate([kin.limits[variables, 0], np.full(pose_variables, -np.inf)])
+        high = np.concatenate([kin.limits[variables, 1], np.full(pose_variables, np.inf)])
+        solved = least_squares(
+            residual, start, bounds=(low, high), args=(variables, collide), method="trf", x_scale="jac"
+        )
+        return np.asarray(solved.x)
+
+    x = solve(np.concatenate([q0[moving], np.zeros(pose_variables)]), moving, False)
+    first = unpack(x, moving)
+    fit = aim.summary(first)
     if len(scene.object_geoms) and (fit.penetration > LINK_TOLERANCE or fit.self_penetration > LINK_TOLERANCE):
-        x = least_squares(residual, x, bounds=(low, high), args=(True,), method="trf", x_scale="jac").x
-        second = aim.summary(unpack(x))
+        # Every joint and the palm again, from the first solution (the pose increment restarts at 0).
+        angles, rotation, shift = first
+        increment = [_matrix_rotvec(rotation @ rotation0.T), shift - shift0] if pose_variables else []
+        x = np.concatenate([angles[free], *increment])
+        x = solve(x, free, True)
+        second = aim.summary(unpack(x, free))
         fit = second if _better(second, fit) else fit
     return fit
+
+
+def _rotvec_matrix(vector: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The rotation matrix of a rotation vector (axis times angle [rad]), Rodrigues' formula."""
+    angle = float(np.linalg.norm(vector))
+    if angle < 1e-12:
+        return np.eye(3)
+    k = vector / angle
+    cross = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
+    return np.eye(3) + np.sin(angle) * cross + (1.0 - np.cos(angle)) * (cross @ cross)
+
+
+def _matrix_rotvec(matrix: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The rotation vector of a rotation matrix."""
+    return np.asarray(Rotation.from_matrix(matrix).as_rotvec())
+
+
+def measure_pose(
+    scene: FitScene,
+    fingers: Sequence[int],
+    points: ArrayLike,
+    normals: ArrayLike,
+    pose: tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]],
+) -> HandFit:
+    """A given pose measured as a fit (nothing solved): residuals to the contacts, pad angles, depths.
+
+    Args:
+        scene: The hand and the object.
+        fingers: Finger ``fingers[k]`` takes contact k.
+        points: Contacts, shape (m, 3) [m].
+        normals: Their inward unit normals, shape (m, 3).
+        pose: Joint angles (J,), palm rotation (3, 3) and palm position (3,) [m].
+    """
+    chosen = tuple(int(f) for f in fingers)
+    inward = np.asarray(normals, dtype=float)
+    inward = inward / np.linalg.norm(inward, axis=1, keepdims=True)
+    radii = np.array([scene.kinematics.fingers[f].radius for f in chosen])
+    aim = _Targets(scene, chosen, np.asarray(points, dtype=float) - radii[:, None] * inward, inward, radii)
+    return aim.summary(pose)
 
 
 def _better(a: HandFit, b: HandFit) -> bool:

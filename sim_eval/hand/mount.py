@@ -10,6 +10,7 @@ palm at a pose is then placing the mount: a body pose in a fit, a mocap weld in 
 
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass
 
 import mujoco
@@ -21,6 +22,11 @@ from ogcp.planner.hands.kinematics import HandKinematics
 
 PREFIX = "hand/"
 MOUNT = "ogcp_mount"
+_OPTION_FIELDS = tuple(
+    name
+    for name in dir(mujoco.MjSpec().option)
+    if not name.startswith("_") and not callable(getattr(mujoco.MjSpec().option, name))
+)
 
 
 def attach_hand(spec: mujoco.MjSpec, kinematics: HandKinematics, free: bool = False) -> mujoco.MjsBody:
@@ -51,6 +57,10 @@ def attach_hand(spec: mujoco.MjSpec, kinematics: HandKinematics, free: bool = Fa
         for joint in list(body.joints):
             if joint.type == mujoco.mjtJoint.mjJNT_FREE or joint.name in idle:
                 hand.delete(joint)
+    # The scene's options win; a hand tuned for another simulator (the Shadow hand of MJX's tests:
+    # one solver iteration, impratio 10) would otherwise make MuJoCo warn on every attach.
+    for name in _OPTION_FIELDS:
+        setattr(hand.option, name, copy.copy(getattr(spec.option, name)))
     frame.attach_body(root, PREFIX, "")
     # A URDF's meshes came in memory (ogcp.planner.hands.loading); the scene needs them too.
     spec.assets = {**spec.assets, **hand.assets}

@@ -13,8 +13,11 @@ planner's scaled wrench space ``[force, torque / rho]``) is resisted when
 where ``J_k`` is the translational Jacobian of p_k on b_k over the hand's joints, ``M`` the
 actuators' moment arms with their force ranges ``u``, and ``E`` the rows of the hand's joint
 equalities (a coupled joint is held by its driver), with free multipliers ``eta``. The palm is
-held by the weld and takes whatever it must. The prediction is the largest ``s``: a linear
-program per direction, the same meaning of "fidelity" as for fingertips.
+held by the weld and takes whatever it must. A position servo is also a spring: within the
+trial's failure distance it changes its force only so much (:class:`ServoTravel` adds those rows
+around the settled forces), so a soft servo's hand is predicted to resist what it builds before
+the object has moved that far. The prediction is the largest ``s``: a linear program per
+direction, the same meaning of "fidelity" as for fingertips.
 """
 
 from __future__ import annotations
@@ -97,6 +100,7 @@ def hand_resistance(
     mu: float,
     cone_edge_count: int,
     directions: NDArray[np.float64],
+    travel: float | None = None,
 ) -> NDArray[np.float64]:
     """Largest resisted disturbance along each direction, shape (D,) [N in scaled wrench space].
 
@@ -110,6 +114,10 @@ def hand_resistance(
         mu: Friction coefficient.
         cone_edge_count: Edges of the linearised cone.
         directions: Unit disturbance directions, shape (D, 6).
+        travel: How far the object may move before the trial counts a failure [m]: the
+            position servos' force changes are limited by the joint travel that moves each
+            contact at most this far (:class:`ServoTravel`). None: the force ranges alone (a
+            perfectly stiff servo).
 
     Returns:
         The resistance per direction; 0 with no contact, NaN where the solver failed.
@@ -119,7 +127,10 @@ def hand_resistance(
     statics = hand_statics(
         model, data, hand, contacts.points, contacts.normals, contacts.bodies, com, torque_scale, mu, cone_edge_count
     )
-    cost = np.zeros(statics.size + 1)
+    first = len(contacts.points) * statics.edges  # the actuator forces' columns
+    size = statics.size + 1
+    limits = ServoTravel.of(model, data, contacts, travel, first, size) if travel is not None else None
+    cost = np.zeros(size)
     cost[-1] = -1.0
     bounds = [*statics.bounds, (0.0, None)]
     bottom = np.hstack([statics.hand_balance, np.zeros((len(statics.hand_balance), 1))])
@@ -127,7 +138,15 @@ def hand_resistance(
     for i, d in enumerate(directions):
         top = np.hstack([statics.object_balance, d[:, None]])
         rows = np.vstack([top, bottom])
-        result = linprog(cost, A_eq=rows, b_eq=np.zeros(len(rows)), bounds=bounds, method="highs")
+        result = linprog(
+            cost,
+            A_ub=limits.rows if limits is not None and len(limits.rows) else None,
+            b_ub=limits.bounds if limits is not None and len(limits.rows) else None,
+            A_eq=rows,
+            b_eq=np.zeros(len(rows)),
+            bounds=bounds,
+            method="highs",
+        )
         if result.status == 0:
             resistance[i] = float(result.x[-1])
         elif result.status == 3:  # unbounded: some direction needs no actuator (an unlimited servo)
@@ -225,6 +244,73 @@ def force_ranges(model: mujoco.MjModel) -> tuple[list[float | None], list[float 
             low.append(None)
             high.append(None)
     return low, high
+
+
+@dataclass(frozen=True, eq=False)
+class ServoTravel:
+    """Linear rows that keep the servos' force changes within what the failure distance allows.
+
+    A position servo on joint j (force ``kp (ctrl - gear q)``) changes its force by
+    ``du_j = kp_j |gear_j| dq_j`` when its joint turns by dq_j. A hand body b that carries contacts
+    then moves its contact point p_b by ``J_b dq`` (J_b its translational Jacobian over those
+    joints), and the trial counts a failure once the object, which the contacts hold, moved
+    ``travel``. So to first order the force changes satisfy, per body and axis,
+
+        -h  <=  sum_j J_b[:, j] (u_j - u0_j) / (kp_j |gear_j|)  <=  h,     h = travel / sqrt(3)
+
+    around the settled forces u0: the box of half-width h is the largest inside the sphere of
+    radius ``travel``, so every motion it allows stays short of the failure distance. The program
+    then finds the resistance the servos build before the object has moved that far, not the
+    force range they would reach after a larger motion. Actuators on tendons or sites keep their
+    force ranges alone.
+
+    Attributes:
+        rows: ``A_ub`` over the program's variables, shape (R, n).
+        bounds: ``b_ub``, shape (R,).
+    """
+
+    rows: NDArray[np.float64]
+    bounds: NDArray[np.float64]
+
+    @classmethod
+    def of(
+        cls,
+        model: mujoco.MjModel,
+        data: mujoco.MjData,
+        contacts: RealisedContacts,
+        travel: float,
+        first_force: int,
+        size: int,
+    ) -> ServoTravel:
+        """The rows for a state; the actuator forces are columns ``first_force + a`` of ``size`` variables."""
+        servos = []  # (actuator, dof, stiffness kp |gear| [N·m/rad or N/m])
+        for a in range(model.nu):
+            stiffness = -float(model.actuator_biasprm[a, 1]) * abs(float(model.actuator_gear[a, 0]))
+            if model.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_JOINT and stiffness > 0:
+                servos.append((a, int(model.jnt_dofadr[model.actuator_trnid[a, 0]]), stiffness))
+        rows, limits = [], []
+        jacobian = np.zeros((3, model.nv))
+        settled = np.array([float(data.actuator_force[a]) for a, _, _ in servos])
+        for body in sorted({int(b) for b in contacts.bodies}):
+            point = contacts.points[contacts.bodies == body].mean(axis=0)
+            mujoco.mj_jac(model, data, jacobian, None, point, body)
+            moves = np.array([jacobian[:, dof] / stiffness for _, dof, stiffness in servos]).T.reshape(3, -1)
+            for axis in range(3):
+                if not moves[axis].any():
+                    continue
+                for sign in (1.0, -1.0):
+                    row = np.zeros(size)
+                    row[[first_force + a for a, _, _ in servos]] = sign * moves[axis]
+                    rows.append(row)
+                    limits.append(travel / math.sqrt(3.0) + sign * float(moves[axis] @ settled))
+        return cls(np.array(rows).reshape(-1, size), np.array(limits))
+
+
+def _below(model: mujoco.MjModel, body: int, ancestor: int) -> bool:
+    """Whether ``body`` is ``ancestor`` or in its subtree."""
+    while body > 0 and body != ancestor:
+        body = int(model.body_parentid[body])
+    return body == ancestor
 
 
 def equality_rows(model: mujoco.MjModel, hand: MountedHand, dofs: NDArray[np.intp]) -> NDArray[np.float64]:

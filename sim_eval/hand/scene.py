@@ -29,7 +29,8 @@ from scipy.spatial.transform import Rotation
 
 from ogcp.planner.hands.kinematics import HandKinematics
 from ogcp.sim_eval.collision import Part
-from ogcp.sim_eval.hand.fit import FitScene, HandFit, fit_hand
+from ogcp.sim_eval.hand.fit import HandFit, fit_hand
+from ogcp.sim_eval.hand.fit_scene import FitScene
 from ogcp.sim_eval.hand.mount import MOUNT, PREFIX, MountedHand, attach_hand
 from ogcp.sim_eval.hand.squeeze import Grip, balanced_grip
 from ogcp.sim_eval.scene import GraspScene, add_object, contact_friction, set_options
@@ -68,6 +69,9 @@ class HandScene:
         squeeze_forces: The normal force each pad is to press with [N] (zeros: no balanced squeeze
             exists, the pads were pushed past the surface instead), shape (m,).
         grip: The largest balanced grip (None where none exists); :func:`squeezed` takes shares of it.
+        palms: The palm's mocap pose (position, (w, x, y, z)) at each approach waypoint and at the
+            squeeze, shape (K + 1, 7); None: held where the fit put it (a given grasp's stages
+            may move it).
     """
 
     scene: GraspScene
@@ -78,6 +82,7 @@ class HandScene:
     grasp: NDArray[np.float64]
     squeeze_forces: NDArray[np.float64]
     grip: Grip | None = None
+    palms: NDArray[np.float64] | None = None
 
     def ctrl(self, angles: ArrayLike) -> NDArray[np.float64]:
         """Servo targets that hold a configuration (other actuators at their reference), shape (nu,)."""
@@ -251,10 +256,17 @@ def close_hand(hand_scene: HandScene) -> HandScene:
     steps = max(1, round(STAGE_TIME / model.opt.timestep))
     approach = [hand_scene.ctrl(angles) for angles in hand_scene.approach]
     legs = [*itertools.pairwise(approach), (approach[-1], scene.preload_ctrl)]
+    palms = hand_scene.palms
+    mocap = int(model.body_mocapid[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, WRIST)])
     for leg, (start, end) in enumerate(legs):
         count = max(1, steps // (len(legs) - 1)) if leg < len(legs) - 1 else steps
         for k in range(count):
-            data.ctrl[:] = start + (end - start) * min(1.0, (k + 1) / (0.5 * count))
+            share = min(1.0, (k + 1) / (0.5 * count))
+            data.ctrl[:] = start + (end - start) * share
+            if palms is not None:
+                data.mocap_pos[mocap] = palms[leg, :3] + (palms[leg + 1, :3] - palms[leg, :3]) * share
+                quat = palms[leg, 3:] + (palms[leg + 1, 3:] - palms[leg, 3:]) * share  # nlerp: stages lie close
+                data.mocap_quat[mocap] = quat / np.linalg.norm(quat)
             mujoco.mj_step(model, data)
     if not np.all(np.isfinite(data.qpos)):
         return hand_scene

@@ -15,6 +15,7 @@ Contacts of other links are kept in the record (``hand.extra_contacts``), never 
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from collections.abc import Sequence
 from typing import Any
@@ -29,9 +30,12 @@ from ogcp.planner.hands.kinematics import HandKinematics
 from ogcp.planner.hands.reachability import HandReachability
 from ogcp.sim_eval.collision import place_tips
 from ogcp.sim_eval.collision_fit import ContactFit
+from ogcp.sim_eval.dexgraspbench import hold_test, physics_settings, use_object_defaults
 from ogcp.sim_eval.directions import direction_set
 from ogcp.sim_eval.gates import gate_failures
-from ogcp.sim_eval.hand.fit import FitScene, HandFit, fit_hand
+from ogcp.sim_eval.hand.fit import HandFit, fit_hand, measure_pose
+from ogcp.sim_eval.hand.fit_scene import FitScene
+from ogcp.sim_eval.hand.given import GIVEN_MAX_PENETRATION, GivenPose, given_scene
 from ogcp.sim_eval.hand.predict import hand_resistance, realised_contacts
 from ogcp.sim_eval.hand.scene import SQUEEZE_LADDER, HandScene, build_hand_scene, close_hand, squeezed
 from ogcp.sim_eval.metrics import fidelity
@@ -39,6 +43,7 @@ from ogcp.sim_eval.protocol import FULL_STATE, Settled, settle
 from ogcp.sim_eval.result import GraspSimResult
 from ogcp.sim_eval.settings import SimSettings
 from ogcp.sim_eval.trial import (
+    DEXGRASPBENCH,
     FIDELITY_FLOOR,
     ObjectBody,
     failed_result,
@@ -59,19 +64,24 @@ class HandSetup:
 
     Attributes:
         kinematics: The hand, compiled.
-        model: Its reachability model (the fit's starts).
+        model: Its reachability model (the fit's starts); None: built on first use (grasps
+            posed by another planner are not fitted and never need it).
         fingers: Names of the fingers that take the contacts; None: the first m.
     """
 
     kinematics: HandKinematics
-    model: HandReachability
+    model: HandReachability | None = None
     fingers: tuple[str, ...] | None = None
+
+    @functools.cached_property
+    def reach(self) -> HandReachability:
+        """The reachability model: the given one, else sampled (or read from its cache) now."""
+        return self.model or HandReachability(self.kinematics.descriptor, self.fingers)
 
     @classmethod
     def of(cls, hand: HandKinematics, fingers: Sequence[str] | None = None) -> HandSetup:
-        """A setup for a compiled hand."""
-        names = tuple(fingers) if fingers is not None else None
-        return cls(hand, HandReachability(hand.descriptor, names), names)
+        """A setup for a compiled hand (its reachability model is built on first use)."""
+        return cls(hand, None, tuple(fingers) if fingers is not None else None)
 
 
 def fit_grasp(
@@ -86,9 +96,9 @@ def fit_grasp(
 
     ``points`` and ``normals`` (shape (m, 3)) are the targets of the grasp's contacts, in grasp order.
     """
-    fingers = setup.model.chosen(len(grasp))
+    fingers = setup.reach.chosen(len(grasp))
     best: tuple[HandFit, tuple[int, ...]] | None = None
-    for start in setup.model.starts(grasp, contacts, FIT_STARTS):
+    for start in setup.reach.starts(grasp, contacts, FIT_STARTS):
         order = tuple(start.fingers)
         fit = fit_hand(scene, fingers, points[list(order)], normals[list(order)], start.joint_angles)
         if best is None or _rank(fit) < _rank(best[0]):
@@ -114,6 +124,7 @@ def simulate_hand_grasp(
     setup: HandSetup,
     mu: float,
     torsion: float,
+    given: GivenPose | None = None,
 ) -> GraspSimResult:
     """Fit, close and test the hand on one grasp.
 
@@ -127,11 +138,17 @@ def simulate_hand_grasp(
         setup: The hand.
         mu: Friction coefficient of hand-object contacts.
         torsion: Torsional friction [m]; 0: hard contacts.
+        given: The hand as another planner posed it (not fitted; finger k takes contact k), or
+            None: fitted here.
 
     Returns:
         The result; an unreachable grasp's has ``error`` and ``hand.fit`` saying why.
     """
     kinematics = setup.kinematics
+    compat = settings.protocol == "dexgraspbench"
+    if compat:  # their step, solver and hand contacts; their friction unless one was asked for
+        settings = physics_settings(settings)
+        mu = settings.mu if settings.mu is not None else float(DEXGRASPBENCH["mu"])
     idx = np.asarray(grasp, dtype=np.intp)
     positions, normals = contacts.positions[idx], contacts.normals[idx]
     radius = max(f.radius for f in kinematics.fingers)
@@ -139,7 +156,12 @@ def simulate_hand_grasp(
     points = np.where(placement.placed[:, None], placement.points, positions)
     inward = np.where(placement.placed[:, None], placement.normals, normals)
     parts = fit.decomposition.parts
-    posed, order = fit_grasp(setup, FitScene(kinematics, parts), contacts, grasp, points, inward)
+    if given is None:
+        posed, order = fit_grasp(setup, FitScene(kinematics, parts), contacts, grasp, points, inward)
+    else:
+        pose = (given.grasp.joint_angles, given.grasp.rotation, given.grasp.translation)
+        posed = measure_pose(FitScene(kinematics, parts), given.fingers, points, inward, pose)
+        order = tuple(range(len(grasp)))
     hand: dict[str, Any] = {
         **kinematics.descriptor.to_dict(),
         "finger_contacts": [grasp[i] for i in order],
@@ -147,14 +169,26 @@ def simulate_hand_grasp(
     }
     hand["fit_residuals"] = hand["fit"]["fit_residuals"]
     hand["joint_angles"] = hand["fit"]["joint_angles"]
-    if not posed.realised:
+    if given is not None:
+        hand["given"] = {"pregrasp": given.pregrasp is not None, "squeeze": given.squeeze is not None}
+        if posed.penetration > GIVEN_MAX_PENETRATION:
+            reason = f"the given pose puts link {posed.worst_link} {posed.penetration * 1e3:.1f} mm inside the object"
+            failed = failed_result(contacts, grasp, label, reason, "")
+            return dataclasses.replace(failed, gates={"valid": False, "reachable": False}, hand=hand)
+    elif not posed.realised:
         reason = f"unreachable for the {kinematics.descriptor.name} hand: {posed.reason}"
         failed = failed_result(contacts, grasp, label, reason, "")
         return dataclasses.replace(failed, gates={"valid": False, "reachable": False}, hand=hand)
     ordered_points, ordered_normals = points[list(order)], inward[list(order)]
     scene_args = (kinematics, posed, ordered_points, ordered_normals, parts, body.com, body.inertia, settings, mu)
     opened = build_hand_scene(*scene_args, contacts.torque_scale, torsion)
-    for share in SQUEEZE_LADDER:  # the strongest balanced grip that settles steadily
+    if given is not None:
+        opened = given_scene(opened, given)
+    if compat:
+        use_object_defaults(opened.scene)  # in the compiled model, which every share shares
+    # The strongest balanced grip that settles steadily; DexGraspBench closes once, to its squeeze.
+    ladder = SQUEEZE_LADDER if opened.grip is not None and not compat else (1.0,)
+    for share in ladder:
         closed = close_hand(squeezed(opened, share))
         settled = settle(closed.scene, settings)
         if settled.gates["valid"]:
@@ -178,6 +212,7 @@ def simulate_hand_grasp(
         mu,
         settings.prediction_cone_edges,
         dirs.vectors,
+        travel=settings.move_threshold,  # the servos' stiffness bounds what they resist within it
     )
     pads_ok, extra = _pad_gate(closed, realised, ordered_points, model)
     gates = dict(settled.gates)
@@ -188,7 +223,9 @@ def simulate_hand_grasp(
     holds: dict[str, Any] = {}
     if not settled.gates["diverged"] and settings.weight_test and not settings.gravity:
         holds["weight"] = weight_test(closed.scene, settings)  # gravity is off: m g along each axis as a load
-    if not settled.gates["diverged"]:
+    if compat:  # their verdict, on ogcp's gates (the pads' one included); no ramps, as for tips
+        holds["dexgraspbench"] = hold_test(closed.scene, dataclasses.replace(settled, gates=gates), settings)
+    elif not settled.gates["diverged"]:
         measured, censored = ramp_to_failure(
             closed.scene, settled, dirs.vectors, predicted, contacts.torque_scale, settings
         )

@@ -39,6 +39,15 @@ method = "astar"
 hand = "sdh"
 label = "A* SDH"
 """
+SDH_SIM_SUITE = (
+    SDH_SUITE.replace("simulate = false", "")
+    + """
+[simulation]
+enabled = true
+directions = 0
+threads = 1
+"""
+)
 SIM_SUITE = """
 schema_version = 1
 name = "tiny-sim"
@@ -147,3 +156,37 @@ def test_sim_grasps_draws_the_settled_tips_and_older_records_their_start(sim_run
     ]
     title = sim_grasps(plots.RunData(data.directory, tuple(cells), (), None)).axes[0].get_title()
     assert "tips at start positions" in title
+
+
+def test_fig10_draws_the_hand_as_it_settled_when_the_cell_was_simulated(tmp_path):
+    folder = tmp_path / "run"
+    SuiteRunner(parse_suite(SDH_SIM_SUITE), folder, log=lambda _: None).run()
+    data = load_run(folder)
+    (cell,) = [c for c in data.cells if c.simulation is not None]
+    (simulated,) = cell.simulation.grasps
+    figure = fig10_hand_grasps(data)
+    [posed] = HAND_FITS
+    assert posed.settled and figure.axes[0].get_title().split("\n")[1].startswith("settled, pads within")
+    assert posed.fit.joint_angles == pytest.approx(simulated.hand["settled_joint_angles"])
+    assert posed.fit.translation == pytest.approx(simulated.hand["palm_position"])
+
+
+def test_the_tips_versus_hand_figure_has_one_bar_group_per_case(tmp_path):
+    from ogcp.benchmarks.plots.style import save_figure
+    from ogcp.benchmarks.plots.tips_hand import fig_tips_vs_hand
+
+    rows = [
+        {"tips_valid": True, "realised": True, "hand_valid": True},
+        {"tips_valid": True, "realised": False, "hand_valid": False},
+    ]
+    cases = [
+        {"hand": "sdh", "object": "box", "m": 3, "rows": rows},
+        {"hand": "shadow_hand", "object": "box", "m": 3, "rows": rows[:1]},
+    ]
+    figure = fig_tips_vs_hand(cases)
+    (ax,) = figure.axes
+    heights = [patch.get_height() for patch in ax.patches]
+    assert heights == [1.0, 1.0, 0.5, 1.0, 0.5, 1.0]  # tips, realised, held; per case in order
+    assert [t.get_text() for t in ax.get_xticklabels()] == ["sdh\nbox, m=3", "shadow_hand\nbox, m=3"]
+    paths = save_figure(figure, tmp_path, "tips_vs_hand")
+    assert [p.suffix for p in paths] == [".pdf", ".png"] and b"/FontFile2" in paths[0].read_bytes()

@@ -214,8 +214,8 @@ BAD_SUITES = [
         "methods[0].hand: the sdh hand has 3 fingers",
     ),
     (
-        "schema_version = 1\nobjects = ['box']\n[[methods]]\nmethod = 'astar'\nhand = 'shadow'",
-        "hand 'shadow'; built-in hands are sdh, parallel_gripper, or give FILE.toml",
+        "schema_version = 1\nobjects = ['box']\n[[methods]]\nmethod = 'astar'\nhand = 'allegro'",
+        "hand 'allegro'; built-in hands are sdh, shadow_hand, parallel_gripper, or give FILE.toml",
     ),
     (
         "schema_version = 1\nobjects = ['box']\n[[methods]]\nmethod = 'es'\nhand_threshold = 0.2",

@@ -40,8 +40,8 @@ INVALID = [
     (AStarConfig, {"max_spread": -1.0}, "max_spread: expected a number > 0, got -1.0"),
     (
         AStarConfig,
-        {"hand": "shadow"},
-        "unknown hand 'shadow'; built-in hands are sdh, parallel_gripper, or give FILE.toml",
+        {"hand": "allegro"},
+        "unknown hand 'allegro'; built-in hands are sdh, shadow_hand, parallel_gripper, or give FILE.toml",
     ),
     (AStarConfig, {"hand_threshold": 0.2}, "hand_threshold: applies only with a hand"),
     (AStarConfig, {"hand_fingers": ["thumb"]}, "hand_fingers: applies only with a hand"),

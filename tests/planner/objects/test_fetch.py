@@ -20,7 +20,7 @@ import trimesh
 
 from ogcp.benchmarks import cli
 from ogcp.planner import BUILTIN_OBJECTS, resolve_object
-from ogcp.planner.infra import OgcpError
+from ogcp.planner.infra import OgcpError, wheels
 from ogcp.planner.objects import fetch as assets
 from ogcp.planner.objects import fetchable as asset_registry
 from ogcp.planner.objects.fetchable import FETCH_GROUPS, FETCHABLE_OBJECTS, PAPER_OBJECTS, pip_target_args
@@ -173,7 +173,7 @@ def test_failed_download_is_one_clear_line(cache, monkeypatch, tmp_path):
         assert "--no-deps" in command and "--only-binary=:all:" in command and command[-1] == "sleplet==1.5.2"
         return subprocess.CompletedProcess(command, 1, "", "Looking in indexes\nERROR: No matching distribution\n")
 
-    monkeypatch.setattr(asset_registry.subprocess, "run", pip_fails)
+    monkeypatch.setattr(wheels.subprocess, "run", pip_fails)
     with pytest.raises(OgcpError) as info:
         assets.fetch_objects(["homer"], log=lambda line: None)
     assert str(info.value) == "pip could not download sleplet==1.5.2 (exit 1): ERROR: No matching distribution"

@@ -9,7 +9,8 @@ import trimesh
 
 from ogcp.planner.hands import HandKinematics, load_descriptor, resolve_hand
 from ogcp.sim_eval.body import object_inertia
-from ogcp.sim_eval.hand.fit import FitScene, fit_hand
+from ogcp.sim_eval.hand.fit import fit_hand
+from ogcp.sim_eval.hand.fit_scene import FitScene
 from ogcp.sim_eval.hand.scene import PREGRASP_RADII, build_hand_scene, close_hand
 from ogcp.sim_eval.protocol import ramp_trials, settle
 from ogcp.sim_eval.settings import SimSettings
@@ -88,3 +89,24 @@ def test_a_wrist_between_root_and_palm_is_welded_at_its_reference(tmp_path):
     assert mujoco.mj_name2id(closed.scene.model, mujoco.mjtObj.mjOBJ_JOINT, "hand/wrist") == -1
     settled = settle(closed.scene, settings)
     assert settled.gates["valid"] and settled.gates["tips_in_contact"] == 2
+
+
+@pytest.mark.parametrize("travel", [None, 2e-4, 1e-3, 1.0])
+def test_a_servo_resists_along_its_jaw_what_it_builds_within_the_failure_distance(travel):
+    """Pushed along y, the pinch sheds one jaw's force: F when the servos are stiff, kp h within the travel."""
+    from ogcp.sim_eval.hand.predict import hand_resistance, realised_contacts
+    from ogcp.sim_eval.hand.trial import _settled_data
+
+    kinematics = HandKinematics(resolve_hand("parallel_gripper"))
+    limit, kp = kinematics.descriptor.actuation.force_range, kinematics.descriptor.actuation.kp
+    settings = SimSettings()
+    _, closed = _closed(kinematics, settings)
+    data = _settled_data(closed, settle(closed.scene, settings))
+    model = closed.scene.model
+    contacts = realised_contacts(model, data, closed.hand, closed.scene.object_geoms)
+    com = np.zeros(3)
+    along = np.array([[0, 1, 0, 0, 0, 0], [0, -1, 0, 0, 0, 0]], dtype=float)
+    resisted = hand_resistance(model, data, closed.hand, contacts, com, 0.05, MU, 8, along, travel=travel)
+    # Half-width travel / sqrt(3): the largest box of motions inside the failure sphere.
+    expected = limit if travel is None else min(limit, kp * travel / np.sqrt(3.0))
+    np.testing.assert_allclose(resisted, expected, rtol=0.02)

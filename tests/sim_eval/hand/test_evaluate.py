@@ -119,3 +119,12 @@ def test_the_weight_test_runs_with_a_hand(sdh_plan):
     weight = grasp.hold_tests["weight"]
     assert weight["axes"] == ["+x", "-x", "+y", "-y", "+z", "-z"] and len(weight["passed"]) == 6
     assert weight["success"] == all(weight["passed"]) and weight["load"] > 0
+
+
+def test_dexgraspbenchs_test_runs_on_a_closed_hand(sdh_plan):
+    (grasp,) = evaluate_plan(sdh_plan, {"protocol": "dexgraspbench"}, HULL).grasps
+    test = grasp.hold_tests["dexgraspbench"]
+    assert test["physics"]["timestep"] == pytest.approx(0.004) and test["mu"] == pytest.approx(0.6)
+    assert None not in test["passed"] and test["success"] == (test["gates_passed"] and all(test["passed"]))
+    assert grasp.hand["squeeze_share"] == 1.0  # their sequence closes once: no ladder of grips
+    assert np.isnan(grasp.measured).all()  # their fixed loads replace the ramps, as for fingertips

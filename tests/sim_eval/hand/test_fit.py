@@ -9,7 +9,8 @@ from scipy.spatial.transform import Rotation
 
 from ogcp.planner.hands import HandKinematics, load_descriptor, resolve_hand
 from ogcp.planner.infra import OgcpError
-from ogcp.sim_eval.hand.fit import LINK_TOLERANCE, RESIDUAL_TOLERANCE, FitScene, fit_hand, rigid_fit
+from ogcp.sim_eval.hand.fit import LINK_TOLERANCE, RESIDUAL_TOLERANCE, fit_hand, rigid_fit
+from ogcp.sim_eval.hand.fit_scene import FitScene
 from tests.planner.hands.hand_files import write_mesh_hand
 
 
