@@ -22,7 +22,7 @@ if TYPE_CHECKING:
     from ogcp.sim_eval.decomposition import Decomposition, DecompositionSettings
     from ogcp.sim_eval.evaluate import GraspEvaluator, evaluate_plan
     from ogcp.sim_eval.external import evaluate_grasps
-    from ogcp.sim_eval.external_export import export_grasps
+    from ogcp.sim_eval.inputs.external_export import export_grasps
     from ogcp.sim_eval.result import SIM_SCHEMA, GraspSimResult, SimGraspRecord, SimRecord, SimResult
     from ogcp.sim_eval.settings import SimSettings
 
@@ -40,7 +40,7 @@ _EXPORTS = {
     "SimSettings": "ogcp.sim_eval.settings",
     "evaluate_grasps": "ogcp.sim_eval.external",
     "evaluate_plan": "ogcp.sim_eval.evaluate",
-    "export_grasps": "ogcp.sim_eval.external_export",
+    "export_grasps": "ogcp.sim_eval.inputs.external_export",
     "load_grasps": "ogcp.planner.records.grasps",
 }
 

@@ -29,14 +29,14 @@ from ogcp.planner.grasp.contact_set import ContactSet
 from ogcp.planner.grasp.reach import REACH_TOLERANCE, default_tip_radius, reachable
 from ogcp.planner.infra.errors import OgcpError
 from ogcp.planner.infra.provenance import provenance
-from ogcp.sim_eval.body import object_inertia
-from ogcp.sim_eval.collision_fit import DecompositionLadder
 from ogcp.sim_eval.decomposition.decompose import Decomposition, DecompositionSettings, decompose
-from ogcp.sim_eval.dexgraspbench import set_summary
-from ogcp.sim_eval.metrics import set_metrics
+from ogcp.sim_eval.decomposition.ladder import DecompositionLadder
+from ogcp.sim_eval.protocols.dexgraspbench import set_summary
+from ogcp.sim_eval.protocols.metrics import set_metrics
+from ogcp.sim_eval.protocols.trial import ObjectBody, contact_torsion, failed_result, simulate_grasp
 from ogcp.sim_eval.result import GraspSimResult, SimResult
+from ogcp.sim_eval.scene.body import object_inertia
 from ogcp.sim_eval.settings import SimSettings, scaled_lengths
-from ogcp.sim_eval.trial import ObjectBody, contact_torsion, failed_result, simulate_grasp
 
 if TYPE_CHECKING:
     from ogcp.sim_eval.hand.given import GivenPose
@@ -297,7 +297,7 @@ def evaluate_plan(
     Returns:
         The simulation result.
     """
-    from ogcp.sim_eval.plan_input import plan_input
+    from ogcp.sim_eval.inputs.plan_input import plan_input
 
     if max_grasps is not None and (isinstance(max_grasps, bool) or not isinstance(max_grasps, int) or max_grasps < 1):
         raise OgcpError(f"max_grasps must be an integer >= 1 or None, got {max_grasps!r}")

@@ -6,7 +6,7 @@ scale rho of :func:`~ogcp.planner.grasp.contact_set.mass_properties` (as
 :func:`~ogcp.planner.grasp.contact_set.sample_contacts` sets them), the record's mu and cone edges.
 Each grasp indexes its own contacts there, and :class:`~ogcp.sim_eval.evaluate.GraspEvaluator`
 simulates them exactly as it simulates a plan's, so an ogcp plan exported with
-:func:`~ogcp.sim_eval.external_export.export_grasps` and evaluated here gives the plan's own numbers.
+:func:`~ogcp.sim_eval.inputs.external_export.export_grasps` and evaluated here gives the plan's own numbers.
 
 Contacts need not lie on the mesh exactly. Each one's signed distance from the surface and the
 angle of its normal from the surface's inward normal there are measured and recorded; one

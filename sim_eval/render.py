@@ -7,13 +7,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ogcp.planner.infra.errors import OgcpError
-from ogcp.sim_eval.body import object_inertia
-from ogcp.sim_eval.collision import place_tips
-from ogcp.sim_eval.collision_fit import DecompositionLadder
 from ogcp.sim_eval.decomposition.decompose import DecompositionSettings
+from ogcp.sim_eval.decomposition.ladder import DecompositionLadder
 from ogcp.sim_eval.evaluate import object_diagonal, tip_radius
-from ogcp.sim_eval.protocol import FULL_STATE, Settled, settle
-from ogcp.sim_eval.scene import GraspScene, build_scene
+from ogcp.sim_eval.protocols.phases import FULL_STATE, Settled, settle
+from ogcp.sim_eval.scene.body import object_inertia
+from ogcp.sim_eval.scene.collision import place_tips
+from ogcp.sim_eval.scene.grasp_scene import GraspScene, build_scene
 from ogcp.sim_eval.settings import SimSettings
 
 
@@ -80,7 +80,7 @@ def render_plan(
     The grasp is the one ``evaluate`` simulates: on the decomposition the grasp's contacts call
     for, with the tips started on its surface.
     """
-    from ogcp.sim_eval.plan_input import plan_input
+    from ogcp.sim_eval.inputs.plan_input import plan_input
 
     plan = plan_input(record)
     settings = (settings or SimSettings()).scaled(object_diagonal(plan.mesh))

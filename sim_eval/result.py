@@ -66,12 +66,12 @@ class GraspSimResult:
         surface_distance: Distance of each planned contact from the decomposed surface, shape (m,) [m].
         hold_tests: Pass/fail of constant-load tests: ``weight``, and ``dexgraspbench`` (per axis
             ``passed``, ``delta_pos`` [m], ``delta_angle`` [deg], ``success``, ``failures``; see
-            :func:`ogcp.sim_eval.dexgraspbench.hold_test`).
+            :func:`ogcp.sim_eval.protocols.dexgraspbench.hold_test`).
         error: Why the grasp could not be simulated, if it could not.
         unreachable: Fingers (positions in ``grasp``) whose contact the simulated fingertip
             cannot touch without cutting the object; such a grasp is not simulated.
         invalid_reasons: Each failed validity gate in JSON form (gate, finger, value, limit,
-            unit, message; see :mod:`ogcp.sim_eval.gates`); empty for a valid grasp.
+            unit, message; see :mod:`ogcp.sim_eval.protocols.gates`); empty for a valid grasp.
         predicted_planned: Analytic resistance at the planned contacts, shape (D,) [N].
         realized: The contacts the tips start on (``points``, ``normals``, ``offsets`` [m] from
             the plan, ``normal_angles`` [deg], ``travel`` [m]) and their ``q1`` and ``q1_change``

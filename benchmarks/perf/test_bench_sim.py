@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 import trimesh
 
-from ogcp.sim_eval.body import object_inertia
-from ogcp.sim_eval.directions import direction_set
-from ogcp.sim_eval.protocol import ramp_trials, serial_trials, settle
-from ogcp.sim_eval.scene import build_scene
+from ogcp.sim_eval.protocols.directions import direction_set
+from ogcp.sim_eval.protocols.phases import ramp_trials, serial_trials, settle
+from ogcp.sim_eval.scene.body import object_inertia
+from ogcp.sim_eval.scene.grasp_scene import build_scene
 from ogcp.sim_eval.settings import SimSettings
 
 

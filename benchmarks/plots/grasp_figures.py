@@ -22,7 +22,7 @@ from numpy.typing import NDArray
 
 from ogcp.planner.infra.errors import OgcpError
 from ogcp.planner.methods.registry import METHODS
-from ogcp.sim_eval.plan_input import PlanInput, plan_input
+from ogcp.sim_eval.inputs.plan_input import PlanInput, plan_input
 
 from .data import CellData, RunData, SkipFigure
 from .external import by_problem_with_external, host_problems, is_external
@@ -167,7 +167,7 @@ def draw_grasp(
 
     Args:
         ax: The panel (its axis frame is switched off).
-        rebuilt: Mesh and contact set of the plan (:func:`ogcp.sim_eval.plan_input.plan_input`).
+        rebuilt: Mesh and contact set of the plan (:func:`ogcp.sim_eval.inputs.plan_input.plan_input`).
         grasp: Contact indices of the grasp, length m.
         colour: Colour of the grasp's contacts and arrows.
         pixels: Side of the square rendered image [px].

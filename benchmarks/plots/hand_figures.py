@@ -30,7 +30,7 @@ from ogcp.planner.records.plan import PlanHand
 from ogcp.sim_eval.hand.fit import HandFit, fit_hand, measure_pose
 from ogcp.sim_eval.hand.fit_scene import FitScene
 from ogcp.sim_eval.hand.geometry import posed_triangles
-from ogcp.sim_eval.plan_input import PlanInput
+from ogcp.sim_eval.inputs.plan_input import PlanInput
 
 from .data import CellData, RunData, SkipFigure
 from .grasp_figures import CONTACT_COLOUR, NoGraspCells, best_view, panel_grid, rebuilt_panels

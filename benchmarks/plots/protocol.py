@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ogcp.sim_eval.metrics import binned_roc, roc_auc
+from ogcp.sim_eval.protocols.metrics import binned_roc, roc_auc
 
 from .data import CellData, RunData
 from .external import by_problem_with_external

@@ -23,7 +23,7 @@ from numpy.typing import NDArray
 
 from ogcp.planner.grasp.contact_set import ContactSet
 from ogcp.planner.grasp.reach import default_tip_radius
-from ogcp.sim_eval.plan_input import PlanInput
+from ogcp.sim_eval.inputs.plan_input import PlanInput
 from ogcp.sim_eval.result import SimGraspRecord
 
 from .data import CellData, RunData, SkipFigure

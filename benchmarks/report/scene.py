@@ -3,7 +3,7 @@
 A scene is what the viewer draws for one grasp: the object mesh (shared by every grasp on that
 object, so a report holds each mesh once), the contact set's points (shared per contact set),
 the grasp's contacts and inward normals, and the simulated outcome. Meshes are rebuilt from the
-records (:func:`ogcp.sim_eval.plan_input.plan_input` for plans, which shows the contacts a plan
+records (:func:`ogcp.sim_eval.inputs.plan_input.plan_input` for plans, which shows the contacts a plan
 records, on its mesh found as ``ogcp evaluate`` finds it; the recorded object description,
 re-sampled, for simulation records on their own), never stored in them, and coarsened by vertex
 clustering to at most :data:`MAX_FACES` faces so that a report stays small.
@@ -26,7 +26,7 @@ from ogcp.planner.grasp.contact_set import ContactSet, sample_contacts
 from ogcp.planner.infra.errors import OgcpError
 from ogcp.planner.objects import DEFAULT_DIAGONAL, resolve_object
 from ogcp.planner.records.plan import PlanView
-from ogcp.sim_eval.plan_input import plan_input
+from ogcp.sim_eval.inputs.plan_input import plan_input
 from ogcp.sim_eval.result import SimGraspRecord, SimRecord
 
 #: Most faces kept per object mesh; a finer mesh is coarsened by vertex clustering.
@@ -154,7 +154,7 @@ class Scenes:
         """The index and rebuilt contact set of a contact-set source (-1, None when it cannot be rebuilt).
 
         A plan's set is the one it records, checked against its mesh as ``ogcp evaluate`` does
-        (:func:`ogcp.sim_eval.plan_input.plan_input`; the mesh file is looked for next to ``plan_file``
+        (:func:`ogcp.sim_eval.inputs.plan_input.plan_input`; the mesh file is looked for next to ``plan_file``
         first); only a record without a plan is re-sampled from its description.
         """
         key = _key(source)

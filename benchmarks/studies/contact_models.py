@@ -24,7 +24,7 @@ from ogcp.benchmarks.plots.data import CellData, RunData, load_run
 from ogcp.benchmarks.suite.parse import parse_suite
 from ogcp.benchmarks.suite.runner import SuiteRunner
 from ogcp.benchmarks.suite.store import RESULTS
-from ogcp.sim_eval.metrics import binned_roc, roc_auc
+from ogcp.sim_eval.protocols.metrics import binned_roc, roc_auc
 
 PROTOCOLS = ("resistance", "dexgraspbench")
 SUITE = """schema_version = 1

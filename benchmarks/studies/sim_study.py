@@ -36,14 +36,14 @@ from ogcp.planner.grasp.quality import q1
 from ogcp.planner.grasp.reach import default_tip_radius
 from ogcp.planner.infra.atomic import write_json_atomic
 from ogcp.planner.infra.provenance import provenance
-from ogcp.sim_eval.body import object_inertia
 from ogcp.sim_eval.decomposition.decompose import decompose
-from ogcp.sim_eval.directions import direction_set
 from ogcp.sim_eval.evaluate import GraspEvaluator, object_diagonal
-from ogcp.sim_eval.predict import predicted_resistance
-from ogcp.sim_eval.protocol import ramp_trials, serial_trials, settle
+from ogcp.sim_eval.protocols.directions import direction_set
+from ogcp.sim_eval.protocols.phases import ramp_trials, serial_trials, settle
+from ogcp.sim_eval.protocols.predict import predicted_resistance
 from ogcp.sim_eval.result import SimRecord
-from ogcp.sim_eval.scene import build_scene
+from ogcp.sim_eval.scene.body import object_inertia
+from ogcp.sim_eval.scene.grasp_scene import build_scene
 from ogcp.sim_eval.settings import SimSettings
 
 

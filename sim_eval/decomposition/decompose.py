@@ -17,7 +17,7 @@ check) remeshes them into a closed manifold first; preprocess ``off`` needs a cl
 consistently oriented mesh and is refused otherwise. The remesh of an open surface is a thin
 closed shell around it, not a solid (measured: a box missing one triangle became 26 parts
 holding 31 % of its volume): contacts still meet a surface near the mesh, but the object's
-mass properties must not come from the parts (see :func:`ogcp.sim_eval.body.object_inertia`).
+mass properties must not come from the parts (see :func:`ogcp.sim_eval.scene.body.object_inertia`).
 """
 
 from __future__ import annotations
@@ -43,9 +43,9 @@ from scipy.spatial import ConvexHull
 
 from ogcp.planner.infra.cache import cache_dir, read_entry, write_entry
 from ogcp.planner.infra.errors import OgcpError
-from ogcp.sim_eval.body import Part, hull_part, is_closed_manifold, object_inertia
 from ogcp.sim_eval.decomposition.coacd_child import run_coacd_child
 from ogcp.sim_eval.decomposition.settings import DecompositionSettings
+from ogcp.sim_eval.scene.body import Part, hull_part, is_closed_manifold, object_inertia
 
 __all__ = [
     "CacheWriteWarning",
@@ -54,7 +54,7 @@ __all__ = [
     "cache_key",
     "decompose",
     "mesh_sha256",
-    "object_inertia",  # re-exported from ogcp.sim_eval.body for the evaluator
+    "object_inertia",  # re-exported from ogcp.sim_eval.scene.body for the evaluator
 ]
 
 SCHEMA = "ogcp.decomposition/1"

@@ -14,8 +14,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ogcp.planner.hands.kinematics import HandKinematics
-from ogcp.sim_eval.collision import Part
 from ogcp.sim_eval.hand.mount import MountedHand, attach_hand
+from ogcp.sim_eval.scene.collision import Part
 
 
 class FitScene:

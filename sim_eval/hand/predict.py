@@ -1,6 +1,6 @@
 """Analytic resistance of a closed hand: its realised contacts, friction, and its actuators' limits.
 
-For fingertips (:mod:`ogcp.sim_eval.predict`) each finger's normal force is capped; a hand's
+For fingertips (:mod:`ogcp.sim_eval.protocols.predict`) each finger's normal force is capped; a hand's
 fingers are capped by its actuators instead, through its Jacobian. With the hand's realised
 contacts k (point p_k on hand body b_k, inward normal n_k) and the friction cone linearised by the
 planner's edges e_kj (normal component 1), a disturbance ``s d`` (``d`` a unit 6-vector in the

@@ -12,7 +12,7 @@ to the squeeze (:mod:`ogcp.sim_eval.hand.squeeze`: targets under which the servo
 contact forces, a share of the largest the actuators allow; where no balanced squeeze exists, the
 pads' targets :data:`SQUEEZE_RADII` pad radii past the surface), each over :data:`STAGE_TIME`. The
 state it ends in becomes the scene's start, so the protocol's settling, gates and ramps
-(:mod:`ogcp.sim_eval.protocol`) run on it as on fingertips, the squeeze targets held as preload.
+(:mod:`ogcp.sim_eval.protocols.phases`) run on it as on fingertips, the squeeze targets held as preload.
 """
 
 from __future__ import annotations
@@ -28,12 +28,12 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
 from ogcp.planner.hands.kinematics import HandKinematics
-from ogcp.sim_eval.collision import Part
 from ogcp.sim_eval.hand.fit import HandFit, fit_hand
 from ogcp.sim_eval.hand.fit_scene import FitScene
 from ogcp.sim_eval.hand.mount import MOUNT, PREFIX, MountedHand, attach_hand
 from ogcp.sim_eval.hand.squeeze import Grip, balanced_grip
-from ogcp.sim_eval.scene import GraspScene, add_object, contact_friction, set_options
+from ogcp.sim_eval.scene.collision import Part
+from ogcp.sim_eval.scene.grasp_scene import GraspScene, add_object, contact_friction, set_options
 from ogcp.sim_eval.settings import SimSettings
 
 WRIST = "ogcp_wrist"

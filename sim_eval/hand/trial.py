@@ -1,7 +1,7 @@
 """One grasp tested with a real hand: fitted, closed by its servos, settled, gated, ramped to failure.
 
 The pads aim at the realised contacts, the points where pads of their rounding touch the parts
-actually simulated (:func:`ogcp.sim_eval.collision.place_tips`), as fingertips do. The hand is
+actually simulated (:func:`ogcp.sim_eval.scene.collision.place_tips`), as fingertips do. The hand is
 fitted there from the reachability model's nearest samples (:mod:`ogcp.sim_eval.hand.fit`); a
 grasp it cannot realise is recorded as unreachable with the finger and its residual, or the link
 and its depth, and not simulated. A realised one is closed (:mod:`ogcp.sim_eval.hand.scene`) with
@@ -28,21 +28,18 @@ from ogcp.planner.grasp.contact_set import ContactSet
 from ogcp.planner.grasp.quality import q1_certificate
 from ogcp.planner.hands.kinematics import HandKinematics
 from ogcp.planner.hands.reachability import HandReachability
-from ogcp.sim_eval.collision import place_tips
-from ogcp.sim_eval.collision_fit import ContactFit
-from ogcp.sim_eval.dexgraspbench import hold_test, physics_settings, use_object_defaults
-from ogcp.sim_eval.directions import direction_set
-from ogcp.sim_eval.gates import gate_failures
+from ogcp.sim_eval.decomposition.ladder import ContactFit
 from ogcp.sim_eval.hand.fit import HandFit, fit_hand, measure_pose
 from ogcp.sim_eval.hand.fit_scene import FitScene
 from ogcp.sim_eval.hand.given import GIVEN_MAX_PENETRATION, GivenPose, given_scene
 from ogcp.sim_eval.hand.predict import hand_resistance, realised_contacts
 from ogcp.sim_eval.hand.scene import SQUEEZE_LADDER, HandScene, build_hand_scene, close_hand, squeezed
-from ogcp.sim_eval.metrics import fidelity
-from ogcp.sim_eval.protocol import FULL_STATE, Settled, settle
-from ogcp.sim_eval.result import GraspSimResult
-from ogcp.sim_eval.settings import SimSettings
-from ogcp.sim_eval.trial import (
+from ogcp.sim_eval.protocols.dexgraspbench import hold_test, physics_settings, use_object_defaults
+from ogcp.sim_eval.protocols.directions import direction_set
+from ogcp.sim_eval.protocols.gates import gate_failures
+from ogcp.sim_eval.protocols.metrics import fidelity
+from ogcp.sim_eval.protocols.phases import FULL_STATE, Settled, settle
+from ogcp.sim_eval.protocols.trial import (
     DEXGRASPBENCH,
     FIDELITY_FLOOR,
     ObjectBody,
@@ -51,6 +48,9 @@ from ogcp.sim_eval.trial import (
     realized_summary,
     weight_test,
 )
+from ogcp.sim_eval.result import GraspSimResult
+from ogcp.sim_eval.scene.collision import place_tips
+from ogcp.sim_eval.settings import SimSettings
 
 #: Samples a fit starts from, nearest first, until one fit is realised.
 FIT_STARTS = 8

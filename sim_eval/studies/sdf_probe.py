@@ -15,7 +15,7 @@ collider it measures:
   diagonal; ``ncon``: median contacts of the one pair; ``normal``: median/max angle between the
   deepest contact's normal and the exact one (centre minus nearest surface point);
 * speed and stability: compile time, steps/s of the object held by 3 preloaded tips (the A*
-  grasp of 50 contacts; tips on 3 slides with servos as in :mod:`ogcp.sim_eval.scene`), contacts per
+  grasp of 50 contacts; tips on 3 slides with servos as in :mod:`ogcp.sim_eval.scene.grasp_scene`), contacts per
   step, and over the second half of 2 x settle_time: object and tip drift [% diag] and the
   normal-force spread std/mean of the worst tip.
 """
@@ -35,8 +35,8 @@ from numpy.typing import NDArray
 from ogcp.planner import GraspPlanner, resolve_object, sample_contacts
 from ogcp.planner.grasp.mesh_distance import SurfaceIndex
 from ogcp.planner.grasp.wrench import tangent_basis
-from ogcp.sim_eval.body import object_inertia
 from ogcp.sim_eval.decomposition.decompose import decompose
+from ogcp.sim_eval.scene.body import object_inertia
 from ogcp.sim_eval.settings import SimSettings
 
 SDFLIB = (
@@ -134,7 +134,7 @@ def accuracy(mesh: trimesh.Trimesh, parts: Parts | None, r: float, diag: float, 
 def grasp_model(
     mesh: trimesh.Trimesh, parts: Parts | None, settings: SimSettings, r: float, initpoints: int | None
 ) -> tuple[mujoco.MjModel, NDArray[np.float64], float]:
-    """The object (free) held by 3 tips at the A* grasp of 50 contacts, as in :func:`ogcp.sim_eval.scene.build_scene`.
+    """The object (free) held by 3 tips at the A* grasp of 50 contacts, as in :func:`ogcp.sim_eval.scene.grasp_scene.build_scene`.
 
     Returns:
         ``(model, preload ctrl, compile seconds)``.

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 import trimesh
 
-import ogcp.sim_eval.plan_input
+import ogcp.sim_eval.inputs.plan_input
 from ogcp.benchmarks.cli.app import main
 from ogcp.benchmarks.report import write_view
 
@@ -39,8 +39,8 @@ def test_view_finds_the_mesh_next_to_a_moved_plan_and_shows_its_recorded_contact
         raise AssertionError("the view re-sampled the plan's contact set")
 
     # As on another build: nothing may re-sample, the recorded set is the reference.
-    monkeypatch.setattr(ogcp.sim_eval.plan_input, "same_sampling_build", lambda record: False)
-    monkeypatch.setattr(ogcp.sim_eval.plan_input, "_resample", no_resampling)
+    monkeypatch.setattr(ogcp.sim_eval.inputs.plan_input, "same_sampling_build", lambda record: False)
+    monkeypatch.setattr(ogcp.sim_eval.inputs.plan_input, "_resample", no_resampling)
     shown = write_view(moved_plan)
     assert shown.notes == () and shown.grasps == 1
     data = json.loads(_DATA.search(shown.path.read_text()).group(1))

@@ -22,7 +22,7 @@ from ogcp.planner.infra.errors import OgcpError
 from ogcp.planner.objects import resolve_object
 from ogcp.planner.records.plan import contact_set_record
 from ogcp.planner.search.grasp_planner import GraspPlanner
-from ogcp.sim_eval.plan_input import plan_input
+from ogcp.sim_eval.inputs.plan_input import plan_input
 
 REFUSAL = "the plan does not match its problem: "
 Edit = Callable[[dict[str, Any]], None]

@@ -10,11 +10,11 @@ import trimesh
 from ogcp.planner.grasp import ContactSet
 from ogcp.planner.infra.errors import OgcpError
 from ogcp.sim_eval import Decomposition, DecompositionSettings, GraspEvaluator, SimSettings
-from ogcp.sim_eval import collision_fit as fit_module
-from ogcp.sim_eval.body import hull_part, object_inertia
-from ogcp.sim_eval.collision import PLACEMENT_TOLERANCE, CollisionSurface, place_tips
-from ogcp.sim_eval.collision_fit import DecompositionLadder
-from ogcp.sim_eval.scene import build_scene
+from ogcp.sim_eval.decomposition import ladder as fit_module
+from ogcp.sim_eval.decomposition.ladder import DecompositionLadder
+from ogcp.sim_eval.scene.body import hull_part, object_inertia
+from ogcp.sim_eval.scene.collision import PLACEMENT_TOLERANCE, CollisionSurface, place_tips
+from ogcp.sim_eval.scene.grasp_scene import build_scene
 
 BOX = (0.1, 0.08, 0.06)
 TOP = np.array([[0.0, 0.0, 0.03]])

@@ -12,12 +12,12 @@ import trimesh
 from ogcp.planner.grasp import ContactSet
 from ogcp.planner.infra import OgcpError
 from ogcp.sim_eval import Decomposition, DecompositionSettings, GraspEvaluator, SimSettings
-from ogcp.sim_eval import dexgraspbench as dg
-from ogcp.sim_eval.body import object_inertia
-from ogcp.sim_eval.metrics import binned_roc, roc_auc
-from ogcp.sim_eval.protocol import Settled, settle
+from ogcp.sim_eval.protocols import dexgraspbench as dg
+from ogcp.sim_eval.protocols.metrics import binned_roc, roc_auc
+from ogcp.sim_eval.protocols.phases import Settled, settle
 from ogcp.sim_eval.result import GraspSimResult
-from ogcp.sim_eval.scene import build_scene
+from ogcp.sim_eval.scene.body import object_inertia
+from ogcp.sim_eval.scene.grasp_scene import build_scene
 
 HULL = DecompositionSettings(method="convex_hull")
 BOX = trimesh.creation.box([0.1, 0.08, 0.06])

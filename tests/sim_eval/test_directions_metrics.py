@@ -1,4 +1,4 @@
-"""Disturbance directions (ogcp.sim_eval.directions) and agreement metrics (ogcp.sim_eval.metrics)."""
+"""Disturbance directions (ogcp.sim_eval.protocols.directions) and agreement metrics (ogcp.sim_eval.protocols.metrics)."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ from scipy.optimize import linprog
 
 from ogcp.planner.grasp import contact_wrenches, q1_certificate
 from ogcp.planner.infra import OgcpError
-from ogcp.sim_eval.directions import (
+from ogcp.sim_eval.protocols.directions import (
     DirectionSet,
     axis_directions,
     axis_labels,
@@ -22,7 +22,7 @@ from ogcp.sim_eval.directions import (
     sphere_directions,
     weakest_q1_direction,
 )
-from ogcp.sim_eval.metrics import (
+from ogcp.sim_eval.protocols.metrics import (
     below_floor,
     fidelity,
     kendall,

@@ -8,7 +8,7 @@ import trimesh
 
 from ogcp.planner.grasp import ContactSet
 from ogcp.sim_eval import Decomposition, DecompositionSettings, GraspEvaluator, SimGraspRecord, SimSettings
-from ogcp.sim_eval.gates import CONTACT_FRACTION, gate_failures
+from ogcp.sim_eval.protocols.gates import CONTACT_FRACTION, gate_failures
 
 SETTINGS = SimSettings()
 PASSING = {"initial_penetration": 2e-4, "tip_penetration": [2e-4, 1e-4, 0.0], "creep": 1e-6, "diverged": False}

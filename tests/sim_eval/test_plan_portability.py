@@ -11,13 +11,13 @@ from typing import Any
 import numpy as np
 import pytest
 
-import ogcp.sim_eval.plan_input as plan_input_module
+import ogcp.sim_eval.inputs.plan_input as plan_input_module
 from ogcp.planner.grasp.contact_set import ContactSet, sample_contacts
 from ogcp.planner.infra.errors import OgcpError
 from ogcp.planner.objects import resolve_object
 from ogcp.planner.records.plan import add_plan_path, contact_set_record
 from ogcp.planner.search.grasp_planner import GraspPlanner
-from ogcp.sim_eval.plan_input import plan_input
+from ogcp.sim_eval.inputs.plan_input import plan_input
 
 N = 40
 

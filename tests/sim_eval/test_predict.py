@@ -1,4 +1,4 @@
-"""The resistance LP of ogcp.sim_eval.predict: closed forms, LP duality and input validation.
+"""The resistance LP of ogcp.sim_eval.protocols.predict: closed forms, LP duality and input validation.
 
 Closed forms are derived by hand from the README's cone convention. Pinch: fingers at
 (+-a, 0, 0) with inward normals (-+1, 0, 0) have ``|n_x| >= 0.9``, so ``e = (0, 1, 0)``:
@@ -19,7 +19,7 @@ from scipy.optimize import linprog
 
 from ogcp.planner.grasp import contact_wrenches
 from ogcp.planner.infra import OgcpError
-from ogcp.sim_eval.predict import Prediction, ResistanceLP, physical_wrench, predicted_resistance
+from ogcp.sim_eval.protocols.predict import Prediction, ResistanceLP, physical_wrench, predicted_resistance
 
 HALF_WIDTH = 0.04  # a [m]
 RHO = 0.1  # [m]

@@ -12,11 +12,11 @@ import trimesh
 from ogcp.planner.grasp import ContactSet
 from ogcp.planner.infra import OgcpError
 from ogcp.sim_eval import GraspEvaluator, SimSettings, evaluate_plan
-from ogcp.sim_eval.body import object_inertia
 from ogcp.sim_eval.decomposition import Decomposition, DecompositionSettings
-from ogcp.sim_eval.predict import predicted_resistance
-from ogcp.sim_eval.protocol import ramp_trials, serial_trials, settle
-from ogcp.sim_eval.scene import build_scene
+from ogcp.sim_eval.protocols.phases import ramp_trials, serial_trials, settle
+from ogcp.sim_eval.protocols.predict import predicted_resistance
+from ogcp.sim_eval.scene.body import object_inertia
+from ogcp.sim_eval.scene.grasp_scene import build_scene
 
 F_MAX = 10.0
 MU = 0.5

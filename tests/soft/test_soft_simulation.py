@@ -8,11 +8,11 @@ import trimesh
 
 from ogcp.planner.grasp import ContactSet
 from ogcp.sim_eval import SimSettings
-from ogcp.sim_eval.body import object_inertia
-from ogcp.sim_eval.predict import predicted_resistance
-from ogcp.sim_eval.protocol import ramp_trials, settle
-from ogcp.sim_eval.scene import build_scene
-from ogcp.sim_eval.trial import contact_torsion
+from ogcp.sim_eval.protocols.phases import ramp_trials, settle
+from ogcp.sim_eval.protocols.predict import predicted_resistance
+from ogcp.sim_eval.protocols.trial import contact_torsion
+from ogcp.sim_eval.scene.body import object_inertia
+from ogcp.sim_eval.scene.grasp_scene import build_scene
 from tests.sim_eval.test_sim import _ramp as ramp_failure_load
 
 F_MAX, MU, RHO = 10.0, 0.5, 0.1

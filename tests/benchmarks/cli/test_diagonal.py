@@ -14,7 +14,7 @@ from ogcp.planner import builtin_mesh, resolve_object
 from ogcp.planner.grasp import ContactSet
 from ogcp.planner.infra.errors import OgcpError
 from ogcp.planner.records.plan import contact_sampling
-from ogcp.sim_eval.plan_input import plan_input
+from ogcp.sim_eval.inputs.plan_input import plan_input
 
 
 def _run(argv: list[str]) -> tuple[int, str, str]:

@@ -14,7 +14,7 @@ from ogcp.planner import builtin_mesh
 from ogcp.planner.grasp import ContactSet, sample_contacts
 from ogcp.planner.grasp.reach import DEFAULT_TIP_RADIUS_RATIO, REACH_TOLERANCE, default_tip_radius
 from ogcp.planner.records.plan import contact_sampling
-from ogcp.sim_eval.plan_input import plan_input
+from ogcp.sim_eval.inputs.plan_input import plan_input
 
 
 def _run(argv: list[str]) -> tuple[int, str, str]:

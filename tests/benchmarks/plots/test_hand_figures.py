@@ -23,7 +23,7 @@ from ogcp.benchmarks.plots.sim_figures_3d import (
 )
 from ogcp.benchmarks.suite.parse import parse_suite
 from ogcp.benchmarks.suite.runner import SuiteRunner
-from ogcp.sim_eval.plan_input import plan_input
+from ogcp.sim_eval.inputs.plan_input import plan_input
 
 matplotlib.use("Agg")
 SDH_SUITE = """

@@ -19,9 +19,9 @@ from scipy.spatial.transform import Rotation
 from ogcp.planner.grasp import NonWatertightWarning, mass_properties
 from ogcp.planner.infra import OgcpError
 from ogcp.planner.infra.cache import ENTRY_MANIFEST, CacheEntryWarning
-from ogcp.sim_eval.body import hull_part, is_closed_manifold, object_inertia
-from ogcp.sim_eval.collision import CollisionSurface
 from ogcp.sim_eval.decomposition import Decomposition, DecompositionSettings, cache_key, decompose
+from ogcp.sim_eval.scene.body import hull_part, is_closed_manifold, object_inertia
+from ogcp.sim_eval.scene.collision import CollisionSurface
 
 # Monkeypatching needs the module objects themselves (``decompose`` is also a function name).
 dec = importlib.import_module("ogcp.sim_eval.decomposition.decompose")

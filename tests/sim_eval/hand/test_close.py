@@ -8,11 +8,11 @@ import pytest
 import trimesh
 
 from ogcp.planner.hands import HandKinematics, load_descriptor, resolve_hand
-from ogcp.sim_eval.body import object_inertia
 from ogcp.sim_eval.hand.fit import fit_hand
 from ogcp.sim_eval.hand.fit_scene import FitScene
 from ogcp.sim_eval.hand.scene import PREGRASP_RADII, build_hand_scene, close_hand
-from ogcp.sim_eval.protocol import ramp_trials, settle
+from ogcp.sim_eval.protocols.phases import ramp_trials, settle
+from ogcp.sim_eval.scene.body import object_inertia
 from ogcp.sim_eval.settings import SimSettings
 from tests.planner.hands.hand_files import write_urdf_gripper
 

@@ -1,6 +1,6 @@
 """One grasp's simulated test: tips placed on the collision surface, preload, gates, ramps, hold tests.
 
-The tips start where they touch the parts actually simulated (:func:`~ogcp.sim_eval.collision.place_tips`),
+The tips start where they touch the parts actually simulated (:func:`~ogcp.sim_eval.scene.collision.place_tips`),
 never inside them. What they touch there are the *realized* contacts: the prediction the
 measurement is compared with, the ramp's targets and Q1's weakest direction all come from them,
 and the planned contacts' Q1 and prediction are reported next to them, so that the share of the
@@ -18,19 +18,19 @@ from numpy.typing import NDArray
 
 from ogcp.planner.grasp.contact_set import ContactSet
 from ogcp.planner.grasp.quality import Q1Certificate, q1_certificate
-from ogcp.sim_eval.collision import TipPlacement, place_tips
-from ogcp.sim_eval.collision_fit import ContactFit
-from ogcp.sim_eval.dexgraspbench import PROTOCOL, hold_test, physics_settings, use_object_defaults
-from ogcp.sim_eval.directions import direction_set
-from ogcp.sim_eval.gates import GateFailure, gate_failures, not_in_force_closure
-from ogcp.sim_eval.metrics import fidelity
-from ogcp.sim_eval.predict import predicted_resistance
-from ogcp.sim_eval.protocol import Settled, hold_trials, ramp_trials, settle
+from ogcp.sim_eval.decomposition.ladder import ContactFit
+from ogcp.sim_eval.protocols.dexgraspbench import PROTOCOL, hold_test, physics_settings, use_object_defaults
+from ogcp.sim_eval.protocols.directions import direction_set
+from ogcp.sim_eval.protocols.gates import GateFailure, gate_failures, not_in_force_closure
+from ogcp.sim_eval.protocols.metrics import fidelity
+from ogcp.sim_eval.protocols.phases import Settled, hold_trials, ramp_trials, settle
+from ogcp.sim_eval.protocols.predict import predicted_resistance
 from ogcp.sim_eval.result import GraspSimResult
-from ogcp.sim_eval.scene import GRAVITY, GraspScene, build_scene
+from ogcp.sim_eval.scene.collision import TipPlacement, place_tips
+from ogcp.sim_eval.scene.grasp_scene import GRAVITY, GraspScene, build_scene
 from ogcp.sim_eval.settings import SimSettings
 
-#: DexGraspBench's test at commit 1e7a5a6 (load, limits, friction, step; see ogcp.sim_eval.dexgraspbench).
+#: DexGraspBench's test at commit 1e7a5a6 (load, limits, friction, step; see ogcp.sim_eval.protocols.dexgraspbench).
 DEXGRASPBENCH = PROTOCOL.constants()
 WEIGHT_TEST_DURATION = 2.0  # [s]
 FIDELITY_FLOOR = 1e-3  # predictions below this fraction of F_max have no fidelity
@@ -250,7 +250,7 @@ def ramp_to_failure(
 
 
 def _dexgraspbench(scene: GraspScene, settled: Settled, settings: SimSettings) -> dict[str, Any]:
-    """DexGraspBench's verdict (:func:`ogcp.sim_eval.dexgraspbench.hold_test`): their six loads from the initial pose."""
+    """DexGraspBench's verdict (:func:`ogcp.sim_eval.protocols.dexgraspbench.hold_test`): their six loads from the initial pose."""
     return hold_test(scene, settled, settings)
 
 

@@ -1,6 +1,6 @@
 """Why a settled grasp is invalid: each failed validity gate as a finger, an amount and a remedy.
 
-:func:`~ogcp.sim_eval.protocol.settle` records the gates as numbers (``initial_penetration``,
+:func:`~ogcp.sim_eval.protocols.phases.settle` records the gates as numbers (``initial_penetration``,
 ``tip_penetration``, ``tips_in_contact``, ``creep``, ``diverged``); this module turns the failed
 ones into :class:`GateFailure` values that say which gate failed, on which finger, by how much
 against which limit, and what the user can change. They are written into each grasp's
@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ogcp.sim_eval.protocol import CONTACT_FRACTION
+from ogcp.sim_eval.protocols.phases import CONTACT_FRACTION
 from ogcp.sim_eval.settings import SimSettings
 
 
@@ -82,7 +82,7 @@ def gate_failures(gates: Mapping[str, Any], normal_forces: ArrayLike, settings: 
     """The failed gates of one settled grasp, whole-grasp failures first, then by finger.
 
     Args:
-        gates: The gates :func:`~ogcp.sim_eval.protocol.settle` recorded.
+        gates: The gates :func:`~ogcp.sim_eval.protocols.phases.settle` recorded.
         normal_forces: Tip normal forces after settling, shape (m,) [N].
         settings: The settings the grasp was simulated with (their limits are the gates').
 

@@ -1,7 +1,7 @@
 """The object as a rigid body for simulation: convex parts and mass properties.
 
 Mass and inertia come from the watertight mesh, never from the union of convex parts, whose
-overlaps would count some volume twice. Distances to the parts live in :mod:`ogcp.sim_eval.collision`.
+overlaps would count some volume twice. Distances to the parts live in :mod:`ogcp.sim_eval.scene.collision`.
 """
 
 from __future__ import annotations

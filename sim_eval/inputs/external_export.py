@@ -63,7 +63,7 @@ def export_grasps(
             ``HFTSResult``) together with ``contacts``.
         path: The file to write; a mesh path is written relative to its folder.
         contacts: The contact set the plan indexes. None for a record: it is re-sampled and
-            checked against the record (:func:`ogcp.sim_eval.plan_input.plan_input`).
+            checked against the record (:func:`ogcp.sim_eval.inputs.plan_input.plan_input`).
         max_grasps: Export at most this many grasps, best first.
 
     Returns:
@@ -78,7 +78,7 @@ def export_grasps(
     if isinstance(plan, Mapping):
         record = dict(plan)
         if contacts is None:
-            from ogcp.sim_eval.plan_input import plan_input
+            from ogcp.sim_eval.inputs.plan_input import plan_input
 
             rebuilt = plan_input(record)
             contacts, grasps, labels = rebuilt.contacts, rebuilt.grasps, rebuilt.labels

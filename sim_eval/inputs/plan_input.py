@@ -48,7 +48,7 @@ from ogcp.planner.records.plan import (
     recorded_contacts,
     recorded_positions,
 )
-from ogcp.sim_eval.plan_contacts import (
+from ogcp.sim_eval.inputs.plan_contacts import (
     FACE_NORMAL_TOLERANCE,
     SURFACE_TOLERANCE,
     mesh_candidates,
@@ -56,7 +56,7 @@ from ogcp.sim_eval.plan_contacts import (
     surface_misfit,
     versions_note,
 )
-from ogcp.sim_eval.plan_fields import check_plan_fields
+from ogcp.sim_eval.inputs.plan_fields import check_plan_fields
 
 POSITION_TOLERANCE = 1e-9  # [m] recorded vs re-sampled contact positions, COM and rho
 NORMAL_TOLERANCE = 1e-9  # recorded vs re-sampled unit normals (per component)
@@ -126,7 +126,7 @@ def _mesh(source: dict[str, Any], candidates: Sequence[Path]) -> trimesh.Trimesh
 
     Args:
         source: The object's description as recorded.
-        candidates: Where a mesh file may be, tried in order (:func:`ogcp.sim_eval.plan_contacts.mesh_candidates`).
+        candidates: Where a mesh file may be, tried in order (:func:`ogcp.sim_eval.inputs.plan_contacts.mesh_candidates`).
     """
     kind = source.get("kind")
     if kind in ("builtin", "fetched"):

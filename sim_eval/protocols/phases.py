@@ -16,7 +16,7 @@ import numpy as np
 from mujoco import rollout
 from numpy.typing import NDArray
 
-from ogcp.sim_eval.scene import GraspScene
+from ogcp.sim_eval.scene.grasp_scene import GraspScene
 from ogcp.sim_eval.settings import SimSettings
 
 FULL_STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS

@@ -3,7 +3,7 @@
 CoACD's parts are convex hulls of pieces of the mesh, so where a piece is concave they stand
 proud of the surface, and a fingertip meets them before it meets the mesh. For every grasp the
 offset of the collision surface along each contact's normal is measured
-(:meth:`~ogcp.sim_eval.collision.CollisionSurface.offsets`); when one exceeds the tolerance
+(:meth:`~ogcp.sim_eval.scene.collision.CollisionSurface.offsets`); when one exceeds the tolerance
 (``contact_tolerance`` x the object's diagonal) the next, finer CoACD threshold of
 :attr:`~ogcp.sim_eval.decomposition.settings.DecompositionSettings.ladder` is tried, each computed
 once per object and cached on disk like any decomposition. A grasp gets the coarsest level that
@@ -23,9 +23,9 @@ import trimesh
 from numpy.typing import ArrayLike, NDArray
 
 from ogcp.planner.infra.errors import OgcpError
-from ogcp.sim_eval.collision import CollisionSurface
 from ogcp.sim_eval.decomposition.decompose import Decomposition, decompose
 from ogcp.sim_eval.decomposition.settings import DecompositionSettings
+from ogcp.sim_eval.scene.collision import CollisionSurface
 
 #: How far along the normal the offset is looked for, in fingertip radii on either side.
 OFFSET_REACH_RADII = 2.0

@@ -15,7 +15,7 @@ not copied (the repository has no licence). Where each value comes from, at that
   pose before the hand closes; success is delta_pos < 5 cm and delta_angle < 15 degrees.
 * ``src/util/rot_util.py`` (``np_get_delta_qpos``): the distance between positions and
   2 arccos of the relative quaternion's w.
-* ``src/task/statistic.py``: their ROC-AUC (:func:`~ogcp.sim_eval.metrics.binned_roc`) of their Q1
+* ``src/task/statistic.py``: their ROC-AUC (:func:`~ogcp.sim_eval.protocols.metrics.binned_roc`) of their Q1
   metric, 2 - Q1, against success.
 """
 
@@ -32,10 +32,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ogcp.planner.infra.errors import OgcpError
-from ogcp.sim_eval.metrics import binned_roc, roc_auc
-from ogcp.sim_eval.protocol import Settled, hold_poses
+from ogcp.sim_eval.protocols.metrics import binned_roc, roc_auc
+from ogcp.sim_eval.protocols.phases import Settled, hold_poses
 from ogcp.sim_eval.result import GraspSimResult
-from ogcp.sim_eval.scene import GraspScene
+from ogcp.sim_eval.scene.grasp_scene import GraspScene
 from ogcp.sim_eval.settings import RANGES, SimSettings
 
 SOURCE = "JYChen18/DexGraspBench@1e7a5a6"
@@ -331,8 +331,8 @@ def set_summary(results: Sequence[GraspSimResult]) -> dict[str, Any]:
         ``n_gates_failed``, ``n_held_despite_gates`` (gates failed, every load held: successes
         for their test alone), ``n_penetration_failed``, ``n_unreachable``, ``n_errors``, and
         ``auc_q1`` of the planned Q1 against success: ``mann_whitney`` (ogcp's exact
-        :func:`~ogcp.sim_eval.metrics.roc_auc`, ties count 1/2), ``dexgraspbench`` (their binned
-        :func:`~ogcp.sim_eval.metrics.binned_roc` of -Q1), ``bins``, ``roc`` (their fpr, tpr) and ``n``.
+        :func:`~ogcp.sim_eval.protocols.metrics.roc_auc`, ties count 1/2), ``dexgraspbench`` (their binned
+        :func:`~ogcp.sim_eval.protocols.metrics.binned_roc` of -Q1), ``bins``, ``roc`` (their fpr, tpr) and ``n``.
     """
     evaluated = [r for r in results if r.error is None or r.unreachable]
     flags = np.array([succeeded(r) for r in evaluated], dtype=bool)

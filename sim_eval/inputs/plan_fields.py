@@ -1,6 +1,6 @@
 """Type and range checks of the ``ogcp.plan/1`` fields the simulation reads (:func:`check_plan_fields`).
 
-A plan is user input: every field ``ogcp.sim_eval.plan_input`` reads is checked here first, so a
+A plan is user input: every field ``ogcp.sim_eval.inputs.plan_input`` reads is checked here first, so a
 malformed file ends in one line naming the field's key path, never in a traceback deeper in.
 """
 
