@@ -44,12 +44,12 @@ from ogcp.planner.infra.errors import OgcpError, choice_error
 from ogcp.planner.records.grasps import GRASPS_SCHEMA, ExternalGrasps
 from ogcp.sim_eval.decomposition.decompose import DecompositionSettings
 from ogcp.sim_eval.evaluate import GraspEvaluator, object_diagonal, tip_radius
+from ogcp.sim_eval.hand.given import GivenPose, resolve_pose
 from ogcp.sim_eval.result import SimResult
 from ogcp.sim_eval.settings import SimSettings
 
 if TYPE_CHECKING:
     from ogcp.planner.hands.kinematics import HandKinematics
-    from ogcp.sim_eval.hand.given import GivenPose
 
 #: ``on_surface`` choices: what happens to a contact off the mesh's surface.
 ON_SURFACE = ("project", "refuse")
@@ -251,8 +251,6 @@ def external_input(
         if g.hand is not None:
             if hand is None:
                 raise OgcpError(f"{where}: grasps[{i}].hand: simulating a posed hand needs the record's hand")
-            from ogcp.sim_eval.hand.given import resolve_pose
-
             own = g.positions if len(g.positions) else None
             pose, pads, pad_normals = resolve_pose(hand, g.hand, mesh, f"{where}: grasps[{i}].hand", own)
             poses.append(pose)

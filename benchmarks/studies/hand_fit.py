@@ -12,8 +12,8 @@ per case: the share of the model's accepted grasps among all (seed 0), fits real
 worst pad residual, grasps valid after closing, the median fidelity of the valid ones, the most
 frequent reason of the invalid ones, seconds per hand grasp, and the tips' side: grasps valid
 with fingertips, how many of those the hand realised and held, the tips' median fidelity, and the
-median ratio of a valid grasp's hand trial (fit, close, protocol) to its fingertip trial, timed
-in the same run.
+median ratio of the hand trial (fit, close, protocol) to the fingertip trial of the grasps valid
+with both, timed in the same run.
 With ``--out``, every grasp's row goes to ``DIR/hand_fit.json`` and the tips-versus-hand figure
 (:func:`ogcp.benchmarks.plots.tips_hand.fig_tips_vs_hand`) to ``DIR/tips_vs_hand.{pdf,png}``.
 """
@@ -112,14 +112,14 @@ def table_row(case: dict[str, Any]) -> str:
         f"| {_median([r['hand_seconds'] for r in rows], 1)} | {len(tips)} of {len(rows)} "
         f"| {sum(r['realised'] for r in tips)}, {sum(r['hand_valid'] for r in tips)} "
         f"| {_median([r['tips_fidelity'] for r in tips if r['tips_fidelity'] is not None], 2)} "
-        f"| {_median([r['hand_seconds'] / r['tips_seconds'] for r in valid], 1)} |"
+        f"| {_median([r['hand_seconds'] / r['tips_seconds'] for r in valid if r['tips_valid']], 1)} |"
     )
 
 
 HEADER = (
     "| hand, object, m | accepted (seed 0) | A* optima realised | median worst residual [mm] | valid when closed "
     "| median fidelity | invalid because | s per grasp | valid with tips | of those: realised, held "
-    "| tips' median fidelity | hand / tips time (valid) |\n|---|---|---|---|---|---|---|---|---|---|---|---|"
+    "| tips' median fidelity | hand / tips time (both valid) |\n|---|---|---|---|---|---|---|---|---|---|---|---|"
 )
 
 

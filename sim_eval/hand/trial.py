@@ -53,7 +53,7 @@ from ogcp.sim_eval.scene.collision import place_tips
 from ogcp.sim_eval.settings import SimSettings
 
 #: Samples a fit starts from, nearest first, until one fit is realised.
-FIT_STARTS = 8
+FIT_STARTS = 16
 #: A pad counts as on its contact when its centre of pressure lies within this many pad radii of it.
 PAD_REACH_RADII = 3.0
 
