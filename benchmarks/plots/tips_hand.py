@@ -12,11 +12,13 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .style import SERIES_COLOURS, SINGLE_COLUMN, new_figure, styled
+from .style import DOUBLE_COLUMN, SERIES_COLOURS, SINGLE_COLUMN, new_figure, shared_legend, styled
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
+#: Most cases drawn at one column's width.
+ONE_COLUMN_CASES = 4
 #: The three bars of a case: (row key, legend label).
 BARS = (
     ("tips_valid", "valid with fingertips"),
@@ -33,9 +35,11 @@ def fig_tips_vs_hand(cases: Sequence[dict[str, Any]]) -> Figure:
         cases: ``{"hand", "object", "m", "rows": [{"tips_valid", "realised", "hand_valid"}, ...]}``.
 
     Returns:
-        A one-column figure; each bar is labelled with its count.
+        A one-column figure (two columns beyond :data:`ONE_COLUMN_CASES` cases); each bar is
+        labelled with its count, the legend below the panel.
     """
-    figure, (ax,) = new_figure(1, width=SINGLE_COLUMN, panel_height=2.2)
+    width = SINGLE_COLUMN if len(cases) <= ONE_COLUMN_CASES else DOUBLE_COLUMN
+    figure, (ax,) = new_figure(1, width=width, panel_height=2.0)
     width = 0.8 / len(BARS)
     positions = np.arange(len(cases))
     for k, (key, label) in enumerate(BARS):
@@ -44,8 +48,14 @@ def fig_tips_vs_hand(cases: Sequence[dict[str, Any]]) -> Figure:
         at = positions + (k - (len(BARS) - 1) / 2) * width
         bars = ax.bar(at, counts / totals, width, label=label, color=SERIES_COLOURS[k])
         ax.bar_label(bars, labels=[str(c) for c in counts], fontsize=6, padding=1)
-    ax.set_xticks(positions, [f"{c['hand']}\n{c['object']}, m={c['m']}" for c in cases], fontsize=6)
-    ax.set_ylim(0, 1.15)
+    ax.set_xticks(positions, [_label(case) for case in cases], fontsize=6)
+    ax.set_ylim(0, 1.12)
     ax.set_ylabel("share of planned grasps")
-    ax.legend(loc="upper right", fontsize=6, ncols=1)
+    shared_legend(figure, [ax], columns=len(BARS))
     return figure
+
+
+def _label(case: dict[str, Any]) -> str:
+    """A case's tick label; a hand's name breaks at its underscores, so long names keep to their group."""
+    hand = "\n".join(str(case["hand"]).split("_"))
+    return f"{hand}\n{case['object']}, m={case['m']}"

@@ -187,6 +187,6 @@ def test_the_tips_versus_hand_figure_has_one_bar_group_per_case(tmp_path):
     (ax,) = figure.axes
     heights = [patch.get_height() for patch in ax.patches]
     assert heights == [1.0, 1.0, 0.5, 1.0, 0.5, 1.0]  # tips, realised, held; per case in order
-    assert [t.get_text() for t in ax.get_xticklabels()] == ["sdh\nbox, m=3", "shadow_hand\nbox, m=3"]
+    assert [t.get_text() for t in ax.get_xticklabels()] == ["sdh\nbox, m=3", "shadow\nhand\nbox, m=3"]
     paths = save_figure(figure, tmp_path, "tips_vs_hand")
     assert [p.suffix for p in paths] == [".pdf", ".png"] and b"/FontFile2" in paths[0].read_bytes()
