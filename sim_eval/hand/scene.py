@@ -128,6 +128,7 @@ def build_hand_scene(
     mu: float,
     torque_scale: float,
     torsion: float = 0.0,
+    approach: bool = True,
 ) -> HandScene:
     """Compile the object and the hand at its fitted palm pose, in the pregrasp.
 
@@ -143,6 +144,8 @@ def build_hand_scene(
         mu: Friction coefficient of hand-object contacts.
         torque_scale: rho [m] of the scaled wrench space (the squeeze's balance).
         torsion: Torsional friction [m]; 0: condim 3.
+        approach: Compute ogcp's approach (pads backed off along the normals, straight in); False:
+            the grasp configuration alone, for a caller that brings its own pregrasp.
 
     Returns:
         The scene, not yet closed (:func:`close_hand`), squeezing with the full grip (:func:`squeezed`
@@ -174,13 +177,15 @@ def build_hand_scene(
             equality.solref = list(WELD_SOLREF)
     model = spec.compile()
     hand = MountedHand.find(model, kinematics)
-    around = FitScene(kinematics, parts)
-    approach = np.array(
-        [moved_configuration(around, fit, points, normals, -f * PREGRASP_RADII) for f in APPROACH[:-1]]
-        + [fit.joint_angles]
-    )
-    approach = approach[_first_clear(around, fit, approach) :]
-    pregrasp = approach[0]
+    waypoints = np.array([fit.joint_angles])
+    if approach:
+        around = FitScene(kinematics, parts)
+        waypoints = np.array(
+            [moved_configuration(around, fit, points, normals, -f * PREGRASP_RADII) for f in APPROACH[:-1]]
+            + [fit.joint_angles]
+        )
+        waypoints = waypoints[_first_clear(around, fit, waypoints) :]
+    pregrasp = waypoints[0]
     mount_qpos = int(model.jnt_qposadr[model.body_jntadr[hand.mount]])
     start = model.qpos0.copy()
     start[mount_qpos : mount_qpos + 3] = fit.translation
@@ -218,7 +223,7 @@ def build_hand_scene(
         watched_qpos=np.arange(mount_qpos, mount_qpos + 3, dtype=np.intp),
         start_qpos=start,
     )
-    return HandScene(scene, hand, fit.fingers, pregrasp, approach, fit.joint_angles.copy(), forces, grip)
+    return HandScene(scene, hand, fit.fingers, pregrasp, waypoints, fit.joint_angles.copy(), forces, grip)
 
 
 def squeezed(hand_scene: HandScene, share: float) -> HandScene:

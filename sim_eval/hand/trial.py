@@ -181,7 +181,8 @@ def simulate_hand_grasp(
         return dataclasses.replace(failed, gates={"valid": False, "reachable": False}, hand=hand)
     ordered_points, ordered_normals = points[list(order)], inward[list(order)]
     scene_args = (kinematics, posed, ordered_points, ordered_normals, parts, body.com, body.inertia, settings, mu)
-    opened = build_hand_scene(*scene_args, contacts.torque_scale, torsion)
+    own_approach = given is None or given.pregrasp is None  # a given pregrasp replaces ogcp's approach
+    opened = build_hand_scene(*scene_args, contacts.torque_scale, torsion, approach=own_approach)
     if given is not None:
         opened = given_scene(opened, given)
     if compat:
