@@ -7,6 +7,7 @@ import numpy as np
 from ogcp.planner.baselines.es import ESResult
 from ogcp.planner.baselines.hfts import HFTSResult
 from ogcp.planner.grasp.contact_set import ContactSet
+from ogcp.planner.infra.tolerance import TOL
 from ogcp.planner.methods.registry import METHODS
 from ogcp.planner.methods.runners import MethodRun
 from ogcp.planner.records.plan import PlanHand, PlanOptimum, PlanView
@@ -42,8 +43,10 @@ def search_summary(result: SearchResult, contacts: ContactSet) -> str:
             f"{why.get(result.status, 'interrupted by request')}: best so far, optimum <= {result.bound:.6f} "
             f"(gap {result.gap:.6f}, {100 * relative:.2f} % of the bound)"
         )
-    elif result.method == "wastar":
+    elif result.method == "wastar" and result.bound - result.q1 > TOL.q1_gap * max(1.0, result.bound):
         certificate = f"within bound: optimum <= {result.bound:.6f} (guarantee: <= {result.eps_bound:.6f})"
+    elif result.method == "wastar":  # its bound closed on its grasp: proven optimal like A*'s
+        certificate = "optimal (certified: the bound equals Q1)"
     elif c["symmetry"]:
         certificate = "optimal up to approximate symmetry removal"
     else:

@@ -32,8 +32,10 @@ def register(commands: Any) -> None:
     )
     report.set_defaults(handler=run_report)
     view = commands.add_parser("view", help="interactive 3D view (HTML) of one plan, simulation or cell record")
-    view.add_argument("result", type=Path, metavar="RESULT", help="JSON of ogcp plan, ogcp simulate or one cell")
-    view.add_argument("--out", type=Path, default=None, metavar="FILE", help="HTML file (default RESULT.html)")
+    view.add_argument("result", type=Path, metavar="RESULT", help="JSON of ogcp plan, ogcp evaluate or one cell")
+    view.add_argument(
+        "--out", type=Path, default=None, metavar="FILE", help="HTML file (default: RESULT with the suffix .html)"
+    )
     view.add_argument("--no-open", action="store_true", help="only write the file, do not open a browser")
     view.set_defaults(handler=run_view)
 

@@ -242,7 +242,7 @@ def write_view(result: str | Path, out: str | Path | None = None) -> ReportResul
     """Write the 3D view of one result: an ``ogcp.plan/1``, ``ogcp.sim/1``/``/2`` or ``ogcp.cell/1`` record.
 
     Args:
-        result: The JSON file (``ogcp plan --out``, ``ogcp simulate --out``, or one cell record).
+        result: The JSON file (``ogcp plan --out``, ``ogcp evaluate --out``, or one cell record).
         out: The HTML file (default: next to ``result``, with the suffix ``.html``).
 
     Raises:
