@@ -10,7 +10,7 @@ frame with the finger joints' angles: the same hand configuration, seen from the
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 import mujoco
 import numpy as np
@@ -19,6 +19,7 @@ from numpy.typing import ArrayLike, NDArray
 from ogcp.planner.hands.kinematics import HandKinematics
 from ogcp.planner.infra.errors import OgcpError
 from ogcp.planner.records.hand_poses import HandStage
+from ogcp.sim_eval.hand.given import quaternion_of, rotation_of
 
 _MOVABLE = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
 
@@ -90,26 +91,12 @@ def stage_from_root_qpos(kinematics: HandKinematics, qpos: ArrayLike, order: Seq
     quaternion = vector[3:7]
     if np.linalg.norm(quaternion) < 1e-9:
         raise OgcpError(f"{where}: the root quaternion (values 4 to 7) is zero")
-    model = kinematics.model
-    data = mujoco.MjData(model)
-    data.qpos[:] = kinematics.reference_qpos
-    for name, angle in zip(order, vector[7:], strict=True):
-        data.qpos[model.jnt_qposadr[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, name)]] = angle
-    mujoco.mj_kinematics(model, data)
-    root_rotation = data.xmat[kinematics.root].reshape(3, 3)
-    root_position = data.xpos[kinematics.root]
-    palm_rotation = root_rotation.T @ data.xmat[kinematics.palm].reshape(3, 3)
-    palm_position = root_rotation.T @ (data.xpos[kinematics.palm] - root_position)
-    given_rotation = np.empty(9)
-    mujoco.mju_quat2Mat(given_rotation, quaternion / np.linalg.norm(quaternion))
-    rotation = given_rotation.reshape(3, 3) @ palm_rotation
-    position = given_rotation.reshape(3, 3) @ palm_position + vector[:3]
-    quat = np.empty(4)
-    mujoco.mju_mat2Quat(quat, rotation.ravel())
-    angles = {
-        name: float(angle) for name, angle in zip(order, vector[7:], strict=True) if name in kinematics.joint_names
-    }
-    return HandStage(angles, position, quat)
+    angles = dict(zip(order, (float(v) for v in vector[7:]), strict=True))
+    palm_rotation, palm_position, _ = _palm_in_root(kinematics, angles)
+    root = rotation_of(quaternion)
+    rotation = root @ palm_rotation
+    finger = {name: angle for name, angle in angles.items() if name in kinematics.joint_names}
+    return HandStage(finger, root @ palm_position + vector[:3], quaternion_of(rotation))
 
 
 def root_qpos(kinematics: HandKinematics, stage: HandStage, order: Sequence[str]) -> NDArray[np.float64]:
@@ -119,25 +106,30 @@ def root_qpos(kinematics: HandKinematics, stage: HandStage, order: Sequence[str]
         Root position (3) [m], root quaternion (w, x, y, z) (4), then the angles of ``order``.
     """
     assert stage.palm_position is not None and stage.palm_quaternion is not None
+    palm_rotation, palm_position, qpos = _palm_in_root(kinematics, stage.joint_angles)
+    rotation = rotation_of(stage.palm_quaternion) @ palm_rotation.T
+    position = stage.palm_position - rotation @ palm_position
+    angles = [qpos[_qpos_address(kinematics, name)] for name in order]
+    return np.concatenate([position, quaternion_of(rotation), angles])
+
+
+def _qpos_address(kinematics: HandKinematics, joint: str) -> int:
+    model = kinematics.model
+    return int(model.jnt_qposadr[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, joint)])
+
+
+def _palm_in_root(
+    kinematics: HandKinematics, angles: Mapping[str, float]
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """The palm's rotation (3, 3) and position (3,) [m] in the root body's frame with the named
+    joints at ``angles`` (the others at their reference), and the qpos used, shape (nq,)."""
     model = kinematics.model
     data = mujoco.MjData(model)
     data.qpos[:] = kinematics.reference_qpos
-    for name, angle in stage.joint_angles.items():
-        data.qpos[model.jnt_qposadr[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, name)]] = angle
+    for name, angle in angles.items():
+        data.qpos[_qpos_address(kinematics, name)] = angle
     mujoco.mj_kinematics(model, data)
     root_rotation = data.xmat[kinematics.root].reshape(3, 3)
-    palm_rotation = root_rotation.T @ data.xmat[kinematics.palm].reshape(3, 3)
-    palm_position = root_rotation.T @ (data.xpos[kinematics.palm] - data.xpos[kinematics.root])
-    given = np.empty(9)
-    mujoco.mju_quat2Mat(given, stage.palm_quaternion)
-    rotation = given.reshape(3, 3) @ palm_rotation.T
-    position = stage.palm_position - rotation @ palm_position
-    quat = np.empty(4)
-    mujoco.mju_mat2Quat(quat, rotation.ravel())
-    angles = [
-        stage.joint_angles.get(
-            name, float(data.qpos[model.jnt_qposadr[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, name)]])
-        )
-        for name in order
-    ]
-    return np.concatenate([position, quat, angles])
+    rotation = root_rotation.T @ data.xmat[kinematics.palm].reshape(3, 3)
+    position = root_rotation.T @ (data.xpos[kinematics.palm] - data.xpos[kinematics.root])
+    return rotation, position, data.qpos.copy()
