@@ -150,7 +150,8 @@ class GraspEvaluator:
             bar.update()
         bar.close()
         return SimResult(
-            object=dict(contacts.source),
+            # rho turns the scaled torques of the torque directions into N·m for a reader.
+            object={**contacts.source, "torque_scale": contacts.torque_scale},
             grasps=tuple(results),
             set_metrics=_set_level(results, settings, diagonal),
             settings={

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import warnings
+
 import mujoco
 import numpy as np
 from numpy.typing import NDArray
@@ -46,13 +48,7 @@ def render_grasp(
     model.vis.global_.offheight = max(model.vis.global_.offheight, height)
     model.vis.headlight.ambient[:] = 0.45  # the scene has no lights of its own
     model.vis.headlight.diffuse[:] = 0.7
-    try:
-        renderer = mujoco.Renderer(model, height, width)
-    except Exception as exc:
-        raise OgcpError(
-            "offscreen rendering is not available here: set MUJOCO_GL=egl or MUJOCO_GL=osmesa "
-            f"with the matching library installed (e.g. Debian's libosmesa6) ({type(exc).__name__})"
-        ) from exc
+    renderer = _renderer(model, height, width)
     data = mujoco.MjData(model)
     mujoco.mj_setState(model, data, settled.state, FULL_STATE)
     mujoco.mj_forward(model, data)
@@ -65,6 +61,31 @@ def render_grasp(
         return renderer.render().copy()
     finally:
         renderer.close()
+
+
+def check_offscreen_rendering() -> None:
+    """Raise at once when this machine cannot render offscreen (before any simulation is spent).
+
+    Raises:
+        OgcpError: When no OpenGL context can be created (no display, EGL or OSMesa).
+    """
+    _renderer(mujoco.MjModel.from_xml_string("<mujoco/>"), 8, 8).close()
+
+
+def _renderer(model: mujoco.MjModel, height: int, width: int) -> mujoco.Renderer:
+    """A MuJoCo renderer, or one line saying why there is none.
+
+    GLFW's own warnings (no DISPLAY, not initialised) are kept off the terminal: the error says it all.
+    """
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return mujoco.Renderer(model, height, width)
+    except Exception as exc:
+        raise OgcpError(
+            "offscreen rendering is not available here: set MUJOCO_GL=egl or MUJOCO_GL=osmesa "
+            f"with the matching library installed (e.g. Debian's libosmesa6) ({type(exc).__name__})"
+        ) from exc
 
 
 def render_plan(

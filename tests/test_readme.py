@@ -13,12 +13,23 @@ def readme_commands() -> list[str]:
     return [line for block in blocks for line in block.splitlines() if line.startswith("python3 -m venv")]
 
 
-def test_readme_has_exactly_a_main_command_and_a_test_command():
+def test_readme_has_a_set_up_a_main_command_and_a_test_command():
     commands = readme_commands()
-    assert len(commands) == 2
-    main = next(c for c in commands if not c.endswith("-m pytest"))
-    assert "bin/ogcp suite quick " in main and "--resume" in main and "bin/ogcp plot results/quick" in main
-    assert any(c.endswith("-m pytest") for c in commands)
+    assert len(commands) == 3
+    setup = "python3 -m venv .venv && .venv/bin/pip install -e '.[test]'"
+    assert setup in commands  # set-up alone, its own command
+    main = next(c for c in commands if "bin/ogcp suite" in c)
+    assert main.startswith(setup) and "bin/ogcp suite quick " in main and "--resume" in main
+    assert "bin/ogcp plot results/quick" in main
+    test = next(c for c in commands if c.endswith("-m pytest"))
+    assert test.startswith(setup)  # each complete on its own on a fresh machine
+
+
+def test_readme_fits_a_screen_and_links_only_to_files_that_exist():
+    text = (ROOT / "README.md").read_text()
+    assert len(text.splitlines()) <= 250
+    links = re.findall(r"\]\(([^)#]+)(?:#[^)]*)?\)", text)
+    assert links and all((ROOT / link).exists() for link in links if "://" not in link), links
 
 
 def test_ci_runs_the_readme_test_command():

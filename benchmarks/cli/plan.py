@@ -308,6 +308,7 @@ EXIT_STATUS = {"stopped": 3, "memory": 4, "interrupted": 130}
 
 def run_plan(args: argparse.Namespace) -> int:
     from ogcp.benchmarks.cli.interrupt import stop_on_interrupt
+    from ogcp.benchmarks.cli.kernels import compile_kernels
     from ogcp.benchmarks.cli.plan_summary import describe
 
     spec = method_spec(args.method)
@@ -315,6 +316,7 @@ def run_plan(args: argparse.Namespace) -> int:
     options = run_options_from_args(spec, args)
     check_output(args.output)  # before the search whose result it is to hold
     contacts = load_contact_set(args.object, args)
+    compile_kernels([spec.name])  # first use: kept out of the time limit and the reported times
     if "time_limit" in spec.run_options:  # the searches: Ctrl-C returns their best grasp
         with stop_on_interrupt() as stop:
             run = spec.run(config, contacts, args.fingers, dataclasses.replace(options, stop=stop))

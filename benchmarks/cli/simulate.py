@@ -305,9 +305,11 @@ def sim_summary(record: dict[str, Any]) -> str:
 
     sim = SimRecord.from_dict(record)
     name = sim.object.get("name") or sim.object.get("path", "?")
+    found = sim.object.get("torque_scale")
+    rho = float(found) if isinstance(found, (int, float)) and not isinstance(found, bool) and found > 0 else None
     lines = [f"object: {name}, {len(sim.grasps)} grasp(s), {_fmt(sim.wall_seconds, 1)} s"]
     for g in sim.grasps:
-        head = f"\n{g.label} {list(g.grasp or ())}: Q1 {_fmt(g.q1, 4)} N"
+        head = f"\n{g.label} {list(g.grasp or ())}: Q1 {_fmt(g.q1, 4)}"
         if g.error:
             lines.append(f"{head}  {'UNREACHABLE' if g.unreachable else 'ERROR'} {g.error}")
             continue
@@ -328,12 +330,15 @@ def sim_summary(record: dict[str, Any]) -> str:
             lines.extend(f"    {failure}" for failure in _list(test.get("failures")))
         if not np.isfinite(g.measured).any():
             continue
-        lines.append("  direction    predicted [N]  measured [N]  fidelity")
+        lines.append("  direction      predicted     measured  unit   fidelity")
         for label, p, m, c, f in zip(g.direction_labels, g.predicted, g.measured, g.censored, g.fidelity):
             if label in AXIS_LABELS:
-                lines.append(f"  {label:<11}  {_fmt(p):>13}  {_fmt(m):>12}{'+' if c else ' '} {_fmt(f)}")
+                scale, unit = _row_unit(label, rho)
+                lines.append(
+                    f"  {label:<11}  {_fmt(p, 3, scale):>11}  {_fmt(m, 3, scale):>11}{'+' if c else ' '} {unit:<6} {_fmt(f)}"
+                )
         lines.append(
-            f"  minimum      {_fmt(g.predicted_min):>13}  {_fmt(g.measured_min):>12}   "
+            f"  minimum      {_fmt(g.predicted_min):>11}  {_fmt(g.measured_min):>11}  {'N*':<6} "
             f"median fidelity over {len(g.direction_labels)} directions: {_fmt(g.median_fidelity)}"
         )
     m = sim.set_metrics
@@ -352,8 +357,20 @@ def sim_summary(record: dict[str, Any]) -> str:
             f"AUC(Q1, holds {m.get('holding_load', '-')} N) {_fmt(m.get('auc_q1_holds'))}"
         )
     lines.extend(_dexgraspbench_line(m.get("dexgraspbench")))
-    lines.append("(+ = held to the end of the ramp: a lower bound)")
+    lines.append(
+        "(+ = held to the end of the ramp: a lower bound; Q1 is dimensionless; N* = the size of a scaled "
+        f"wrench, forces in N and torques divided by rho{'' if rho is None else f' = {rho:.4g} m'})"
+    )
     return "\n".join(lines)
+
+
+def _row_unit(label: str, rho: float | None) -> tuple[float, str]:
+    """Scale and unit of a table row: forces in N, torques in N·m (when the record gives rho), N* else."""
+    if label.startswith(("+f", "-f")):
+        return 1.0, "N"
+    if label.startswith(("+t", "-t")) and rho is not None:
+        return rho, "N·m"
+    return 1.0, "N*"
 
 
 def _dexgraspbench_line(summary: Any) -> list[str]:
@@ -383,6 +400,10 @@ def run_evaluate(args: argparse.Namespace) -> int:
     check_output(args.output)
     check_output(args.render)
     record = load_plan(args.plan)
+    if args.render is not None:
+        from ogcp.sim_eval.render import check_offscreen_rendering
+
+        check_offscreen_rendering()
     result = evaluate_plan(
         record,
         _settings(args),
@@ -393,11 +414,15 @@ def run_evaluate(args: argparse.Namespace) -> int:
         tips=args.tips,
     )
     data = result.to_dict()
-    if args.render is not None:
-        _render(record, args)
-    if args.output is not None:
+    if args.output is not None:  # first: a picture that fails must not cost the results
         write_json_atomic(args.output, data)
     print(json.dumps(data) if args.json else sim_summary(data))
+    if args.render is not None:
+        try:
+            _render(record, args)
+        except OgcpError as exc:
+            print(f"ogcp: error: {exc}", file=sys.stderr)
+            return 1
     return 0
 
 

@@ -99,11 +99,28 @@ def sim_grasps(data: RunData, notes: list[str] | None = None) -> Figure:
         weakest = int(np.nanargmin(grasp.measured))
         bound = "≥" if len(grasp.censored) > weakest and grasp.censored[weakest] else "="
         where = TIP_CAPTIONS[tips]
+        label = grasp.direction_labels[weakest]
         ax.set_title(
             f"{names[cell.problem]}: {cell.label} {grasp.label}{where}\n"
-            f"weakest {grasp.direction_labels[weakest]} {bound} {grasp.measured[weakest]:.3g} N"
+            f"weakest: {direction_name(label)} {bound} {grasp.measured[weakest]:.3g} {_unit(label)}"
         )
     return figure
+
+
+def direction_name(label: str) -> str:
+    """What a disturbance direction's label means, in words (``+fx`` -> ``force +x``, ``s22`` -> ``sphere dir. 22``)."""
+    if len(label) == 3 and label[0] in "+-" and label[1] in "ft" and label[2] in "xyz":
+        return f"{'force' if label[1] == 'f' else 'torque'} {label[0]}{label[2]}"
+    if label == "q1-weakest":
+        return "Q1's weakest direction"
+    if label[:1] == "s" and label[1:].isdigit():
+        return f"sphere dir. {int(label[1:])}"
+    return label
+
+
+def _unit(label: str) -> str:
+    """Forces in N; any other direction's load is the size of a scaled wrench (torques / rho)."""
+    return "N" if label[:2] in ("+f", "-f") else "N (scaled wrench)"
 
 
 def _tip_radius(cell: CellData, rebuilt: PlanInput) -> float:

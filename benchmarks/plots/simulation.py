@@ -10,6 +10,7 @@ problem on the same object (:mod:`.external`), beside A*, ES and HFTS.
 
 from __future__ import annotations
 
+import collections
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -116,30 +117,47 @@ def sim_q1_vs_resistance(run: RunData, notes: list[str] | None = None) -> Figure
     """Scatter of Q1 against the minimum measured resistance, one panel per problem (a column per mu).
 
     The title gives Spearman and Kendall over the panel's valid grasps; hollow triangles
-    are grasps whose weakest direction never slipped (a lower bound).
+    are grasps whose weakest direction never slipped (a lower bound). A grasp that several
+    methods returned (A*, WA* and ES often agree) is a dot of the first method ringed by the
+    others, in their colours, so that no method's marks hide under another's.
     """
     groups = _simulated(run)
     names = facet_names(run)
     figure, axes = facet_figure(run, [(problem, None) for problem in groups], panel_height=2.0)
-    lower_bounds = False
+    lower_bounds = rings = False
     for ax, (problem, cells) in zip(axes, groups.items()):
         # A grasp returned by several methods (A* and ES) is one sample of the correlation; an
         # external cell's indices are into its own contacts, so grasps are told apart by problem too.
         unique: dict[tuple[Any, tuple[int, ...]], tuple[float, float]] = {}
+        # How many methods have drawn each grasp: a repeat is a ring around the earlier marks.
+        drawn: collections.Counter[tuple[Any, tuple[int, ...]]] = collections.Counter()
         for cell, grasps in cells:
-            points = [
-                (g.q1, g.measured_min, g.min_censored)
-                for g in grasps
-                if g.q1 is not None and g.measured_min is not None
-            ]
+            points = []
             for g in grasps:
-                if g.q1 is not None and g.measured_min is not None:
-                    unique.setdefault((cell.problem, g.grasp), (g.q1, g.measured_min))
+                if g.q1 is None or g.measured_min is None:
+                    continue
+                key = (cell.problem, g.grasp)
+                unique.setdefault(key, (g.q1, g.measured_min))
+                points.append((g.q1, g.measured_min, g.min_censored, drawn[key]))
+                drawn[key] += 1
             if not points:
                 continue
-            q1, low, cut = (np.array(v) for v in zip(*points))
+            q1, low, cut, before = (np.array(v) for v in zip(*points))
             colour = _colour(cell)
-            ax.scatter(q1[~cut], low[~cut], s=9, color=colour, label=cell.label, linewidths=0)
+            first = ~cut & (before == 0)
+            ax.scatter(q1[first], low[first], s=9, color=colour, label=cell.label, linewidths=0)
+            again = ~cut & (before > 0)
+            if again.any():
+                rings = True
+                ax.scatter(
+                    q1[again],
+                    low[again],
+                    s=9 * (1 + 0.9 * before[again]) ** 2,
+                    facecolors="none",
+                    edgecolors=colour,
+                    linewidths=0.7,
+                    label=None,  # the legend shows the method's dot, drawn above even when empty
+                )
             if cut.any():
                 lower_bounds = True
                 ax.scatter(
@@ -159,6 +177,10 @@ def sim_q1_vs_resistance(run: RunData, notes: list[str] | None = None) -> Figure
         ax.grid(True)
     if lower_bounds:
         _censored_entry(axes[0])
+    if rings:
+        axes[0].scatter(
+            [], [], s=20, facecolors="none", edgecolors="#555555", linewidths=0.7, label="ring: same grasp as a dot"
+        )
     shared_legend(figure, axes)
     return figure
 

@@ -152,10 +152,64 @@ def styled(function: Callable[P, R]) -> Callable[P, R]:
 
     @functools.wraps(function)
     def wrapper(*args: P.args, **kwargs: P.kwargs) -> R:
+        from matplotlib.figure import Figure
+
         with style():
-            return function(*args, **kwargs)
+            result = function(*args, **kwargs)
+            if isinstance(result, Figure):
+                untangle_tick_labels(result)
+            return result
 
     return wrapper
+
+
+def untangle_tick_labels(figure: Figure, rounds: int = 8) -> None:
+    """Thin the ticks of every axis whose tick labels overlap once drawn (narrow panels, long numbers).
+
+    Minor labels go first (a log axis spanning less than a decade labels its minor ticks), then
+    the major ticks are thinned by a third at a time until no two labels touch; x labels still
+    touching with three ticks or fewer are turned upright.
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.ticker import LogLocator, MaxNLocator, NullFormatter
+
+    if not hasattr(figure.canvas, "get_renderer"):
+        FigureCanvasAgg(figure)
+    for _ in range(rounds):
+        figure.canvas.draw()
+        renderer = figure.canvas.get_renderer()  # type: ignore[attr-defined]
+        tangled = [axis for ax in figure.axes for axis in (ax.xaxis, ax.yaxis) if _overlapping(axis, renderer)]
+        if not tangled:
+            return
+        for axis in tangled:
+            if _drawn_labels(axis, minor=True):
+                axis.set_minor_formatter(NullFormatter())
+                continue
+            shown = len(_drawn_labels(axis, minor=False))
+            if shown <= 3:  # too few to thin: labels across the axis take less room along it
+                axis.set_tick_params(labelrotation=90 if axis.axis_name == "x" else 0)
+                continue
+            count = max(2, shown * 2 // 3)
+            locator = LogLocator(numticks=count) if axis.get_scale() == "log" else MaxNLocator(nbins=count - 1)
+            axis.set_major_locator(locator)
+
+
+def _overlapping(axis: Any, renderer: Any) -> bool:
+    """Whether two drawn tick labels of an axis (major or minor) overlap."""
+    boxes = [label.get_window_extent(renderer) for minor in (False, True) for label in _drawn_labels(axis, minor)]
+    return any(a.overlaps(b) for i, a in enumerate(boxes) for b in boxes[i + 1 :])
+
+
+def _drawn_labels(axis: Any, minor: bool) -> list[Any]:
+    """The tick labels an axis draws: with text, at ticks inside the view (the others are never drawn)."""
+    low, high = sorted(axis.get_view_interval())
+    margin = 1e-9 * max(abs(low), abs(high), 1e-300)
+    locations = axis.get_minorticklocs() if minor else axis.get_majorticklocs()
+    return [
+        label
+        for location, label in zip(locations, axis.get_ticklabels(minor=minor), strict=False)
+        if label.get_visible() and label.get_text() and low - margin <= location <= high + margin
+    ]
 
 
 def new_figure(

@@ -19,7 +19,6 @@ from __future__ import annotations
 import os
 import sys
 import threading
-import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -37,6 +36,7 @@ from ogcp.benchmarks.suite.manifest import (
     with_kernel_warmup,
     with_session,
 )
+from ogcp.benchmarks.suite.progress import Meter, number
 from ogcp.benchmarks.suite.record import CellRecord
 from ogcp.benchmarks.suite.select import Selection, is_selected, parse_selection
 from ogcp.benchmarks.suite.store import LOCK, ResultStore
@@ -53,15 +53,19 @@ _WARM_LOCK = threading.Lock()
 _WARMED = False
 
 
-def _warm_up_once() -> float | None:
-    """Warm the kernels if this process has not yet: the seconds it took, None if already warm."""
+def _warm_up_once(announce: Callable[[str], None] | None = None) -> float | None:
+    """Warm the kernels if this process has not yet: the seconds it took, None if already warm.
+
+    The suite's own process warms up first, before any worker starts: on a cold cache it
+    compiles (announcing it) and the workers then only load numba's cache.
+    """
     global _WARMED
     with _WARM_LOCK:
         if _WARMED:
             return None
-        from ogcp.planner.grasp.kernel import warm_up  # lazy: the runner module stays importable without numba loaded
+        from ogcp.planner.methods.warm_up import warm_up  # lazy: the runner module stays importable without numba
 
-        seconds = warm_up()
+        seconds = warm_up(announce=announce)
         _WARMED = True
         return seconds
 
@@ -262,31 +266,38 @@ class SuiteRunner:
         )
         # On a terminal the lines go above the bar (tqdm.write), else through the log.
         say = (lambda text: tqdm.write(text, file=sys.stderr)) if self.progress else self.log
-        meter = _Meter(self.suite.name, len(self.suite.cells), skipped, len(todo), self.lines, self.interval, say)
+        meter = Meter(self.suite.name, len(self.suite.cells), skipped, len(todo), self.lines, self.interval, say)
+        meter.started()
         warmups: dict[int, float] = {}
         try:
-            limits = (self.time_limit, self.memory_limit)
-            tasks = [(cell, settings if cell.simulate else None, *limits) for cell in todo]
-            finished = run_tasks(_run_warm_cell, tasks, self.jobs, self.backend, self.address) if tasks else iter(())
-            for line, pid, warmup in finished:
-                # A process already warm from an earlier run in it (loky reuses its workers) compiled nothing.
-                warmups[pid] = warmup if warmup is not None else warmups.get(pid, 0.0)
-                store.append(line)
-                records[line["id"]] = line
-                bar.update()
-                record = CellRecord.from_dict(line)
-                if record.error is not None:
-                    say(
-                        f"ogcp: cell {record.id} ({record.describe()}) failed: "
-                        f"{record.error.type}: {record.error.message}"
-                    )
-                elif record.status == "stopped" and record.plan_view is not None:
-                    view = record.plan_view
-                    say(
-                        f"ogcp: cell {record.id} ({record.describe()}) stopped at its time limit: "
-                        f"best Q1 {_number(view.q1)}, optimum <= {_number(view.bound)}"
-                    )
-                meter.finished(record)
+            with meter.heartbeat():
+                limits = (self.time_limit, self.memory_limit)
+                tasks = [(cell, settings if cell.simulate else None, *limits) for cell in todo]
+                if tasks:
+                    warmup = _warm_up_once(say)
+                    warmups[os.getpid()] = warmup if warmup is not None else warmups.get(os.getpid(), 0.0)
+                finished = (
+                    run_tasks(_run_warm_cell, tasks, self.jobs, self.backend, self.address) if tasks else iter(())
+                )
+                for line, pid, warmup in finished:
+                    # A process already warm from an earlier run in it (loky reuses its workers) compiled nothing.
+                    warmups[pid] = warmup if warmup is not None else warmups.get(pid, 0.0)
+                    store.append(line)
+                    records[line["id"]] = line
+                    bar.update()
+                    record = CellRecord.from_dict(line)
+                    if record.error is not None:
+                        say(
+                            f"ogcp: cell {record.id} ({record.describe()}) failed: "
+                            f"{record.error.type}: {record.error.message}"
+                        )
+                    elif record.status == "stopped" and record.plan_view is not None:
+                        view = record.plan_view
+                        say(
+                            f"ogcp: cell {record.id} ({record.describe()}) stopped at its time limit: "
+                            f"best Q1 {number(view.q1)}, optimum <= {number(view.bound)}"
+                        )
+                    meter.finished(record)
         finally:
             bar.close()
             if warmups:  # also after an interruption: the cells recorded so far ran warm
@@ -295,52 +306,6 @@ class SuiteRunner:
         return RunSummary(
             len(self.suite.cells), skipped, len(todo), errors, len(self.suite.cells) - len(records), records
         )
-
-
-class _Meter:
-    """Progress lines for runs off a terminal (CI, nohup): see :class:`SuiteRunner` ``lines``."""
-
-    def __init__(
-        self, name: str, total: int, skipped: int, todo: int, mode: str, interval: float, say: Callable[[str], None]
-    ) -> None:
-        self.name, self.total, self.skipped, self.todo = name, total, skipped, todo
-        self.mode, self.interval, self.say = mode, interval, say
-        self.ran = 0
-        self.errors = 0
-        self.start = time.monotonic()
-        self.last: float | None = None
-
-    def finished(self, record: CellRecord) -> None:
-        """Count one finished cell and print its line if one is due."""
-        self.ran += 1
-        self.errors += record.status in ("error", "stopped")
-        now = time.monotonic()
-        done = f"{self.skipped + self.ran}/{self.total}"
-        if self.mode == "each":
-            view = record.plan_view
-            q1 = _number(view.q1 if view is not None else None)
-            wall = "-" if record.wall_seconds is None else f"{record.wall_seconds:.2f}"
-            self.say(f"ogcp: [{done}] {record.describe()} {record.status}: Q1 {q1}, {wall} s")
-        elif self.mode == "periodic" and (
-            self.ran == self.todo or self.last is None or now - self.last >= self.interval
-        ):
-            self.last = now
-            elapsed = now - self.start
-            eta = elapsed / self.ran * (self.todo - self.ran)
-            self.say(
-                f"ogcp: {self.name}: {done} cells, {self.errors} errors, "
-                f"{_duration(elapsed)} elapsed, ETA {_duration(eta)}"
-            )
-
-
-def _duration(seconds: float) -> str:
-    """``1h02m03s``, ``2m05s`` or ``7s``: a duration for a progress line."""
-    whole = round(seconds)
-    hours, rest = divmod(whole, 3600)
-    minutes, secs = divmod(rest, 60)
-    if hours:
-        return f"{hours}h{minutes:02d}m{secs:02d}s"
-    return f"{minutes}m{secs:02d}s" if minutes else f"{secs}s"
 
 
 def summary_table(suite: Suite, records: dict[str, dict[str, Any]]) -> str:
@@ -364,10 +329,6 @@ def summary_table(suite: Suite, records: dict[str, dict[str, Any]]) -> str:
             f"{obj:<12} {label:<{width}} {f'{len(done)}/{totals[(obj, label)]}':>9} {errors:>6} {best} {wall:9.2f}"
         )
     return "\n".join(lines)
-
-
-def _number(value: float | None) -> str:
-    return "-" if value is None else f"{value:.6f}"
 
 
 def _parsed(line: dict[str, Any]) -> CellRecord | None:

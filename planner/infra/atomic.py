@@ -104,22 +104,41 @@ def write_json_atomic(path: str | Path, data: Any, indent: int | None = 1) -> No
     write_text_atomic(path, json.dumps(data, indent=indent) + "\n")
 
 
-def read_json(path: str | Path, what: str) -> Any:
+def read_json(path: str | Path, what: str, schema: str | None = None) -> Any:
     """The JSON document in ``path``, or one-line :class:`OgcpError` saying why not.
 
     Args:
         path: The file.
         what: What the file should hold, for the messages (``plan``, ``grasps``).
+        schema: The schema it should have (``ogcp.plan``), named when the file is not JSON at
+            all (a mesh or another binary given in its place).
 
     Raises:
         OgcpError: For a missing or unreadable file, or text that is not JSON (with its line).
     """
     path = Path(path)
+    expected = f"expected {schema or what} JSON"
     try:
-        return json.loads(path.read_text(encoding="utf-8"))
+        text = path.read_text(encoding="utf-8")
     except FileNotFoundError:
         raise OgcpError(f"{path}: no such {what} file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise OgcpError(f"{path}: cannot read {what}: {exc}") from exc
+    except UnicodeDecodeError:
+        raise OgcpError(f"{path}: not a {what} file ({expected}; this one is not text){_mesh_hint(path)}") from None
+    except OSError as exc:
+        raise OgcpError(f"{path}: cannot read {what}: {exc.strerror or exc}") from exc
+    try:
+        return json.loads(text)
     except json.JSONDecodeError as exc:
+        if not text.lstrip().startswith(("{", "[")):
+            raise OgcpError(f"{path}: not a {what} file ({expected}){_mesh_hint(path)}") from None
         raise OgcpError(f"{path}: not valid JSON ({exc.msg} at line {exc.lineno})") from exc
+
+
+#: File suffixes of meshes, which a newcomer may give where a JSON file is read.
+_MESH_SUFFIXES = (".stl", ".obj", ".ply", ".off", ".glb", ".gltf", ".dae")
+
+
+def _mesh_hint(path: Path) -> str:
+    if path.suffix.lower() not in _MESH_SUFFIXES:
+        return ""
+    return f"; for a mesh, plan first: ogcp plan {path} -o plan.json"

@@ -394,7 +394,7 @@ def load_grasps(path: str | Path) -> ExternalGrasps:
             (one line naming its JSON path).
     """
     path = Path(path)
-    data = read_json(path, "grasps")
+    data = read_json(path, "grasps", "ogcp.grasps/1")
     return replace(ExternalGrasps.from_dict(data, where=str(path), base=path.parent), path=path)
 
 

@@ -247,7 +247,7 @@ def load_plan(path: str | Path) -> dict[str, Any]:
         OgcpError: For a missing or unreadable file, invalid JSON or another schema.
     """
     path = Path(path)
-    record = read_json(path, "plan")
+    record = read_json(path, "plan", "ogcp.plan")
     if not isinstance(record, dict) or record.get("schema") != PLAN_SCHEMA:
         found = record.get("schema") if isinstance(record, dict) else type(record).__name__
         raise OgcpError(f"{path}: expected a plan with schema {PLAN_SCHEMA!r}, got {found!r}")

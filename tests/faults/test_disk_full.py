@@ -160,7 +160,11 @@ def test_the_cli_reports_a_full_disk_in_one_line(suite_file, tmp_path, monkeypat
     with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
         status = main(["suite", str(suite_file), "--out", str(tmp_path / "run")])
     assert status == 2 and out.getvalue() == ""
-    assert err.getvalue().count("\n") == 1 and err.getvalue().startswith("ogcp: error: cannot append to ")
+    # One line of error, after the run's opening progress line (the suite had started).
+    lines = err.getvalue().splitlines()
+    errors = [line for line in lines if line.startswith("ogcp: error")]
+    assert len(errors) == 1 and errors[0] == lines[-1] and errors[0].startswith("ogcp: error: cannot append to ")
+    assert all(line.startswith("ogcp: disk: ") for line in lines[:-1])
     assert (tmp_path / "run" / "results.jsonl").read_bytes() == b""
 
 

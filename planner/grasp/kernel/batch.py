@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import functools
 import threading
+from typing import TypeVar
 
 import numpy as np
 from numba import prange
@@ -118,11 +119,33 @@ def _batch_parallel(
 # Public API
 # --------------------------------------------------------------------------------------
 
+_Scalar = TypeVar("_Scalar", bound=np.generic)
+
 #: One workspace per thread: Dask workers run several tasks in one process at once.
 _LOCAL = threading.local()
 #: Diagnostic counters: [EPA iterations, flat ridge pairs certified, facets created, certificates,
 #: pencil normals recomputed by elimination, unused]. Shared; only indicative under threads.
 _STATS = np.zeros(6, dtype=np.int64)
+
+
+# numba compiles a kernel once per signature, and an array's signature includes whether it is
+# writeable: the contact sets' arrays are read-only, arrays built on the way are not. Each entry
+# point below hands its kernel one kind only (one compilation per kernel, never two): the
+# single-set kernels get writeable arrays, as the batch kernel's own calls of them do, and the
+# batch kernel read-only ones.
+
+
+def _readonly(array: NDArray[_Scalar]) -> NDArray[_Scalar]:
+    """A read-only view (no copy) of an input array."""
+    view = array.view()
+    view.flags.writeable = False
+    return view
+
+
+def _writeable(array: NDArray[np.float64]) -> NDArray[np.float64]:
+    """A C-contiguous float64 array that is writeable (a copy only when the input is not)."""
+    out = np.ascontiguousarray(array, dtype=np.float64)
+    return out if out.flags.writeable else out.copy()
 
 
 def _workspace(n: int) -> Workspace:
@@ -147,7 +170,7 @@ def kernel_q1(wrenches: NDArray[np.float64], certify: bool = True) -> tuple[bool
         settling facet (NaN when none; with ``ok`` False, when finite, the nearest facet
         whose certificate failed: a seed for the other method).
     """
-    w = np.ascontiguousarray(wrenches, dtype=np.float64)
+    w = _writeable(wrenches)
     direction = np.full(DIM, np.nan)
     ws = _workspace(len(w))
     status, value = _q1_kernel(w, len(w), ws.as_tuple(), certify, _STATS, 0.0, direction)
@@ -209,10 +232,11 @@ def evaluate_batch(
         the support table, ``BOUND`` an upper bound below the threshold, ``FALLBACK``
         not settled (NaN; the caller computes it by another method).
     """
-    wc = np.ascontiguousarray(contact_wrenches, dtype=np.float64)
-    g = np.ascontiguousarray(grasps, dtype=np.int64)
-    if table is None:
-        table = support_table(wc, default_directions())
+    wc = _readonly(np.ascontiguousarray(contact_wrenches, dtype=np.float64))
+    g = _readonly(np.ascontiguousarray(grasps, dtype=np.int64))
+    table = _readonly(
+        np.ascontiguousarray(support_table(wc, default_directions()) if table is None else table, dtype=np.float64)
+    )
     out = np.empty(len(g))
     status = np.zeros(len(g), dtype=np.int64)
     if parallel and len(g) >= 1024:
@@ -270,8 +294,8 @@ def canonical_plane(
         when the wrenches on it do not determine one (see
         :func:`ogcp.planner.grasp.kernel.refit._canonical_plane`).
     """
-    w = np.ascontiguousarray(wrenches, dtype=np.float64)
-    u = np.ascontiguousarray(normal, dtype=np.float64)
+    w = _writeable(wrenches)
+    u = _writeable(normal)
     out = u.copy()
     value, ok = _canonical_plane(w, len(w), u, float(offset), np.empty_like(w), out)
     return out, float(value), bool(ok)

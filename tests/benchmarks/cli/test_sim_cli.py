@@ -29,7 +29,7 @@ def plan_file(tmp_path_factory):
 def test_evaluate_prints_measured_against_predicted(plan_file):
     status, out, _ = _run(["evaluate", str(plan_file), "--directions", "4", "--decomposition", "convex_hull"])
     assert status == 0
-    assert "predicted [N]" in out and "measured [N]" in out and "q1-weakest" in out
+    assert "predicted     measured  unit" in out and "q1-weakest" in out and "N·m" in out
     assert "median fidelity" in out
     # Where the tips really started, and how far the collision surface is from the mesh.
     assert "realized contacts:" in out and "collision surface:" in out and "median Q1 change" in out

@@ -9,6 +9,7 @@ from __future__ import annotations
 import contextlib
 import io
 import json
+import time
 from pathlib import Path
 from typing import Any
 
@@ -46,12 +47,12 @@ def stub(monkeypatch: pytest.MonkeyPatch) -> list[float]:
         plan = {"method": "astar", "q1": 0.07, "q_ows": 0.1, "bound": 0.07, "stats": {"cpu_seconds": 0.1}}
         return CellRecord(cell.id, cell.params(), plan=plan, wall_seconds=0.5).to_dict()
 
-    def warm_up() -> float:
+    def warm_up(announce: Any = None) -> float:
         calls.append(3.5)
         return 3.5
 
     monkeypatch.setattr(runner, "run_cell", run_cell)
-    monkeypatch.setattr("ogcp.planner.grasp.kernel.warm_up", warm_up)
+    monkeypatch.setattr("ogcp.planner.methods.warm_up.warm_up", warm_up)
     monkeypatch.setattr(runner, "_WARMED", False)
     return calls
 
@@ -75,17 +76,35 @@ def test_warm_up_runs_once_per_process_and_is_recorded(tmp_path: Path, stub: lis
 
 def test_periodic_lines_are_throttled_and_end_with_the_last_cell(tmp_path: Path, stub: list[float]) -> None:
     every = _run(tmp_path / "a", lines="periodic", interval=0.0)
-    assert len(every) == 3 and every[-1].startswith("ogcp: stub: 3/3 cells, 0 errors, ")
-    assert "elapsed, ETA" in every[0]
+    assert every[0] == "ogcp: stub: 3 cells to run, 0 of 3 done before"  # at once, before any cell
+    assert len(every) == 4 and every[-1].startswith("ogcp: stub: 3/3 cells, 0 errors, ")
+    assert "elapsed, ETA" in every[1]
     throttled = _run(tmp_path / "b", lines="periodic", interval=1e9)
-    assert [line.split(" cells")[0] for line in throttled] == ["ogcp: stub: 1/3", "ogcp: stub: 3/3"]
+    assert [line.split(" cells")[0] for line in throttled[1:]] == ["ogcp: stub: 1/3", "ogcp: stub: 3/3"]
     assert _run(tmp_path / "c") == []
 
 
 def test_verbose_lines_name_each_cell(tmp_path: Path, stub: list[float]) -> None:
-    lines = _run(tmp_path / "a", lines="each")
+    lines = _run(tmp_path / "a", lines="each")[1:]
     assert len(lines) == 3 and lines[0].startswith("ogcp: [1/3] box n=12 seed=")
     assert lines[0].endswith("m=3 A* ok: Q1 0.070000, 0.50 s")
+
+
+def test_a_silent_stretch_gets_a_line_at_least_every_heartbeat(
+    tmp_path: Path, stub: list[float], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    def slow_cell(cell: Any, settings: Any, time_limit: Any, memory_limit: Any) -> dict[str, Any]:
+        time.sleep(1.6)  # a long cell: no cell line for a while
+        plan = {"method": "astar", "q1": 0.07, "q_ows": 0.1, "bound": 0.07, "stats": {"cpu_seconds": 0.1}}
+        return CellRecord(cell.id, cell.params(), plan=plan, wall_seconds=1.6).to_dict()
+
+    monkeypatch.setattr(runner, "run_cell", slow_cell)
+    monkeypatch.setattr("ogcp.benchmarks.suite.progress.HEARTBEAT_S", 0.5)
+    lines = _run(tmp_path / "a", lines="periodic", interval=1e9, max_cells=1)
+    assert lines[0].startswith("ogcp: stub: 1 cells to run")
+    beats = [line for line in lines if line.endswith("elapsed, running")]
+    assert beats and beats[0].startswith("ogcp: stub: 0/3 cells, 0 errors, ")
+    assert lines[-1].startswith("ogcp: stub: 1/3 cells")
 
 
 def test_cli_quiet_and_off_terminal_progress(tmp_path: Path, stub: list[float]) -> None:
