@@ -36,3 +36,10 @@ def test_ci_runs_the_readme_test_command():
     test_command = next(c for c in readme_commands() if c.endswith("-m pytest"))
     ci = (ROOT / ".ci" / "run").read_text()
     assert test_command in ci.splitlines()
+
+
+def test_the_documentation_home_page_is_the_readme():
+    # docs/index.md is the README with links relative to docs/ (regenerate it with this sed):
+    # sed 's#](docs/#](#g' README.md > docs/index.md
+    readme = (ROOT / "README.md").read_text()
+    assert (ROOT / "docs" / "index.md").read_text() == readme.replace("](docs/", "](")

@@ -302,6 +302,42 @@ def run_contacts(args: argparse.Namespace) -> int:
     return 0
 
 
+#: Children one expansion lists beyond which ``ogcp plan`` says what the request costs (2^20: a few s).
+LARGE_EXPANSION = 2**20
+#: Grasps exhaustive search evaluates beyond which ``ogcp plan`` says what the request costs.
+LARGE_ENUMERATION = 10**9
+
+
+def size_note(spec: MethodSpec, config: Any, n: int, m: int, time_limit: float | None) -> str | None:
+    """One line on a request whose size alone makes it long, with the flags that bound it; None for others.
+
+    A* and its kin replace every super-contact at once, so one expansion lists up to b^m children;
+    exhaustive search evaluates C(n, m) grasps.
+    """
+    if m > n or m < 1:
+        return None
+    if spec.name in ("astar", "wastar", "dijkstra"):
+        children = int(getattr(config, "branching", 2)) ** m
+        if children < LARGE_EXPANSION:
+            return None
+        bounded = (
+            f"the time limit of {time_limit:g} s returns the best grasp found and a certified bound"
+            if time_limit is not None
+            else "set --time-limit S to get the best grasp found and a certified bound in S seconds"
+        )
+        return (
+            f"{spec.title} with m = {m}: one expansion lists up to {children:.2g} children (b^m), so the search "
+            f"may not get past its first levels; {bounded}, or plan with --method hfts"
+        )
+    grasps = math.comb(n, m)
+    if spec.name in ("es", "es-pruned") and grasps >= LARGE_ENUMERATION:
+        return (
+            f"{spec.title} evaluates C({n}, {m}) = {grasps:.2g} grasps: hours to years; --jobs and a Dask cluster "
+            "(--backend dask) spread them, --checkpoint DIR resumes an interrupted run, or plan with --method astar"
+        )
+    return None
+
+
 #: Exit status of ``ogcp plan`` by the result's status: a stopped search is a result, not an error.
 EXIT_STATUS = {"stopped": 3, "memory": 4, "interrupted": 130}
 
@@ -316,6 +352,9 @@ def run_plan(args: argparse.Namespace) -> int:
     options = run_options_from_args(spec, args)
     check_output(args.output)  # before the search whose result it is to hold
     contacts = load_contact_set(args.object, args)
+    note = size_note(spec, config, len(contacts), args.fingers, options.time_limit)
+    if note is not None:
+        print(f"ogcp: {note}", file=sys.stderr, flush=True)
     compile_kernels([spec.name])  # first use: kept out of the time limit and the reported times
     if "time_limit" in spec.run_options:  # the searches: Ctrl-C returns their best grasp
         with stop_on_interrupt() as stop:

@@ -72,6 +72,13 @@ POLISH_SHARE = 0.1
 POLISH_AFTER = 30.0
 #: [s] Most time local search may take in all: a long search's certificate needs the time more.
 POLISH_SECONDS = 30.0
+#: [s] Time one child takes to list, bound and keep (compiled listing, measured at m = 20: about
+#: 1.7 µs, with margin): a search with a time limit starts no expansion or bound that cannot end in time.
+SUCCESSOR_SECONDS = 3e-6
+#: [B] Memory one listed child takes per finger (its nodes, twice) on top of ~32 B of its bounds.
+SUCCESSOR_BYTES_PER_FINGER = 8
+#: [s] Local search a search stopped without any grasp still takes (large m: no expansion fits).
+STOP_POLISH_SECONDS = 0.5
 #: [s] Longest one call of local search runs: progress reports, the deadline and the other
 #: parts wait meanwhile.
 POLISH_SLICE = 2.0
@@ -205,6 +212,8 @@ class Search(Expansion):
         if polisher is None or self._barren or (elapsed < POLISH_AFTER and not stopping):
             return
         budget = min(POLISH_SECONDS, POLISH_SHARE * elapsed)
+        if stopping and self.incumbent is None:
+            budget = max(budget, polisher.seconds + STOP_POLISH_SECONDS)  # a grasp is owed, if any is found
         allowance = min(POLISH_SLICE, budget - polisher.seconds)
         if allowance <= 0:
             return
@@ -261,6 +270,17 @@ class Search(Expansion):
                 else:
                     self.push(open_list, max(lower, g), depth, EXACT_G, g, ident)
                 continue
+            listed = self.successor_count(state)
+            if listed * SUCCESSOR_SECONDS > deadline - now:
+                # Listing this state's children (up to b^m of them) would outlast the limit.
+                open_list.restore(entry)
+                return self.stopped(open_list)
+            if (
+                self.memory_limit is not None
+                and listed * (SUCCESSOR_BYTES_PER_FINGER * self.m + 32) > self.memory_limit
+            ):
+                open_list.restore(entry)  # ... or take more memory than the search may
+                return self.stopped(open_list, "memory")
             if stage != EXACT:
                 self.refine(open_list, state, depth, lower, g, ident)
                 continue

@@ -28,6 +28,10 @@ from ogcp.planner.search.search_space import State
 DIVE_BUDGET = 20_000
 #: Open states a dive starts from, most promising first.
 DIVE_STARTS = 16
+#: Children a dive ranks at each step (Γ lists up to b^m; a dive wants one good path down).
+DIVE_CHILDREN = 64
+#: [s] Most time a dive takes: it runs after a search's time limit.
+DIVE_SECONDS = 1.0
 
 
 @dataclass(frozen=True)
@@ -110,20 +114,22 @@ class SearchOutcome(Forgetting):
 
         Each of the :data:`DIVE_STARTS` open states with the smallest bounds is descended
         until its first valid terminal state, which is offered as the incumbent (found by
-        the open state it lies below, so the certificate is unchanged). The incumbent stays
-        None when :data:`DIVE_BUDGET` states hold no valid grasp.
+        the open state it lies below, so the certificate is unchanged), ranking at most
+        :data:`DIVE_CHILDREN` children of each state. The incumbent stays None when
+        :data:`DIVE_BUDGET` states, or :data:`DIVE_SECONDS`, hold no valid grasp.
         """
         budget = DIVE_BUDGET
+        deadline = time.perf_counter() + DIVE_SECONDS
         for entry in open_list.smallest_lower(DIVE_STARTS):
             start = self.state_of(entry[6])
             stack = [start]
-            while stack and budget > 0:
+            while stack and budget > 0 and time.perf_counter() < deadline:
                 state = stack.pop()
                 budget -= 1
                 if self.is_terminal(state):
                     self.offer(self.exact(state), tuple(sorted(state)), start, entry[6])
                     break
-                children = self.successors(state)
+                children = self.successors(state, limit=DIVE_CHILDREN, deadline=deadline)
                 # Ascending U, so the child with the highest bound is popped next.
                 stack.extend(sorted(children, key=lambda child: self.upper(self.node_vectors(child))))
 

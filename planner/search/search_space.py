@@ -5,8 +5,10 @@ See :mod:`ogcp.planner.search.grasp_planner` for the design; :mod:`ogcp.planner.
 
 from __future__ import annotations
 
+import collections
 import itertools
-from collections.abc import Hashable, Sequence
+import time
+from collections.abc import Hashable, Iterator, Sequence
 from typing import Any
 
 import numpy as np
@@ -126,19 +128,62 @@ class SearchSpace:
             return all(c.accepts(grasp, self.contacts) for c in constraints)
         return all(c.admits(parts, self.contacts) for c in constraints)
 
-    def successors(self, state: State) -> list[State]:
-        """Γ restricted to valid states (Eq. 15), sorted unless finger order is kept."""
-        combos = itertools.product(*(self.tree.children(node) for node in state))
-        unique = dict.fromkeys(combos if self.config["ordered"] else (tuple(sorted(c)) for c in combos))
-        result = []
-        for child in unique:
+    def successors(self, state: State, limit: int | None = None, deadline: float | None = None) -> list[State]:
+        """Γ restricted to valid states (Eq. 15), sorted unless finger order is kept.
+
+        Args:
+            state: The state to expand.
+            limit: Stop after this many valid successors, listing each multiset once (a dive
+                needs a few, and Γ lists up to b^m); None: all, in product order.
+            deadline: ``time.perf_counter()`` reading after which the listing stops (a dive
+                runs after the search's time limit; at large m nearly every combination is
+                invalid); None: none.
+        """
+        seen: set[State] = set()
+        result: list[State] = []
+        for tried, combo in enumerate(self._combinations(state, distinct=limit is not None)):
+            if deadline is not None and tried % 1024 == 1023 and time.perf_counter() > deadline:
+                break
+            child = combo if self.config["ordered"] else tuple(sorted(combo))
+            if child in seen:
+                continue
+            seen.add(child)
             if not self.valid(self.members(child), self.is_terminal(child), child):
                 self.pruned += 1
                 continue
             if self.symmetry is not None and not self.symmetry.is_new(self.depth(child), self.members(child)):
                 continue
             result.append(child)
+            if limit is not None and len(result) >= limit:
+                break
         return result
+
+    def _combinations(self, state: State, distinct: bool) -> Iterator[tuple[int, ...]]:
+        """Γ's combinations of a state's children, in product order; with ``distinct``, the
+        multisets only (a super-contact that appears k times picks k of its children without
+        order), which lists a few hundred children of the root instead of its b^m."""
+        if not distinct or self.config["ordered"]:
+            yield from itertools.product(*(self.tree.children(node) for node in state))
+            return
+        picks = [
+            list(itertools.combinations_with_replacement(self.tree.children(node), times))
+            for node, times in sorted(collections.Counter(state).items())
+        ]
+        for chosen in itertools.product(*picks):
+            yield tuple(itertools.chain.from_iterable(chosen))
+
+    def successor_count(self, state: State) -> int:
+        """How many children expanding or bounding a state lists at most: Γ's and Γh's products [-].
+
+        Γ replaces every super-contact at once, so a state has up to b^m successors: at large m
+        one expansion outlasts any time limit, and the search checks this count first.
+        """
+        # From the sizes alone: splitting a node here would number the tree's nodes in another order.
+        spread = max(int(self.config["branching"]), int(self.config.get("heuristic_branching") or 1))
+        count = 1
+        for node in state:
+            count *= min(spread, len(self.tree.members[node]))
+        return count
 
     # -- quality: exact values and cheap upper bounds ---------------------------------
 

@@ -91,3 +91,16 @@ def test_results_are_written_when_the_picture_fails(small_plan: Path, tmp_path: 
     index = grasp["directions"].index("+tx")
     assert row.split()[1] == f"{grasp['predicted'][index] * rho:.3f}" and "N·m" in row
     assert any(line.strip().startswith("+fx") and " N " in line for line in table.splitlines())
+
+
+def test_a_request_too_big_to_finish_says_so_in_one_line_with_the_flags_that_bound_it() -> None:
+    from ogcp.benchmarks.cli.plan import size_note
+    from ogcp.planner.methods.registry import METHODS
+
+    astar, es = METHODS["astar"], METHODS["es"]
+    assert size_note(astar, astar.config(), 60, 3, None) is None  # an ordinary request: nothing
+    note = size_note(astar, astar.config(), 60, 30, None)
+    assert note is not None and "1.1e+09 children" in note and "--time-limit" in note and "\n" not in note
+    assert "the time limit of 5 s returns" in (size_note(astar, astar.config(), 60, 30, 5.0) or "")
+    assert size_note(es, es.config(), 200, 3, None) is None
+    assert "C(60, 20) = 4.2e+15 grasps" in (size_note(es, es.config(), 60, 20, None) or "")
