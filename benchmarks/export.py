@@ -200,8 +200,11 @@ def _records(run_dir: str | Path) -> list[CellRecord]:
     store = ResultStore(run_dir)
     if not store.results_path.is_file():
         raise OgcpError(f"{run_dir}: no results.jsonl (expected the --out folder of ogcp suite)")
+    read = store.read()
+    if not read.records and read.problems:
+        raise OgcpError(f"{store.results_path}: no cell record this ogcp can read ({read.problems[0]})")
     latest: dict[str, CellRecord] = {}
-    for line in store.read().records:
+    for line in read.records:
         try:
             record = CellRecord.from_dict(line)
         except OgcpError as exc:

@@ -134,7 +134,7 @@ def surface_fit(
     if abs(distance[i]) > PROJECT_LIMIT * radius:
         raise OgcpError(
             f"{where(i)}, beyond the {radius * 1e3:.4g} mm fingertip radius ({count}): not a rounding of the "
-            "surface; are the units metres and the frame the mesh's?"
+            f"surface; {_units_hint(mesh, points, PROJECT_LIMIT * radius)}"
         )
     if (outward := np.flatnonzero(angle > 90.0)).size:
         j = int(outward[np.argmax(angle[outward])])
@@ -359,3 +359,11 @@ def evaluate_grasps(
     poses = given.poses if setup is not None else None
     result = evaluator.evaluate(mesh, given.contacts, given.grasps, given.labels, poses=poses)
     return dataclasses.replace(result, object={**result.object, "external": given.record(on_surface)})
+
+
+def _units_hint(mesh: trimesh.Trimesh, points: NDArray[np.float64], reach: float) -> str:
+    """What to check when contacts are far off the surface: millimetres, when they fit once divided by 1000."""
+    scaled = SurfaceIndex(mesh).nearest(points / 1000.0)
+    if float(np.max(scaled.distance)) <= reach:
+        return "the positions look like millimetres: ogcp.grasps/1 positions are in metres, divide them by 1000"
+    return "are the units metres and the frame the mesh's?"

@@ -6,6 +6,7 @@ Exit status: 0 when the tables are written, 2 on invalid input.
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -31,7 +32,10 @@ def register(commands: Any) -> None:
 def run_export(args: argparse.Namespace) -> int:
     """Handler of ``ogcp export``."""
     from ogcp.benchmarks.export import export_run  # lazy: ogcp --help never loads the record readers
+    from ogcp.benchmarks.suite.store import ResultStore
 
     for path in export_run(args.run, args.out, args.format):
         print(path)
+    for problem in ResultStore(args.run).read().problems:  # what the tables leave out, and why
+        print(f"ogcp: note: {problem}", file=sys.stderr)
     return 0

@@ -20,6 +20,7 @@ from ogcp.benchmarks.report.scene import Scenes
 from ogcp.benchmarks.report.viewer import VIEWER_JS
 from ogcp.benchmarks.suite.record import CellRecord
 from ogcp.benchmarks.suite.store import ResultStore
+from ogcp.planner.infra.atomic import read_json
 from ogcp.planner.infra.errors import OgcpError
 
 #: The file ``ogcp report`` writes into the run folder.
@@ -249,10 +250,12 @@ def write_view(result: str | Path, out: str | Path | None = None) -> ReportResul
         OgcpError: For a file that cannot be read or is none of those records.
     """
     result = Path(result)
-    try:
-        record = json.loads(result.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise OgcpError(f"cannot read {result}: {exc}") from exc
+    if result.name == "results.jsonl" or result.is_dir():
+        folder = result.parent if result.name == "results.jsonl" else result
+        raise OgcpError(
+            f"{result} is a suite's results: ogcp report {folder} draws them all; ogcp view shows one record"
+        )
+    record = read_json(result, "result", "ogcp.plan, ogcp.sim or ogcp.cell")
     schema = str(record.get("schema", "")) if isinstance(record, dict) else ""
     scenes = Scenes()
     if schema.startswith("ogcp.plan/"):

@@ -15,11 +15,10 @@ from collections.abc import Mapping
 from dataclasses import dataclass, fields
 from typing import Any
 
-from ogcp.benchmarks.suite.store import jsonable
+from ogcp.benchmarks.suite.store import CELL_SCHEMA, jsonable
 from ogcp.planner.infra.errors import OgcpError
 from ogcp.planner.records.plan import PlanView
 
-CELL_SCHEMA = "ogcp.cell/1"
 #: Lines of a failing cell's traceback kept in its record.
 TRACEBACK_LINES = 15
 #: Params that make two cells plan on the same contact set: object, |C|, contact seed, m, mu, k, diagonal

@@ -59,6 +59,10 @@ class ReadReport:
         return self.size - self.valid_end
 
 
+#: The schema of a suite cell's record (:mod:`ogcp.benchmarks.suite.record` writes it).
+CELL_SCHEMA = "ogcp.cell/1"
+
+
 def read_results(path: str | Path) -> ReadReport:
     """Read a ``results.jsonl`` (a missing file reads as empty).
 
@@ -80,6 +84,10 @@ def read_results(path: str | Path) -> ReadReport:
             continue
         if not isinstance(record, dict) or not isinstance(record.get("id"), str):
             problems.append(f"{path.name} line {number}: not a cell record with an id (ignored)")
+            continue
+        schema = record.get("schema", CELL_SCHEMA)  # the oldest records name none
+        if schema != CELL_SCHEMA:
+            problems.append(f"{path.name} line {number}: schema {schema!r}, this ogcp reads {CELL_SCHEMA!r} (ignored)")
             continue
         records.append(record)
     if end < len(data):

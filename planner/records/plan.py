@@ -250,7 +250,8 @@ def load_plan(path: str | Path) -> dict[str, Any]:
     record = read_json(path, "plan", "ogcp.plan")
     if not isinstance(record, dict) or record.get("schema") != PLAN_SCHEMA:
         found = record.get("schema") if isinstance(record, dict) else type(record).__name__
-        raise OgcpError(f"{path}: expected a plan with schema {PLAN_SCHEMA!r}, got {found!r}")
+        other = " or grasps with schema 'ogcp.grasps/1'" if str(found).startswith("ogcp.grasps/") else ""
+        raise OgcpError(f"{path}: expected a plan with schema {PLAN_SCHEMA!r}{other}, got {found!r}")
     return record
 
 
