@@ -289,7 +289,9 @@ def run_options_from_args(spec: MethodSpec, args: argparse.Namespace) -> RunOpti
     if "optimum" in spec.run_options:
         options.setdefault("optimum", True)  # ogcp plan shows HFTS's gap to the optimum unless told not to
     # The contacts' seed is recorded by methods without a seed of their own (exhaustive search).
-    return RunOptions(progress=sys.stderr.isatty(), contact_seed=args.seed, **options)
+    terminal = sys.stderr.isatty()
+    lines = None if terminal else (lambda text: print(f"ogcp: {text}", file=sys.stderr, flush=True))
+    return RunOptions(progress=terminal, lines=lines, contact_seed=args.seed, **options)
 
 
 def run_contacts(args: argparse.Namespace) -> int:

@@ -8,6 +8,7 @@ Everything a record holds beyond what the engine writes (the ``hand`` block, HFT
 from __future__ import annotations
 
 import threading
+from collections.abc import Callable
 from dataclasses import dataclass, fields
 from functools import lru_cache
 from pathlib import Path
@@ -52,6 +53,8 @@ class RunOptions:
             seed of its own, records it as ``config.seed``. None: not recorded.
         stop: An event that stops A*, WA* and Dijkstra when set; they return their best
             grasp with status ``interrupted``.
+        lines: Where A*, WA* and Dijkstra send a progress line at least every 30 s (off a
+            terminal, where no bar shows); None: none.
     """
 
     time_limit: float | None = None
@@ -64,6 +67,7 @@ class RunOptions:
     optimum: bool = False
     contact_seed: int | None = None
     stop: threading.Event | None = None
+    lines: Callable[[str], None] | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -126,7 +130,7 @@ def run_search(config: AStarConfig, contacts: ContactSet, m: int, options: RunOp
         memory_limit=options.memory_limit,
         **engine_arguments(config),
     )
-    result = planner.plan(contacts, m, progress=options.progress, stop=options.stop)
+    result = planner.plan(contacts, m, progress=options.progress, stop=options.stop, lines=options.lines)
     return MethodRun(result, add_hand(result.to_dict(contact_set_record(contacts)), hand, contacts))
 
 

@@ -39,7 +39,8 @@ from __future__ import annotations
 
 import math
 import threading
-from collections.abc import Sequence
+import time
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
@@ -175,7 +176,12 @@ class GraspPlanner:
         }
 
     def plan(
-        self, contacts: ContactSet, m: int, progress: bool = False, stop: threading.Event | None = None
+        self,
+        contacts: ContactSet,
+        m: int,
+        progress: bool = False,
+        stop: threading.Event | None = None,
+        lines: Callable[[str], None] | None = None,
     ) -> SearchResult:
         """Find the best m-contact grasp (or one within the WA* bound).
 
@@ -186,6 +192,8 @@ class GraspPlanner:
                 on stderr (tqdm).
             stop: An event that stops the search when set (from another thread or a signal
                 handler); the result then has status ``interrupted``.
+            lines: Where a progress line goes at most every :data:`PROGRESS_LINE_SECONDS`
+                (a log, off a terminal): expansions, best Q1, bound, gap and time; None: none.
 
         Returns:
             The :class:`SearchResult`; its ``status`` says what it certifies (``optimal``,
@@ -213,8 +221,9 @@ class GraspPlanner:
         budget = states_budget(memory, jobs)
         if jobs > 1 and self.record_tree:
             raise OgcpError("record_tree needs jobs = 1: each part of a search keeps a tree of its own")
-        if jobs > 1:
-            with tqdm(desc=config["method"], unit=" expansions", disable=not progress, leave=False) as bar:
+        with tqdm(desc=config["method"], unit=" expansions", disable=not progress, leave=False) as bar:
+            meter = _Progress(config["method"], bar, lines)
+            if jobs > 1:
                 return search_in_parts(
                     contacts,
                     int(m),
@@ -223,24 +232,49 @@ class GraspPlanner:
                     jobs,
                     None if limit is None else float(limit),
                     stop,
-                    on_expand=lambda f: bar.update(),
-                    on_progress=lambda best, bound: bar.set_postfix_str(progress_text(best, bound)),
+                    on_expand=meter.expanded,
+                    on_progress=meter.progressed,
                     memory_limit=budget,
                 )
-        search = Search(
-            contacts,
-            int(m),
-            config,
-            [DistinctContacts(), *self.constraints],
-            self.record_tree,
-            None if limit is None else float(limit),
-            stop,
-            memory_limit=budget,
-        )
-        with tqdm(desc=config["method"], unit=" expansions", disable=not progress, leave=False) as bar:
-            search.on_expand = lambda f: bar.update()
-            search.on_progress = lambda best, bound: bar.set_postfix_str(progress_text(best, bound))
+            search = Search(
+                contacts,
+                int(m),
+                config,
+                [DistinctContacts(), *self.constraints],
+                self.record_tree,
+                None if limit is None else float(limit),
+                stop,
+                memory_limit=budget,
+            )
+            search.on_expand, search.on_progress = meter.expanded, meter.progressed
             return search.run()
+
+
+#: [s] Least time between two progress lines of a search run off a terminal.
+PROGRESS_LINE_SECONDS = 30.0
+
+
+class _Progress:
+    """A search's progress: the bar on a terminal, and off one a line at most every
+    :data:`PROGRESS_LINE_SECONDS` (the first after as long) to ``say``."""
+
+    def __init__(self, method: str, bar: tqdm, say: Callable[[str], None] | None) -> None:
+        self.method, self.bar, self.say = method, bar, say
+        self.start = self.last = time.perf_counter()
+        self.expansions = 0
+
+    def expanded(self, f: float) -> None:
+        self.expansions += 1
+        self.bar.update()
+
+    def progressed(self, best: float | None, bound: float) -> None:
+        self.bar.set_postfix_str(progress_text(best, bound))
+        now = time.perf_counter()
+        if self.say is None or now - self.last < PROGRESS_LINE_SECONDS:
+            return
+        self.last = now
+        elapsed = now - self.start
+        self.say(f"{self.method}: {self.expansions} expansions, {progress_text(best, bound)}, {elapsed:.0f} s elapsed")
 
 
 def progress_text(best: float | None, bound: float) -> str:

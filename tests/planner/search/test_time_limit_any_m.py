@@ -53,3 +53,13 @@ def test_an_m_with_hardly_any_valid_child_still_ends_in_time() -> None:
     else:
         assert result.status == "stopped" and result.q1 <= result.bound
     assert time.perf_counter() - start < LIMIT + SLACK
+
+
+def test_a_long_search_off_a_terminal_prints_progress_lines(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr("ogcp.planner.search.grasp_planner.PROGRESS_LINE_SECONDS", 0.0)
+    lines: list[str] = []
+    # m = 5 of 100 contacts: a search of many short expansions, which reports twice a second.
+    box = sample_contacts(builtin_mesh("box"), n=100, seed=0)
+    GraspPlanner(method="astar", time_limit=LIMIT).plan(box, 5, lines=lines.append)
+    assert lines and all(line.startswith("astar: ") and " expansions, " in line for line in lines)
+    assert "bound 0." in lines[-1] and lines[-1].endswith(" s elapsed")
