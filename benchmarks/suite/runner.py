@@ -6,12 +6,13 @@ to ``results.jsonl``, so the folder is the same whatever ran the cells, apart fr
 order of the lines and the timings. ``resume`` skips cells whose id is already recorded
 and refuses a folder written by a different suite (another hash).
 
-Every process that runs cells first compiles (or loads) the numba kernels, once, before its
-first cell (:func:`_run_warm_cell`), so no cell's times include numba's compilation; the
-seconds each process spent on it go to the session's ``kernel_warmup_seconds`` in
-``manifest.json``. Progress goes to stderr: a bar on a terminal, else one line per finished
-cell at most every ``interval`` seconds (``lines="periodic"``), or one line per cell
-(``lines="each"``).
+The suite's own process compiles (or loads) the numba kernels its methods call before any cell
+starts, and every process that runs cells loads them before its first cell
+(:func:`_run_warm_cell`), so no cell's times include numba's compilation; the seconds each
+process spent on it go to the session's ``kernel_warmup_seconds`` in ``manifest.json``.
+Progress goes to stderr: a bar on a terminal, else an opening line, one line per finished cell
+at most every ``interval`` seconds (``lines="periodic"``) or one per cell (``lines="each"``),
+and a line whenever 30 s pass without one (:mod:`ogcp.benchmarks.suite.progress`).
 """
 
 from __future__ import annotations
@@ -48,35 +49,40 @@ from ogcp.planner.search.memory import states_budget
 #: Progress line modes: none, one line per finished cell at most every ``interval`` s, every cell.
 PROGRESS_LINES = ("none", "periodic", "each")
 
-#: Whether this process has warmed the kernels; a lock because Dask runs cells in threads.
+#: The kernel families this process has warmed; a lock because Dask runs cells in threads.
 _WARM_LOCK = threading.Lock()
-_WARMED = False
+_WARMED: set[str] = set()
 
 
-def _warm_up_once(announce: Callable[[str], None] | None = None) -> float | None:
-    """Warm the kernels if this process has not yet: the seconds it took, None if already warm.
+def _warm_up_once(methods: Sequence[str], announce: Callable[[str], None] | None = None) -> float | None:
+    """Warm the kernels the methods call that this process has not warmed yet.
 
     The suite's own process warms up first, before any worker starts: on a cold cache it
-    compiles (announcing it) and the workers then only load numba's cache.
-    """
-    global _WARMED
-    with _WARM_LOCK:
-        if _WARMED:
-            return None
-        from ogcp.planner.methods.warm_up import warm_up  # lazy: the runner module stays importable without numba
+    compiles (announcing it) and the workers then only load numba's cache. Only the families
+    the suite's methods call (:func:`ogcp.planner.methods.warm_up.families_for`) are warmed.
 
-        seconds = warm_up(announce=announce)
-        _WARMED = True
+    Returns:
+        The seconds it took, None if this process had already warmed them.
+    """
+    # Lazy: the runner module stays importable without numba loaded.
+    from ogcp.planner.methods.warm_up import families_for, warm_up
+
+    with _WARM_LOCK:
+        families = set(families_for(methods))
+        if families <= _WARMED:
+            return None
+        seconds = warm_up(methods, announce=announce)
+        _WARMED.update(families)
         return seconds
 
 
-def _run_warm_cell(*task: Any) -> tuple[dict[str, Any], int, float | None]:
-    """:func:`run_cell` after the kernel warm-up of this process (first call only).
+def _run_warm_cell(methods: Sequence[str], *task: Any) -> tuple[dict[str, Any], int, float | None]:
+    """:func:`run_cell` after the kernel warm-up of this process for the suite's methods (first call only).
 
     Returns:
         The cell's record, this process's id and its warm-up seconds (None: done before).
     """
-    warmup = _warm_up_once()
+    warmup = _warm_up_once(methods)
     return run_cell(*task), os.getpid(), warmup
 
 
@@ -272,9 +278,10 @@ class SuiteRunner:
         try:
             with meter.heartbeat():
                 limits = (self.time_limit, self.memory_limit)
-                tasks = [(cell, settings if cell.simulate else None, *limits) for cell in todo]
+                methods = tuple(sorted({cell.method for cell in todo}))
+                tasks = [(methods, cell, settings if cell.simulate else None, *limits) for cell in todo]
                 if tasks:
-                    warmup = _warm_up_once(say)
+                    warmup = _warm_up_once(methods, say)
                     warmups[os.getpid()] = warmup if warmup is not None else warmups.get(os.getpid(), 0.0)
                 finished = (
                     run_tasks(_run_warm_cell, tasks, self.jobs, self.backend, self.address) if tasks else iter(())

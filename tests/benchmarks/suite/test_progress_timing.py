@@ -47,13 +47,13 @@ def stub(monkeypatch: pytest.MonkeyPatch) -> list[float]:
         plan = {"method": "astar", "q1": 0.07, "q_ows": 0.1, "bound": 0.07, "stats": {"cpu_seconds": 0.1}}
         return CellRecord(cell.id, cell.params(), plan=plan, wall_seconds=0.5).to_dict()
 
-    def warm_up(announce: Any = None) -> float:
+    def warm_up(methods: Any = (), announce: Any = None) -> float:
         calls.append(3.5)
         return 3.5
 
     monkeypatch.setattr(runner, "run_cell", run_cell)
     monkeypatch.setattr("ogcp.planner.methods.warm_up.warm_up", warm_up)
-    monkeypatch.setattr(runner, "_WARMED", False)
+    monkeypatch.setattr(runner, "_WARMED", set())
     return calls
 
 
