@@ -170,7 +170,7 @@ class ExternalInput:
         grasps: Each grasp's indices into ``contacts``.
         labels: Each grasp's label.
         fit: The contacts' distances and angles from the surface.
-        q1: ogcp's Q1 of each grasp at the simulated contacts [N].
+        q1: ogcp's Q1 of each grasp at the simulated contacts [-].
         external: The grasps as given.
         radius: The fingertip radius the tolerances are fractions of [m].
         poses: Per grasp, the hand as the record posed it, or None (fingertips, or fitted by ogcp).

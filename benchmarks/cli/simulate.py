@@ -266,7 +266,7 @@ def _realized_lines(grasp: Any) -> list[str]:
         lines.append(
             f"  realized contacts: {_millimetres(realized.get('offsets', []))} mm from the plan, normals "
             f"{'/'.join(_fmt(a, 1) for a in _list(realized.get('normal_angles')))} deg off; Q1 "
-            f"{_fmt(grasp.q1, 4)} -> {_fmt(grasp.q1_realized, 4)} N"
+            f"{_fmt(grasp.q1, 4)} -> {_fmt(grasp.q1_realized, 4)}"
             + ("" if change is None else f" ({100 * change:+.1f} %)")
         )
     if collision:

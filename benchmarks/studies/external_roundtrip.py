@@ -88,12 +88,12 @@ def main() -> None:
     worst = compare(planned, external)
     directions = len(planned.grasps[0].direction_labels)
     print(
-        f"{args.object}: {len(planned.grasps)} grasps (A* optimum Q1 {best.q1:.6g} N + random), "
+        f"{args.object}: {len(planned.grasps)} grasps (A* optimum Q1 {best.q1:.6g} + random), "
         f"{directions} directions each, {planned.set_metrics['n_valid']} valid; "
         f"plan {plan_seconds:.1f} s, external {external_seconds:.1f} s"
     )
     print(
-        "max |Q1 plan - Q1 external| = {q1_abs:.3g} N (relative {q1_rel:.3g}); predicted: relative {predicted_rel:.3g}; "
+        "max |Q1 plan - Q1 external| = {q1_abs:.3g} (relative {q1_rel:.3g}); predicted: relative {predicted_rel:.3g}; "
         "measured ({measured_values:.0f} finite values): {measured_abs:.3g} N (relative {measured_rel:.3g}); grasps whose label, validity or error "
         "differ: {mismatched_grasps:.0f}".format(**worst)
     )

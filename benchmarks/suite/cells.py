@@ -208,7 +208,7 @@ def external_plan(
         grasps: Its grasps file.
         contacts: Every grasp's contacts in one set (``ogcp.sim_eval.external.external_input``).
         indices: Each grasp's indices into ``contacts``.
-        q1: ogcp's Q1 of each grasp [N].
+        q1: ogcp's Q1 of each grasp [-].
     """
     best = best_grasp(grasps)
     grasp = indices[best]
