@@ -310,6 +310,19 @@ class HandKinematics:
             q[..., position[dependent]] = base + sum(c * x**p for p, c in enumerate(poly))
         return q
 
+    def complete_derivative(self, angles: ArrayLike) -> NDArray[np.float64]:
+        """d complete(angles) / d angles at one configuration, shape (J, J): coupled rows follow their driver."""
+        q = np.asarray(angles, dtype=float)
+        derivative = np.eye(len(self.joint_ids))
+        position = {int(j): k for k, j in enumerate(self.joint_ids)}
+        for dependent, driver, poly in self._couplings:
+            derivative[position[dependent]] = 0.0
+            if driver >= 0:
+                x = q[position[driver]] - self.reference_qpos[self.model.jnt_qposadr[driver]]
+                slope = sum(p * c * x ** (p - 1) for p, c in enumerate(poly) if p)
+                derivative[position[dependent], position[driver]] = slope
+        return derivative
+
     def check(self, angles: ArrayLike, tolerance: float = 1e-6) -> NDArray[np.float64]:
         """A configuration as floats, shape (J,), checked finite and within limits.
 

@@ -40,6 +40,7 @@ from numpy.typing import NDArray
 
 from ogcp.planner.config.methods import DEFAULT_HAND_THRESHOLD
 from ogcp.planner.grasp.contact_set import ContactSet
+from ogcp.planner.hands.box_index import BoxIndex
 from ogcp.planner.hands.descriptor import HandDescriptor
 from ogcp.planner.hands.registry import resolve_hand
 from ogcp.planner.infra.cache import cache_dir as default_cache_dir
@@ -116,6 +117,7 @@ class _FingerModel:
     scale: NDArray[np.float64]
     codes: NDArray[np.float64]
     tree: Any
+    boxes: BoxIndex
 
 
 class HandReachability:
@@ -243,7 +245,8 @@ class HandReachability:
             scale = np.maximum(codes.std(axis=0), floor)
             from scipy.spatial import cKDTree  # here, not at the top: every plan imports this module
 
-            self._models[chosen] = _FingerModel(rows, scale, codes / scale, cKDTree(codes / scale))
+            scaled = codes / scale
+            self._models[chosen] = _FingerModel(rows, scale, scaled, cKDTree(scaled), BoxIndex(scaled))
         return self._models[chosen]
 
     @property
@@ -340,13 +343,10 @@ class HandReachability:
             bounds[x, y, 0] = [v.min() for v in values]
             bounds[x, y, 1] = [v.max() for v in values]
         pairs = list(itertools.combinations(range(m), 2))
-        for a in itertools.permutations(range(m)):
-            box_lo = np.concatenate([bounds[a[i], a[j], 0] for i, j in pairs]) / model.scale
-            box_hi = np.concatenate([bounds[a[i], a[j], 1] for i, j in pairs]) / model.scale
-            gap = np.maximum(box_lo - model.codes, 0.0) + np.maximum(model.codes - box_hi, 0.0)
-            if np.min(np.einsum("ij,ij->i", gap, gap)) <= self.threshold**2:
-                return True
-        return False
+        assignments = list(itertools.permutations(range(m)))
+        box_lo = np.array([np.concatenate([bounds[a[i], a[j], 0] for i, j in pairs]) for a in assignments])
+        box_hi = np.array([np.concatenate([bounds[a[i], a[j], 1] for i, j in pairs]) for a in assignments])
+        return model.boxes.any_within(box_lo / model.scale, box_hi / model.scale, self.threshold)
 
     def describe(self) -> dict[str, object]:
         """JSON-ready description (the same whatever grasps were asked about before)."""

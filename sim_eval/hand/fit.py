@@ -31,6 +31,7 @@ from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
 from ogcp.planner.infra.errors import OgcpError
+from ogcp.sim_eval.hand.fit_jacobian import PoseJacobian
 from ogcp.sim_eval.hand.fit_scene import FitScene
 
 #: Largest pad residual of a realised fit [m].
@@ -259,11 +260,35 @@ def fit_hand(
             parts.append(COLLISION_WEIGHT * np.maximum(np.maximum(into_object, into_hand) - 0.5 * LINK_TOLERANCE, 0.0))
         return np.concatenate(parts)
 
+    def jacobian(x: NDArray[np.float64], variables: NDArray[np.intp], _: bool) -> NDArray[np.float64]:
+        # The pads' rows only: the collision solve differences its residuals (see solve).
+        pose = unpack(x, variables)
+        scene.pose(*pose)
+        palm = (x[len(variables) : len(variables) + 3], pose[2]) if pose_variables else None
+        jac = PoseJacobian(scene, pose[0], variables, palm)
+        world, pad = scene.hand.pads_world(scene.data)
+        centre_rows, normal_rows = [], []
+        for k, f in enumerate(chosen):
+            moved, turned = jac.point_and_direction(world[f], pad[f], int(scene.hand.pads[f]))
+            centre_rows.append(moved - radii[k] * turned)
+            normal_rows.append(weight * turned)
+        rest = np.zeros((len(resting), jac.columns))
+        rest[:, : len(variables)] = REST_WEIGHT * kin.complete_derivative(pose[0])[np.ix_(resting, variables)]
+        return np.vstack([*centre_rows, *normal_rows, rest])
+
     def solve(start: NDArray[np.float64], variables: NDArray[np.intp], collide: bool) -> NDArray[np.float64]:
         low = np.concatenate([kin.limits[variables, 0], np.full(pose_variables, -np.inf)])
         high = np.concatenate([kin.limits[variables, 1], np.full(pose_variables, np.inf)])
         solved = least_squares(
-            residual, start, bounds=(low, high), args=(variables, collide), method="trf", x_scale="jac"
+            residual,
+            start,
+            # Depths are piecewise smooth (their deepest contact changes): contact-normal gradients
+            # stalled the trust region early (xtol) where differences still make progress.
+            jac="2-point" if collide else jacobian,
+            bounds=(low, high),
+            args=(variables, collide),
+            method="trf",
+            x_scale="jac",
         )
         return np.asarray(solved.x)
 

@@ -14,7 +14,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ogcp.planner.hands.kinematics import HandKinematics
-from ogcp.sim_eval.hand.mount import MountedHand, attach_hand
+from ogcp.sim_eval.hand.mount import PREFIX, MountedHand, attach_hand
 from ogcp.sim_eval.scene.collision import Part
 
 
@@ -41,6 +41,9 @@ class FitScene:
         self.hand = MountedHand.find(self.model, kinematics)
         self.kinematics = kinematics
         self._mount_qpos = int(self.model.jnt_qposadr[self.model.body_jntadr[self.hand.mount]])
+        joints = [mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_JOINT, PREFIX + n) for n in kinematics.joint_names]
+        #: dof address of each finger joint, in the kinematics' joint order, shape (J,).
+        self.dofs = self.model.jnt_dofadr[joints].astype(np.intp)
         model = self.model
         # Every hand geom collides with every other and with the object; nothing else does.
         model.geom_contype[:] = 0

@@ -35,6 +35,8 @@ from ogcp.planner.grasp.wrench import cone_edges, contact_wrenches
 from ogcp.sim_eval.hand.mount import MountedHand
 
 _MOVABLE = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
+#: A joint this close to a limit rests on it [rad or m] (past it too: MuJoCo's limits are soft).
+AT_LIMIT = 1e-3
 
 
 @dataclass(frozen=True, eq=False)
@@ -159,12 +161,13 @@ class HandStatics:
     """The linear statics of a hand pressing on an object at K contacts, for linear programs.
 
     The variables are ``[lambda (K E cone-edge weights), u (nu actuator forces), eta (joint
-    equality forces)]``, ``size`` in all; a program appends its own (a load magnitude, a grip).
+    equality forces), s (reactions of the joint limits the hand rests on, >= 0)]``, ``size`` in
+    all; a program appends its own (a load magnitude, a grip).
 
     Attributes:
         object_balance: The object's wrench (scaled space) per variable, shape (6, size).
         hand_balance: The hand's joint-space balance per variable, shape (J, size): the contact
-            forces' joint torques minus the actuators' and the equalities'.
+            forces' joint torques minus the actuators', the equalities' and the limits'.
         bounds: Each variable's (low, high), None where unbounded.
         edges: Cone edges per contact E.
     """
@@ -191,8 +194,14 @@ def hand_statics(
     torque_scale: float,
     mu: float,
     edge_count: int,
+    stops: bool = True,
 ) -> HandStatics:
-    """The statics of contacts ``points`` (K, 3) [m] with inward ``normals`` on hand ``bodies``, in a state."""
+    """The statics of contacts ``points`` (K, 3) [m] with inward ``normals`` on hand ``bodies``, in a state.
+
+    With ``stops``, the joints resting on a limit get its reaction (:func:`limit_reactions`): a
+    load that pushes a joint into its limit meets the limit. A grip leaves them out: limits only
+    react, and two of them against each other would squeeze the object with no actuator at all.
+    """
     count = len(points)
     edges = cone_edges(normals, mu, edge_count)  # (K, E, 3)
     wrenches = contact_wrenches(points, normals, com, torque_scale, mu, edge_count).reshape(count * edge_count, 6).T
@@ -204,12 +213,16 @@ def hand_statics(
         contact_torques[:, k * edge_count : (k + 1) * edge_count] = jacobian[:, dofs].T @ edges[k].T
     moment = actuator_moments(model, data)[:, dofs].T  # (J, nu)
     couplings = equality_rows(model, hand, dofs)  # (n_eq, J)
+    limits = limit_reactions(model, data, hand) if stops else np.zeros((len(dofs), 0))  # (J, L)
     low, high = force_ranges(model)
-    extra = model.nu + len(couplings)
+    extra = model.nu + len(couplings) + limits.shape[1]
     return HandStatics(
         np.hstack([wrenches, np.zeros((6, extra))]),
-        np.hstack([contact_torques, -moment, -couplings.T]),
-        [(0.0, None)] * (count * edge_count) + list(zip(low, high, strict=True)) + [(None, None)] * len(couplings),
+        np.hstack([contact_torques, -moment, -couplings.T, -limits]),
+        [(0.0, None)] * (count * edge_count)
+        + list(zip(low, high, strict=True))
+        + [(None, None)] * len(couplings)
+        + [(0.0, None)] * limits.shape[1],
         edge_count,
     )
 
@@ -224,6 +237,25 @@ def hand_joints(model: mujoco.MjModel, hand: MountedHand) -> list[int]:
         if body == hand.mount and int(model.jnt_type[j]) in _MOVABLE:
             joints.append(j)
     return joints
+
+
+def limit_reactions(model: mujoco.MjModel, data: mujoco.MjData, hand: MountedHand) -> NDArray[np.float64]:
+    """Torques the joint limits can supply at a pose: one column per joint resting on a limit, shape (J, L).
+
+    A joint within :data:`AT_LIMIT` [rad or m] of a limit is held there by it: the limit pushes back
+    with any torque >= 0 along its column (away from the limit), and the servo's target is clamped there.
+    """
+    joints = hand_joints(model, hand)
+    columns = []
+    for row, joint in enumerate(joints):
+        if not model.jnt_limited[joint]:
+            continue
+        value = data.qpos[model.jnt_qposadr[joint]]
+        low, high = model.jnt_range[joint]
+        for side, near in ((1.0, value - low <= AT_LIMIT), (-1.0, high - value <= AT_LIMIT)):
+            if near:
+                columns.append(side * np.eye(len(joints))[row])
+    return np.array(columns).T if columns else np.zeros((len(joints), 0))
 
 
 def actuator_moments(model: mujoco.MjModel, data: mujoco.MjData) -> NDArray[np.float64]:

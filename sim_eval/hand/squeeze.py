@@ -99,7 +99,7 @@ def balanced_grip(
     mujoco.mj_fwdPosition(model, data)
     m = len(fingers)
     bodies = [int(hand.pads[finger]) for finger in fingers]
-    statics = hand_statics(model, data, hand, points, normals, bodies, com, torque_scale, mu, EDGES)
+    statics = hand_statics(model, data, hand, points, normals, bodies, com, torque_scale, mu, EDGES, stops=False)
     n_lambda, n_u = m * EDGES, model.nu
     # Variables [statics', t]: maximise t, every pad's normal force (its edges' weights) >= t.
     cost = np.zeros(statics.size + 1)
@@ -110,7 +110,7 @@ def balanced_grip(
     for k in range(m):
         at_least[k, k * EDGES : (k + 1) * EDGES] = -1.0
     at_least[:, -1] = 1.0
-    bounds = statics.bounds
+    bounds = _servo_reach(model, data, statics.bounds, n_lambda)
     problem = {"A_ub": at_least, "b_ub": np.zeros(m), "A_eq": equalities, "b_eq": np.zeros(len(equalities))}
     result = linprog(cost, bounds=[*bounds, (0.0, None)], method="highs", **problem)
     if result.status == 3:  # unbounded: no actuator limits the grip, so the settings' F_max does
@@ -122,3 +122,26 @@ def balanced_grip(
         result.x[n_lambda : n_lambda + n_u].copy(),
         result.x[:n_lambda].reshape(m, EDGES).sum(axis=1),
     )
+
+
+def _servo_reach(
+    model: mujoco.MjModel, data: mujoco.MjData, bounds: list[tuple[float | None, float | None]], first: int
+) -> list[tuple[float | None, float | None]]:
+    """The actuator forces' bounds narrowed to what each position servo can press within its control range.
+
+    A servo's force is ``kp (ctrl - length)`` and its target is clamped to ``ctrlrange``: a grip
+    that needs a target past it is never pressed (soft servos need targets far past the pose), so
+    the finger it relies on lets go of the object.
+    """
+    narrowed = list(bounds)
+    gains = model.actuator_gainprm[:, 0]
+    for a in range(model.nu):
+        position = model.actuator_biasprm[a, 1] < 0 and gains[a] > 0
+        if not (position and model.actuator_ctrllimited[a]):
+            continue
+        reach = gains[a] * (model.actuator_ctrlrange[a] - data.actuator_length[a])
+        low, high = narrowed[first + a]
+        low = float(reach[0]) if low is None else max(low, float(reach[0]))
+        high = float(reach[1]) if high is None else min(high, float(reach[1]))
+        narrowed[first + a] = (min(low, 0.0), max(high, 0.0))  # zero force stays feasible
+    return narrowed

@@ -34,11 +34,12 @@ from ogcp.sim_eval.hand.fit_scene import FitScene
 from ogcp.sim_eval.hand.given import GIVEN_MAX_PENETRATION, GivenPose, given_scene
 from ogcp.sim_eval.hand.predict import hand_resistance, realised_contacts
 from ogcp.sim_eval.hand.scene import SQUEEZE_LADDER, HandScene, build_hand_scene, close_hand, squeezed
+from ogcp.sim_eval.hand.squeeze import balanced_grip
 from ogcp.sim_eval.protocols.dexgraspbench import hold_test, physics_settings, use_object_defaults
 from ogcp.sim_eval.protocols.directions import direction_set
 from ogcp.sim_eval.protocols.gates import gate_failures
 from ogcp.sim_eval.protocols.metrics import fidelity
-from ogcp.sim_eval.protocols.phases import FULL_STATE, Settled, settle
+from ogcp.sim_eval.protocols.phases import CONTACT_FRACTION, FULL_STATE, Settled, settle
 from ogcp.sim_eval.protocols.trial import (
     DEXGRASPBENCH,
     FIDELITY_FLOOR,
@@ -54,6 +55,9 @@ from ogcp.sim_eval.settings import SimSettings
 
 #: Samples a fit starts from, nearest first, until one fit is realised.
 FIT_STARTS = 16
+#: The weakest pad force of a grip a fit is taken for, as a fraction of F_max: twice what the contact
+#: gate counts as touching (``CONTACT_FRACTION``), so that half the grip still touches.
+PRESS_FRACTION = 2 * CONTACT_FRACTION
 #: A pad counts as on its contact when its centre of pressure lies within this many pad radii of it.
 PAD_REACH_RADII = 3.0
 
@@ -91,22 +95,59 @@ def fit_grasp(
     grasp: tuple[int, ...],
     points: NDArray[np.float64],
     normals: NDArray[np.float64],
+    squeeze: SqueezeCheck | None = None,
 ) -> tuple[HandFit, tuple[int, ...]]:
     """The best fit from the grasp's nearest samples, and the order in which the fingers take its contacts.
 
     ``points`` and ``normals`` (shape (m, 3)) are the targets of the grasp's contacts, in grasp order.
+    With ``squeeze``, a realised fit is taken only where the hand's servos can press a balanced grip
+    (a finger resting on a joint limit it would have to push past cannot press); the best realised
+    fit where none can.
     """
     fingers = setup.reach.chosen(len(grasp))
     best: tuple[HandFit, tuple[int, ...]] | None = None
+    pressing: tuple[HandFit, tuple[int, ...]] | None = None
     for start in setup.reach.starts(grasp, contacts, FIT_STARTS):
         order = tuple(start.fingers)
         fit = fit_hand(scene, fingers, points[list(order)], normals[list(order)], start.joint_angles)
         if best is None or _rank(fit) < _rank(best[0]):
             best = (fit, order)
-        if fit.realised:
+        if fit.realised and (
+            squeeze is None or squeeze.can_press(scene, fit, points[list(order)], normals[list(order)])
+        ):
+            pressing = (fit, order)
             break
     assert best is not None
-    return best
+    return pressing or best
+
+
+@dataclasses.dataclass(frozen=True)
+class SqueezeCheck:
+    """What :func:`~ogcp.sim_eval.hand.squeeze.balanced_grip` needs besides the fit: the object and friction."""
+
+    com: NDArray[np.float64]
+    torque_scale: float
+    mu: float
+    max_normal_force: float
+
+    def can_press(
+        self, scene: FitScene, fit: HandFit, points: NDArray[np.float64], normals: NDArray[np.float64]
+    ) -> bool:
+        """Whether the servos can press a balanced grip at the fit's pose, every pad with at least :data:`PRESS_FRACTION` of F_max."""
+        scene.pose(fit.joint_angles, fit.rotation, fit.translation)
+        grip = balanced_grip(
+            scene.model,
+            scene.hand,
+            scene.data.qpos.copy(),
+            fit.fingers,
+            points,
+            normals,
+            self.com,
+            self.torque_scale,
+            self.mu,
+            self.max_normal_force,
+        )
+        return grip is not None and float(grip.pad_forces.min()) >= PRESS_FRACTION * self.max_normal_force
 
 
 def _rank(fit: HandFit) -> tuple[bool, float]:
@@ -157,7 +198,8 @@ def simulate_hand_grasp(
     inward = np.where(placement.placed[:, None], placement.normals, normals)
     parts = fit.decomposition.parts
     if given is None:
-        posed, order = fit_grasp(setup, FitScene(kinematics, parts), contacts, grasp, points, inward)
+        check = SqueezeCheck(body.com, contacts.torque_scale, mu, settings.max_normal_force)
+        posed, order = fit_grasp(setup, FitScene(kinematics, parts), contacts, grasp, points, inward, check)
     else:
         pose = (given.grasp.joint_angles, given.grasp.rotation, given.grasp.translation)
         posed = measure_pose(FitScene(kinematics, parts), given.fingers, points, inward, pose)

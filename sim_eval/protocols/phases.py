@@ -25,6 +25,7 @@ QPOS_OFFSET = 1  # the full physics state starts with the time, then qpos
 CREEP_WINDOW = 0.1  # [s] the end of settling over which the object must be still
 CONTACT_FRACTION = 0.01  # a tip touches when its normal force exceeds this fraction of F_max
 DIRECTIONS_PER_BATCH = 16  # bounds the rollout's state buffer
+RAMP_SLICE = 200  # steps a ramped trial runs between checks for its failure
 RUNAWAY_RADII = 50.0  # a slide this many tip radii from its start has diverged
 
 
@@ -232,24 +233,39 @@ def ramp_trials(
     """
     model = scene.model
     nstep = max(1, int(np.ceil(duration / model.opt.timestep)))
-    times = np.arange(nstep) * model.opt.timestep
     rows = _physical(directions, torque_scale)
+    rates = np.asarray(rates, dtype=float)
     threads = settings.threads or os.cpu_count() or 1
     datas = [mujoco.MjData(model) for _ in range(threads)]
-    loads_all = np.asarray(rates, dtype=float)[:, None] * times[None, :]
-    failure = np.empty(len(directions))
-    failed = np.zeros(len(directions), dtype=bool)
-    diverged = np.zeros(len(directions), dtype=bool)
+    count = len(directions)
+    first = np.full(count, nstep - 1, dtype=np.intp)
+    failed = np.zeros(count, dtype=bool)
+    diverged = np.zeros(count, dtype=bool)
+    done = np.zeros(count, dtype=np.intp)  # steps each trial has run
+    state = np.tile(settled.state, (count, 1))
     q = slice(QPOS_OFFSET + scene.object_qpos, QPOS_OFFSET + scene.object_qpos + 7)
-    for begin in range(0, len(directions), DIRECTIONS_PER_BATCH):
-        batch = slice(begin, min(begin + DIRECTIONS_PER_BATCH, len(directions)))
-        loads = loads_all[batch]
-        controls = _controls(scene, loads, rows[batch])
-        initial = np.tile(settled.state, (len(loads), 1))
-        state, _ = rollout.rollout(model, datas, initial, controls, control_spec=CONTROL_SPEC)
-        first, hit, bad = _first_failure(state[:, :, q], settled.pose, settings)
-        failure[batch] = loads[np.arange(len(loads)), first]
-        failed[batch], diverged[batch] = hit, bad
+    # Trials run in slices and leave once they fail: most fail near their prediction, well before
+    # the ramp's end, and a hand's step costs several fingertip steps. Freed places take new trials.
+    pending, running = list(range(count)), list[int]()
+    while pending or running:
+        while pending and len(running) < DIRECTIONS_PER_BATCH:
+            running.append(pending.pop(0))
+        trials = np.array(running)
+        steps = done[trials][:, None] + np.arange(RAMP_SLICE)[None, :]
+        loads = rates[trials][:, None] * (steps * model.opt.timestep)
+        controls = _controls(scene, loads, rows[trials])
+        out, _ = rollout.rollout(model, datas, state[trials], controls, control_spec=CONTROL_SPEC)
+        for k, trial in enumerate(trials):
+            ahead = min(RAMP_SLICE, nstep - int(done[trial]))  # the last slice runs past the ramp's end
+            at, hit, bad = _first_failure(out[k : k + 1, :ahead, q], settled.pose, settings)
+            if hit[0] or bad[0] or done[trial] + ahead >= nstep:
+                first[trial] = done[trial] + at[0]
+                failed[trial], diverged[trial] = hit[0], bad[0]
+                running.remove(int(trial))
+            else:
+                state[trial] = out[k, -1]
+            done[trial] += ahead
+    failure = rates * first * model.opt.timestep
     return TrialResult(failure, failed, diverged, nstep)
 
 
