@@ -1,4 +1,4 @@
-"""The one place where ogcp runs work in parallel: joblib, with Dask as the cluster backend.
+"""The one place where ogcp runs work in parallel: joblib's local processes, or a Dask cluster.
 
 Tasks are independent and their results are merged by the caller in a deterministic
 order, so the serial path (``jobs=1``), local processes (``loky``) and a Dask cluster give
@@ -6,16 +6,17 @@ identical answers.
 
 Local workers end with the process that started them (:mod:`ogcp.planner.infra.lifetime`): a suite
 killed by SIGTERM or SIGKILL leaves no worker computing for nobody. Dask workers belong to their
-cluster and are left alone.
+cluster and are left alone; :mod:`ogcp.planner.infra.cluster` runs the tasks there and says
+what happens when a worker or the scheduler dies.
 """
 
 from __future__ import annotations
 
-import contextlib
 import os
 from collections.abc import Callable, Iterable, Iterator
 from typing import Any
 
+from ogcp.planner.infra.cluster import run_on_cluster
 from ogcp.planner.infra.errors import OgcpError, choice_error
 from ogcp.planner.infra.lifetime import call_in_worker, guard_worker
 
@@ -51,28 +52,6 @@ def validate_backend(backend: str, address: str | None, jobs: int) -> None:
         raise OgcpError("--address applies to backend 'dask' only")
 
 
-@contextlib.contextmanager
-def _backend_context(backend: str, address: str | None) -> Iterator[None]:
-    if backend == "loky":
-        yield
-        return
-    try:
-        from dask.distributed import Client  # lazy: Dask is an optional extra
-    except ImportError as exc:
-        raise OgcpError("backend 'dask' needs the dask extra: pip install 'ogcp[dask]'") from exc
-    try:
-        client = Client(address, timeout="10s")
-    except OSError as exc:
-        raise OgcpError(f"cannot reach the Dask scheduler at {address}: {exc}") from exc
-    import joblib  # lazy, see run_tasks
-
-    try:
-        with joblib.parallel_config(backend="dask"):
-            yield
-    finally:
-        client.close()
-
-
 def run_tasks(
     function: Callable[..., Any],
     tasks: Iterable[tuple[Any, ...]],
@@ -98,22 +77,20 @@ def run_tasks(
         for task in tasks:
             yield function(*task)
         return
+    if backend == "dask":
+        yield from run_on_cluster(str(address), function, tasks)
+        return
     # Lazy: the backends and defaults above are read where joblib would be wasted (``ogcp --help``).
     import joblib
 
-    with _backend_context(backend, address):
-        if backend == "dask":
-            parallel = joblib.Parallel(n_jobs=-1, return_as="generator_unordered")
-            yield from parallel(joblib.delayed(function)(*task) for task in tasks)
-            return
-        parent = os.getpid()
-        # Every task starts the parent watchdog in its worker; the initializer (where joblib has
-        # it) also covers a worker that gets no task before the parent dies, which would otherwise
-        # idle for loky's 300 s before it exits. No backend is named, so that a nested call keeps
-        # joblib's choice (threads inside a worker); those backends ignore the initializer.
-        options = {"initializer": guard_worker, "initargs": (parent,)} if _has_initializer(joblib.__version__) else {}
-        parallel = joblib.Parallel(n_jobs=jobs, return_as="generator_unordered", **options)
-        yield from parallel(joblib.delayed(call_in_worker)(parent, function, *task) for task in tasks)
+    parent = os.getpid()
+    # Every task starts the parent watchdog in its worker; the initializer (where joblib has
+    # it) also covers a worker that gets no task before the parent dies, which would otherwise
+    # idle for loky's 300 s before it exits. No backend is named, so that a nested call keeps
+    # joblib's choice (threads inside a worker); those backends ignore the initializer.
+    options = {"initializer": guard_worker, "initargs": (parent,)} if _has_initializer(joblib.__version__) else {}
+    parallel = joblib.Parallel(n_jobs=jobs, return_as="generator_unordered", **options)
+    yield from parallel(joblib.delayed(call_in_worker)(parent, function, *task) for task in tasks)
 
 
 def _has_initializer(version: str) -> bool:
