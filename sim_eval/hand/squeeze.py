@@ -55,7 +55,7 @@ class Grip:
         """
         u = share * self.forces
         gains = model.actuator_gainprm[:, 0]
-        position = (model.actuator_biasprm[:, 1] < 0) & (gains > 0)  # force = kp (ctrl - length) - kv velocity
+        position = position_servos(model)
         limit = np.abs(model.actuator_forcerange).max(axis=1)
         at_limit = model.actuator_forcelimited.astype(bool) & (np.abs(u) >= (1 - 1e-6) * limit)
         reach = np.where(at_limit, 2.0, 1.0)
@@ -124,6 +124,11 @@ def balanced_grip(
     )
 
 
+def position_servos(model: mujoco.MjModel) -> NDArray[np.bool_]:
+    """Which actuators are position servos, force ``kp (ctrl - length) - kv velocity``, shape (nu,)."""
+    return np.asarray((model.actuator_biasprm[:, 1] < 0) & (model.actuator_gainprm[:, 0] > 0))
+
+
 def _servo_reach(
     model: mujoco.MjModel, data: mujoco.MjData, bounds: list[tuple[float | None, float | None]], first: int
 ) -> list[tuple[float | None, float | None]]:
@@ -135,9 +140,9 @@ def _servo_reach(
     """
     narrowed = list(bounds)
     gains = model.actuator_gainprm[:, 0]
+    position = position_servos(model)
     for a in range(model.nu):
-        position = model.actuator_biasprm[a, 1] < 0 and gains[a] > 0
-        if not (position and model.actuator_ctrllimited[a]):
+        if not (position[a] and model.actuator_ctrllimited[a]):
             continue
         reach = gains[a] * (model.actuator_ctrlrange[a] - data.actuator_length[a])
         low, high = narrowed[first + a]
