@@ -88,7 +88,13 @@ def es_summary(result: ESResult, contacts: ContactSet) -> str:
         ),
         f"grasp: {list(result.grasp)}   Q1 = {result.q1:.6f}   Q_OWS = {result.q_ows:.6f}",
     ]
-    admissible = result.grasps - result.excluded
+    covered = result.grasps if result.evaluated is None else result.evaluated
+    if result.status == "stopped":
+        lines.append(
+            f"certificate: stopped at its time limit after {covered} of {result.grasps} grasps "
+            f"({100 * covered / result.grasps:.3g} %): best of those, optimum <= Q_OWS = {result.bound:.6f}"
+        )
+    admissible = covered - result.excluded
     if result.excluded:
         lines.append(f"constraints: {result.excluded} grasps excluded, {admissible} admissible")
     if (
@@ -125,6 +131,11 @@ def hfts_summary(result: HFTSResult, contacts: ContactSet) -> str:
         f"Q1 evaluations: {s['q1_evaluations']}; time: {s['wall_seconds']:.2f} s wall, {s['cpu_seconds']:.2f} s CPU",
         "runs (seed: Q1):  " + "  ".join(f"{r.seed}: {r.q1:.4f}" for r in result.runs),
     ]
+    stopped = sum(r.stopped for r in result.runs)
+    if stopped:
+        lines.insert(
+            3, f"stopped at its time limit: {stopped} of {s['runs']} runs cut short (they descend without moves)"
+        )
     return "\n".join(lines)
 
 
@@ -140,6 +151,12 @@ def _object_text(contacts: ContactSet) -> str:
 def _optimum_text(result: HFTSResult, optimum: PlanOptimum | None) -> str:
     if optimum is None or optimum.q1 is None or optimum.grasp is None:
         return ""
+    if optimum.status != "optimal":
+        bound = "" if optimum.bound is None else f", optimum <= {optimum.bound:.6f}"
+        return (
+            f"\nA* optimum: not proven in the time it had (its best grasp {list(optimum.grasp)}   "
+            f"Q1 = {optimum.q1:.6f}{bound})"
+        )
     gaps = optimum.q1 - result.values
     return (
         f"\nA* optimum: grasp {list(optimum.grasp)}   Q1 = {optimum.q1:.6f}   "

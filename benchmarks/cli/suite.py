@@ -67,7 +67,7 @@ def register(commands: Any) -> None:
         type=typed(TIME_LIMIT),
         default=None,
         metavar="SECONDS",
-        help=f"wall-clock budget per search cell (astar, wastar, dijkstra), {TIME_LIMIT.bounds()}; a cell past it is "
+        help=f"wall-clock budget per planning cell (any method), {TIME_LIMIT.bounds()}; a cell past it is "
         "recorded as stopped, with its best grasp, certified bound and gap (rerun it with "
         "--resume --retry-errors and a larger budget)",
     )

@@ -52,9 +52,9 @@ def run_cell(
         cell: The cell.
         simulation: Settings passed to ``ogcp.sim_eval.evaluate_plan`` (the suite's
             ``[simulation]`` table without ``enabled``); None skips the simulation.
-        time_limit: Wall-clock budget of a search cell (astar, wastar, dijkstra) [s]; past
-            it the cell is recorded with status ``stopped`` and the best grasp found, its
-            certified bound and gap (a ``SearchTimeout`` error when it had found none).
+        time_limit: Wall-clock budget of a planning cell (any method) [s]; past it the cell is
+            recorded with status ``stopped`` and the best grasp found, its certified bound
+            and gap (a ``SearchTimeout`` error when it had found none).
             None: unlimited.
         memory_limit: Most memory of a search cell, all its processes [GiB]; past it the
             cell is recorded like one past its time limit, with status ``memory``

@@ -119,8 +119,8 @@ class SuiteRunner:
         resume: Continue the run recorded in ``out`` (same suite hash), skipping its finished cells.
         retry_errors: With ``resume``, also rerun cells recorded as errors (the new record supersedes).
         max_cells: Stop after running this many cells (the rest: a later ``resume``).
-        time_limit: Wall-clock budget of each search cell [s] (an execution policy, not part
-            of the suite: a cell past it is recorded as an error, to rerun with
+        time_limit: Wall-clock budget of each planning cell [s] (an execution policy, not part
+            of the suite: a cell past it is recorded as stopped, to rerun with
             ``retry_errors`` and a larger limit). None: unlimited.
         memory_limit: Most memory of each search cell, all its processes [GiB]
             (:mod:`ogcp.planner.search.memory`); a cell past it is recorded like one past its time

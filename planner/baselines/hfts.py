@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -31,11 +32,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ogcp.planner.config.methods import HFTSConfig
-from ogcp.planner.config.options import check_values
+from ogcp.planner.config.options import TIME_LIMIT, check_values
 from ogcp.planner.grasp.contact_set import ContactSet
 from ogcp.planner.grasp.quality import q1, q1_certificate, signed_q1
 from ogcp.planner.grasp.wrench import contact_wrenches
 from ogcp.planner.infra.errors import OgcpError
+from ogcp.planner.infra.heartbeat import Heartbeat
 from ogcp.planner.infra.parallel import DEFAULT_BACKEND, DEFAULT_JOBS, run_tasks, validate_backend
 from ogcp.planner.infra.provenance import provenance
 from ogcp.planner.records.plan import check_result, plan_record
@@ -48,7 +50,11 @@ CHILD_CLUSTERS = 4
 @dataclass(frozen=True)
 class HFTSRun:
     """One seeded HFTS run: its grasp, exact Q1 and, per level, the objective after the
-    descent into it (start), after its moves, and how many moves were accepted."""
+    descent into it (start), after its moves, and how many moves were accepted.
+
+    A run that meets its deadline (``stopped``) makes no more moves: it descends at random to
+    real contacts, and its per-level lists end at the level it stopped in.
+    """
 
     seed: int
     grasp: tuple[int, ...]
@@ -59,6 +65,7 @@ class HFTSRun:
     evaluations: int
     cpu_seconds: float
     residual: float | None = None
+    stopped: bool = False
 
     def to_dict(self) -> dict[str, Any]:
         return {**self.__dict__, "grasp": list(self.grasp)}
@@ -100,6 +107,11 @@ class HFTSResult:
             "wall_seconds": self.wall_seconds,
         }
 
+    @property
+    def status(self) -> str:
+        """``heuristic``, or ``stopped`` when the time limit cut a run short."""
+        return "stopped" if any(r.stopped for r in self.runs) else "heuristic"
+
     def to_dict(self, contact_set: dict[str, Any] | None = None) -> dict[str, Any]:
         """JSON form, schema ``ogcp.plan/1``, with ``runs`` listing every run."""
         return plan_record(
@@ -114,7 +126,7 @@ class HFTSResult:
             config=self.config,
             contact_set=contact_set,
             runs=[r.to_dict() for r in self.runs],
-            status="heuristic",
+            status=self.status,
             gap=self.q_ows - self.q1,
         )
 
@@ -174,10 +186,19 @@ def _signed_q1(contacts: ContactSet, positions: NDArray[np.float64], normals: ND
 
 
 def _one_run(
-    contacts: ContactSet, tree: Hierarchy, m: int, seed: int, iterations: int, hand: Any = None, weight: float = 1.0
+    contacts: ContactSet,
+    tree: Hierarchy,
+    m: int,
+    seed: int,
+    iterations: int,
+    hand: Any = None,
+    weight: float = 1.0,
+    deadline: float | None = None,
 ) -> HFTSRun:
-    """One HFTS run (module-level so worker processes can run it)."""
+    """One HFTS run (module-level so worker processes can run it); ``deadline`` is a
+    ``time.time()`` reading after which it makes no more moves."""
     cpu0 = time.process_time()
+    stopped = False
     rng = np.random.default_rng(seed)
     evaluations = 0
 
@@ -202,12 +223,19 @@ def _one_run(
 
     choice = [int(rng.choice(tree.levels[0])) for _ in range(m)]
     leaves: list[int] = []
-    start_per_level, per_level, accepted_per_level = [], [], []
+    start_per_level: list[float] = []
+    per_level: list[float] = []
+    accepted_per_level: list[int] = []
     for level in range(tree.depth + 1):
-        value = objective(level, choice)
-        start_per_level.append(value)
+        stopped = stopped or (deadline is not None and time.time() > deadline)
+        if not stopped:
+            value = objective(level, choice)
+            start_per_level.append(value)
         accepted = 0
-        for _ in range(iterations):
+        for _ in range(0 if stopped else iterations):
+            if deadline is not None and time.time() > deadline:
+                stopped = True
+                break
             if level < tree.depth:
                 candidate = [other(tree.siblings(node, level), node) for node in choice]
             else:  # the real contacts of each finger's leaf cluster
@@ -215,13 +243,14 @@ def _one_run(
             candidate_value = objective(level, candidate)
             if candidate_value > value:
                 choice, value, accepted = candidate, candidate_value, accepted + 1
-        per_level.append(value)
-        accepted_per_level.append(accepted)
+        if len(per_level) < len(start_per_level):
+            per_level.append(value)
+            accepted_per_level.append(accepted)
         if level + 1 < tree.depth:  # descend: a random child per finger, kept even if worse
             choice = [int(rng.choice(tree.children[node])) for node in choice]
         elif level + 1 == tree.depth:
             leaves = choice
-            choice = [int(rng.choice(tree.members[node])) for node in leaves]
+            choice = _distinct([int(rng.choice(tree.members[node])) for node in leaves], leaves, tree, rng)
     grasp = tuple(sorted(choice))
     # The reported quality is the exact Q1 of the real contacts, in canonical order.
     final = q1(contacts.subset_wrenches(np.array(grasp))) if len(set(grasp)) == m else 0.0
@@ -238,7 +267,27 @@ def _one_run(
         evaluations,
         time.process_time() - cpu0,
         residual,
+        stopped,
     )
+
+
+def _distinct(choice: list[int], leaves: list[int], tree: Hierarchy, rng: np.random.Generator) -> list[int]:
+    """``choice`` with each repeated contact replaced by another of its finger's leaf cluster, or
+    of any cluster when that one is used up: m fingers never share a contact, even where m
+    exceeds the clusters (HFTS itself was made for m <= 5). Unchanged, and no draw spent,
+    when the contacts are already distinct."""
+    if len(set(choice)) == len(choice):
+        return choice
+    taken: set[int] = set()
+    everything = np.concatenate([tree.members[node] for node in tree.levels[-1]])
+    for finger, contact in enumerate(choice):
+        if contact in taken:
+            free = [int(c) for c in tree.members[leaves[finger]] if int(c) not in taken]
+            free = free or [int(c) for c in everything if int(c) not in taken]
+            contact = int(rng.choice(free))
+            choice[finger] = contact
+        taken.add(contact)
+    return choice
 
 
 class HFTS:
@@ -254,6 +303,9 @@ class HFTS:
         hand: A hand model with ``residuals(positions, normals)`` (e.g.
             :class:`ogcp.planner.hands.reachability.SDHReachability`); its residual is
             subtracted from the objective with weight ``residual_weight``.
+        time_limit: Wall-clock budget of all runs [s]: past it every run stops moving and
+            descends at random to real contacts (status ``stopped``). None: unlimited.
+        lines: Where a progress line goes every 30 s (a log, off a terminal); None: none.
     """
 
     def __init__(
@@ -268,7 +320,11 @@ class HFTS:
         address: str | None = None,
         hand: Any = None,
         residual_weight: float = 1.0,
+        time_limit: float | None = None,
+        lines: Callable[[str], None] | None = None,
     ) -> None:
+        self.time_limit = time_limit
+        self.lines = lines
         self.hand = hand
         self.residual_weight = residual_weight
         self.runs = runs
@@ -293,15 +349,28 @@ class HFTS:
         )
         if not isinstance(m, (int, np.integer)) or m < 2 or m > len(contacts):
             raise OgcpError(f"m must be an integer with 2 <= m <= |C| = {len(contacts)}, got {m!r}")
+        if self.time_limit is not None:
+            TIME_LIMIT.check("time_limit", self.time_limit)
         wall0 = time.perf_counter()
+        deadline = None if self.time_limit is None else time.time() + self.time_limit
         tree = Hierarchy(contacts, self.position_weight, self.hierarchy_seed)
         if self.hand is not None and m != 3:
             raise OgcpError(f"the {self.hand.name} hand has 3 fingers; got m = {m}")
+        # Runs that start past the deadline still end on real contacts (one exact Q1 each), so
+        # every run has a grasp and the seeds stay comparable.
         tasks = [
-            (contacts, tree, int(m), self.seed + r, self.iterations, self.hand, self.residual_weight)
+            (contacts, tree, int(m), self.seed + r, self.iterations, self.hand, self.residual_weight, deadline)
             for r in range(self.runs)
         ]
-        runs = sorted(run_tasks(_one_run, tasks, self.jobs, self.backend, self.address), key=lambda r: r.seed)
+        runs: list[HFTSRun] = []
+
+        def line() -> str:
+            best = max((r.q1 for r in runs), default=0.0)
+            return f"hfts: {len(runs)} of {self.runs} runs, best Q1 {best:.6f}, {time.perf_counter() - wall0:.0f} s elapsed"
+
+        with Heartbeat(self.lines, line):
+            runs.extend(run_tasks(_one_run, tasks, self.jobs, self.backend, self.address))
+        runs.sort(key=lambda r: r.seed)
         best = max(runs, key=lambda r: (r.q1, [-i for i in r.grasp]))
         idx = np.array(best.grasp, dtype=np.intp)
         config = {

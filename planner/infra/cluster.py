@@ -4,7 +4,8 @@
 joblib's Dask backend: joblib runs everything in the calling process when the cluster has one
 thread in all, and sends tasks in batches, so a lost scheduler would take finished results with
 it). Before any task goes out, every worker must import the tasks' module, or the run stops
-naming the worker. Arguments shared by several tasks (a contact set) are scattered once.
+naming the worker. Large arguments (a contact set) are scattered once, and tasks go out a
+window at a time, so a generator of tasks is never listed in full.
 
 Faults: a worker that dies mid-task has the task run again elsewhere (the scheduler's own
 rescheduling, up to ``distributed.scheduler.allowed-failures`` deaths); the caller records each
@@ -15,22 +16,26 @@ keeps what it recorded, and a rerun (a suite with ``--resume``, exhaustive searc
 
 from __future__ import annotations
 
-import collections
 import contextlib
+import itertools
 import logging
 import pickle
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator
 from typing import Any
 
 from ogcp.planner.infra.errors import OgcpError
 
 #: Seconds the client waits for the scheduler, when connecting and after losing it.
 CONNECT_TIMEOUT = "10s"
-#: Arguments larger than this [bytes] that several tasks share are scattered once.
+#: Arguments larger than this [bytes] (pickled) are scattered once and shared by the tasks.
 SCATTER_BYTES = 1_000
+#: Tasks in flight per worker thread (and at least :data:`MIN_WINDOW` in all): enough to keep
+#: every thread busy while results travel back.
+TASKS_PER_THREAD = 2
+MIN_WINDOW = 4
 
 
-def run_on_cluster(address: str, function: Callable[..., Any], tasks: Sequence[tuple[Any, ...]]) -> Iterator[Any]:
+def run_on_cluster(address: str, function: Callable[..., Any], tasks: Iterable[tuple[Any, ...]]) -> Iterator[Any]:
     """``function(*task)`` for every task on the cluster at ``address``, yielded as each finishes.
 
     Raises:
@@ -51,13 +56,30 @@ def run_on_cluster(address: str, function: Callable[..., Any], tasks: Sequence[t
             client = Client(address, timeout=CONNECT_TIMEOUT)
         except OSError as exc:
             raise OgcpError(f"cannot reach the Dask scheduler at {address}: {exc}") from exc
-        futures: list[Any] = []
+        live: set[Any] = set()
         try:
             _check_workers(client, address, function.__module__)
-            arguments = _scattered(client, tasks)
-            futures = [client.submit(function, *task, pure=False) for task in arguments]
-            for future in as_completed(futures):
-                yield future.result()
+            scatter = _Scatter(client)
+            pending = iter(tasks)
+            # A window of tasks in flight rather than all at once: the tasks may be a generator
+            # too long to list (exhaustive search's chunks) or one that stops at a deadline.
+            window = max(MIN_WINDOW, TASKS_PER_THREAD * sum(client.nthreads().values()))
+            finished = as_completed()
+
+            def submit(task: tuple[Any, ...]) -> None:
+                future = client.submit(function, *scatter(task), pure=False)
+                live.add(future)
+                finished.add(future)
+
+            for task in itertools.islice(pending, window):
+                submit(task)
+            for future in finished:
+                result = future.result()
+                live.discard(future)
+                following = next(pending, None)
+                if following is not None:
+                    submit(following)
+                yield result
         except OgcpError:
             raise
         except Exception as exc:  # whatever a lost cluster raises, said in one line
@@ -72,7 +94,7 @@ def run_on_cluster(address: str, function: Callable[..., Any], tasks: Sequence[t
             ) from exc
         finally:
             with contextlib.suppress(Exception):  # a client of a dead scheduler may fail to cancel or close
-                client.cancel(futures)
+                client.cancel(list(live))
             with contextlib.suppress(Exception):
                 client.close(timeout=5)
     finally:
@@ -93,17 +115,30 @@ def _check_workers(client: Any, address: str, module: str) -> None:
             )
 
 
-def _scattered(client: Any, tasks: Sequence[tuple[Any, ...]]) -> list[tuple[Any, ...]]:
-    """The tasks with each large argument that several share replaced by one scattered future."""
-    uses = collections.Counter(id(arg) for task in tasks for arg in task)
-    futures: dict[int, Any] = {}
-    for task in tasks:
-        for arg in task:
-            # Collections are scattered element by element; they stay as they are.
-            shared = uses[id(arg)] > 1 and not isinstance(arg, (list, tuple, dict, set))
-            if shared and id(arg) not in futures and len(pickle.dumps(arg)) > SCATTER_BYTES:
-                futures[id(arg)] = client.scatter(arg, hash=False)
-    return [tuple(futures.get(id(arg), arg) for arg in task) for task in tasks]
+class _Scatter:
+    """Replaces each large argument of a task with a future scattered once (a contact set shared
+    by every task travels once, not with each task)."""
+
+    def __init__(self, client: Any) -> None:
+        self.client = client
+        # id -> (the argument, its future); the argument is held so that its id is never reused.
+        self.known: dict[int, tuple[Any, Any]] = {}
+
+    def __call__(self, task: tuple[Any, ...]) -> tuple[Any, ...]:
+        return tuple(self._one(arg) for arg in task)
+
+    def _one(self, arg: Any) -> Any:
+        # Collections are scattered element by element; they stay as they are.
+        if arg is None or isinstance(arg, (bool, int, float, str, list, tuple, dict, set)):
+            return arg
+        known = self.known.get(id(arg))
+        if known is not None:
+            return known[1]
+        if len(pickle.dumps(arg)) <= SCATTER_BYTES:
+            return arg
+        future = self.client.scatter(arg, hash=False)
+        self.known[id(arg)] = (arg, future)
+        return future
 
 
 def _scheduler_alive(client: Any) -> bool:

@@ -63,7 +63,8 @@ def run_tasks(
 
     Args:
         function: A picklable function.
-        tasks: Argument tuples.
+        tasks: Argument tuples, taken as workers are free for them: a generator may stop
+            yielding (a deadline) and is never listed in full.
         jobs: Worker processes (ignored by Dask, whose cluster decides).
         backend: ``loky`` (local processes) or ``dask``.
         address: Dask scheduler ``HOST:PORT``.
@@ -72,7 +73,6 @@ def run_tasks(
         Results in completion order (callers merge them deterministically).
     """
     validate_backend(backend, address, jobs)
-    tasks = list(tasks)
     if backend == "loky" and jobs == 1:
         for task in tasks:
             yield function(*task)

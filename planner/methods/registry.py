@@ -95,8 +95,8 @@ class MethodSpec:
 
 
 _SEARCH_RUN_OPTIONS = ("time_limit", "memory_limit", "jobs")
-_ES_RUN_OPTIONS = ("jobs", "backend", "address", "checkpoint")
-_HFTS_RUN_OPTIONS = ("jobs", "backend", "address", "optimum")
+_ES_RUN_OPTIONS = ("time_limit", "jobs", "backend", "address", "checkpoint")
+_HFTS_RUN_OPTIONS = ("time_limit", "jobs", "backend", "address", "optimum")
 
 #: Every method, in the order that listings and ``--help`` show them.
 METHODS: dict[str, MethodSpec] = {

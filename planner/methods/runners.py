@@ -7,7 +7,9 @@ Everything a record holds beyond what the engine writes (the ``hand`` block, HFT
 
 from __future__ import annotations
 
+import contextlib
 import threading
+import time
 from collections.abc import Callable
 from dataclasses import dataclass, fields
 from functools import lru_cache
@@ -28,10 +30,15 @@ from ogcp.planner.config.options import MEMORY_LIMIT, MethodConfig, options_of
 from ogcp.planner.grasp.constraints import Constraint, MaxFingerSpread
 from ogcp.planner.grasp.contact_set import ContactSet
 from ogcp.planner.hands.reachability import HandReachability
+from ogcp.planner.infra.errors import SearchTimeout
 from ogcp.planner.infra.parallel import DEFAULT_BACKEND, DEFAULT_JOBS
 from ogcp.planner.records.plan import add_hand, add_optimum, contact_set_record
 from ogcp.planner.search.grasp_planner import GraspPlanner
 from ogcp.planner.search.result import SearchResult
+
+#: [s] Budget of the A* that finds the optimum next to HFTS's runs when no time limit is set: A*
+#: proves m = 3 on every built-in object in about 10 s, and at large m it may never finish.
+OPTIMUM_SECONDS = 60.0
 
 
 @dataclass(frozen=True)
@@ -39,7 +46,8 @@ class RunOptions:
     """How to run a method, as opposed to what it computes (never part of a suite cell's id).
 
     Attributes:
-        time_limit: Wall-clock budget of A*, WA* and Dijkstra [s]; None: unlimited.
+        time_limit: Wall-clock budget of any method [s] (HFTS's A* optimum included); None:
+            unlimited.
         memory_limit: Most memory of one A*, WA* or Dijkstra search, all its processes [GiB]
             (:mod:`ogcp.planner.search.memory`); None: unlimited.
         progress: Show a progress bar on stderr (search, exhaustive search).
@@ -53,8 +61,8 @@ class RunOptions:
             seed of its own, records it as ``config.seed``. None: not recorded.
         stop: An event that stops A*, WA* and Dijkstra when set; they return their best
             grasp with status ``interrupted``.
-        lines: Where A*, WA* and Dijkstra send a progress line at least every 30 s (off a
-            terminal, where no bar shows); None: none.
+        lines: Where a method sends a progress line at least every 30 s (off a terminal, where
+            no bar shows); None: none.
     """
 
     time_limit: float | None = None
@@ -139,6 +147,7 @@ def run_exhaustive(config: ESConfig | ESPrunedConfig, contacts: ContactSet, m: i
 
     Raises:
         OgcpError: For invalid parameters, a checkpoint of another run, or no admissible grasp.
+        SearchTimeout: When the time limit ends it before any admissible grasp was evaluated.
     """
     constraints, hand = constraints_of(config, m)
     search = ExhaustiveSearch(
@@ -149,6 +158,8 @@ def run_exhaustive(config: ESConfig | ESPrunedConfig, contacts: ContactSet, m: i
         checkpoint=options.checkpoint,
         progress=options.progress,
         constraints=constraints,
+        time_limit=options.time_limit,
+        lines=options.lines,
         **engine_arguments(config),
     )
     result = search.run(contacts, m)
@@ -161,16 +172,30 @@ def run_exhaustive(config: ESConfig | ESPrunedConfig, contacts: ContactSet, m: i
 def run_hfts(config: HFTSConfig, contacts: ContactSet, m: int, options: RunOptions) -> MethodRun:
     """HFTS's runs, and with ``options.optimum`` the A* optimum under the same hand.
 
+    The optimum's A* gets what is left of the time limit, or :data:`OPTIMUM_SECONDS` without
+    one; one that does not finish is recorded with its status and certified bound.
+
     Raises:
         OgcpError: For invalid parameters.
     """
+    wall0 = time.perf_counter()
     hand = constraints_of(config, m)[1]
     search = HFTS(
-        jobs=options.jobs, backend=options.backend, address=options.address, hand=hand, **engine_arguments(config)
+        jobs=options.jobs,
+        backend=options.backend,
+        address=options.address,
+        hand=hand,
+        time_limit=options.time_limit,
+        lines=options.lines,
+        **engine_arguments(config),
     )
     result = search.run(contacts, m)
     record = add_hand(result.to_dict(contact_set_record(contacts)), hand, contacts)
     if options.optimum:
-        optimum = GraspPlanner(seed=config.seed, constraints=[hand] if hand else ()).plan(contacts, m)
-        add_optimum(record, optimum.method, optimum.grasp, optimum.q1)
+        budget = OPTIMUM_SECONDS if options.time_limit is None else options.time_limit - (time.perf_counter() - wall0)
+        if budget > 0:
+            planner = GraspPlanner(seed=config.seed, constraints=[hand] if hand else (), time_limit=budget)
+            with contextlib.suppress(SearchTimeout):  # nothing found in the time left: no optimum to show
+                optimum = planner.plan(contacts, m, stop=options.stop)
+                add_optimum(record, optimum.method, optimum.grasp, optimum.q1, optimum.status, optimum.bound)
     return MethodRun(result, record)

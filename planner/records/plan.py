@@ -184,9 +184,31 @@ def add_hand(record: dict[str, Any], hand: HandReachability | None, contacts: Co
     return record
 
 
-def add_optimum(record: dict[str, Any], method: str, grasp: Sequence[int], q1: float) -> dict[str, Any]:
-    """``record`` with the ``"optimum"`` block: grasp and Q1 [-] an exact ``method`` found (HFTS shows its gap)."""
-    record["optimum"] = {"method": method, "grasp": list(grasp), "q1": q1}
+def add_optimum(
+    record: dict[str, Any],
+    method: str,
+    grasp: Sequence[int],
+    q1: float,
+    status: str = "optimal",
+    bound: float | None = None,
+) -> dict[str, Any]:
+    """``record`` with the ``"optimum"`` block: grasp and Q1 [-] an exact ``method`` found (HFTS shows its gap).
+
+    Args:
+        record: The plan record (changed in place and returned).
+        method: The exact method.
+        grasp: Its grasp's contact indices.
+        q1: Its grasp's Q1 [-].
+        status: ``optimal``, or how it stopped short (``stopped``: its time ran out).
+        bound: Its certified upper bound on the optimum [-]; None: ``q1`` (optimal).
+    """
+    record["optimum"] = {
+        "method": method,
+        "grasp": list(grasp),
+        "q1": q1,
+        "status": status,
+        "bound": q1 if bound is None else bound,
+    }
     return record
 
 
@@ -377,6 +399,8 @@ class PlanOptimum:
     method: str | None
     grasp: tuple[int, ...] | None
     q1: float | None
+    status: str = "optimal"
+    bound: float | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -503,9 +527,13 @@ class PlanView:
         block = self.record.get("optimum")
         if not isinstance(block, dict):
             return None
-        method = block.get("method")
+        method, status = block.get("method"), block.get("status", "optimal")
         return PlanOptimum(
-            None if method is None else str(method), _indices(block.get("grasp")), _number(block.get("q1"))
+            None if method is None else str(method),
+            _indices(block.get("grasp")),
+            _number(block.get("q1")),
+            status if isinstance(status, str) else "optimal",  # older records: always the optimum
+            _number(block.get("bound", block.get("q1"))),
         )
 
 

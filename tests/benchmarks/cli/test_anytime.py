@@ -100,3 +100,22 @@ def test_a_memory_limit_too_small_for_the_processes_is_one_line(tmp_path):
     status, _, err = _run(["plan", "box", "-n", "20", "--memory-limit", "0.5", "--jobs", "2"])
     assert status == 2 and err.count("\n") == 1
     assert "memory_limit 0.5 GiB is too small for a search in 2 process(es): give at least 1 GiB" in err
+
+
+@pytest.mark.parametrize("method", ["es", "es-pruned", "hfts"])
+def test_the_baselines_keep_the_time_limit_too(tmp_path, method):
+    """Before, ES and HFTS refused --time-limit, and without it ES at m = 20 of 60 was killed for memory."""
+    path = tmp_path / "plan.json"
+    argv = ["plan", "sphere", "-n", "60", "-m", "20", "--method", method, "--time-limit", "1", "-o", str(path)]
+    start = time.perf_counter()
+    status, text, err = _run(argv)
+    assert time.perf_counter() - start < 1 + 4.0
+    record = json.loads(path.read_text())
+    _check_certificate(record, 60)
+    if method == "hfts":  # its runs may finish in time; the A* optimum beside them cannot
+        assert status in (0, 3) and ("A* optimum: not proven in the time it had" in text or status == 3)
+        assert "A* optimum: grasp" not in text
+    else:
+        assert status == 3 and record["status"] == "stopped" and record["bound"] == record["q_ows"]
+        assert "certificate: stopped at its time limit after " in text
+        assert "the time limit of 1 s returns the best grasp evaluated" in err

@@ -158,7 +158,7 @@ ERROR_CASES = {
     "astar eps": (["plan", "box", "-n", "8", "--method", "astar", "--eps", "0.3"], "applies to method 'wastar'"),
     "bad max spread": (["plan", "box", "-n", "8", "--max-spread", "0"], "max_spread: expected a number > 0"),
     "tree of es": (["plan", "box", "-n", "8", "--method", "es", "--record-tree"], "applies to methods astar"),
-    "time limit of es": (["plan", "box", "-n", "8", "--method", "es", "--time-limit", "5"], "applies to methods"),
+    "memory limit of es": (["plan", "box", "-n", "8", "--method", "es", "--memory-limit", "2"], "applies to methods"),
 }
 
 

@@ -1,4 +1,4 @@
-"""A suite's time limit holds for a search cell whose m is too large to finish."""
+"""A suite's time limit holds for a search or exhaustive-search cell whose m is too large to finish."""
 
 from __future__ import annotations
 
@@ -19,6 +19,10 @@ m = [30]
 [[methods]]
 method = "wastar"
 label = "WA*"
+
+[[methods]]
+method = "es"
+label = "ES"
 """
 
 
@@ -28,9 +32,11 @@ def test_a_large_m_cell_stops_at_its_time_limit_with_a_certified_grasp(tmp_path:
     start = time.perf_counter()
     summary = SuiteRunner(load_suite(suite), tmp_path / "run", time_limit=2.0).run()
     assert time.perf_counter() - start < 30.0  # before: no answer in minutes
-    assert summary.ran == 1
-    (line,) = ResultStore(tmp_path / "run").read().records
-    record = CellRecord.from_dict(line)
-    view = record.plan_view
-    assert record.status == "stopped" and view is not None and view.q1 is not None and view.bound is not None
-    assert 0 < view.q1 <= view.bound
+    assert summary.ran == 2
+    lines = ResultStore(tmp_path / "run").read().records
+    assert sorted(line["params"]["method"] for line in lines) == ["es", "wastar"]
+    for line in lines:  # exhaustive search too: before, listing its 1e17 grasps' chunks never ended
+        record = CellRecord.from_dict(line)
+        view = record.plan_view
+        assert record.status == "stopped" and view is not None and view.q1 is not None and view.bound is not None
+        assert 0 < view.q1 <= view.bound <= view.q_ows
