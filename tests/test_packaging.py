@@ -174,6 +174,8 @@ def test_the_wheel_installs_one_top_level_package(wheel):
     assert tops - dist_info == {"ogcp"}, f"the wheel installs {sorted(tops - dist_info)} at the top level"
     assert {"ogcp/__init__.py", "ogcp/py.typed", "ogcp/planner/__init__.py", "ogcp/sim_eval/__init__.py"} <= set(names)
     assert {f"ogcp/assets/{relative}" for relative in _asset_files()} <= set(names)
+    kernels = ROOT / "planner" / "grasp" / "kernel" / "shipped"  # compiled kernels: no compiling at first use
+    assert {f"ogcp/planner/grasp/kernel/shipped/{p.name}" for p in kernels.iterdir()} <= set(names)
     shipped = {name.rsplit("/", 1)[0].replace("/", ".") for name in names if name.endswith("/__init__.py")}
     assert not {package for package in shipped for hidden in NOT_SHIPPED if package.startswith(hidden)}
     (entry_points,) = [name for name in names if name.endswith(".dist-info/entry_points.txt")]

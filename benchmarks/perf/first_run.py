@@ -3,11 +3,14 @@
 Run: ``python -m ogcp.benchmarks.perf.first_run [--runs 3]``. Every case is a fresh process with
 an empty numba cache and an empty ogcp cache, each in its own temporary folder:
 
-* ``ogcp plan box -n 200 -m 3`` cold (compiles what A* needs, then plans), and the same command
-  warm (its cache from the cold run) as the reference of the same round;
-* a suite's warm-up (:func:`ogcp.planner.methods.warm_up.warm_up`, every kernel family) cold,
-  with the search family compiled in a helper process alongside (the default) and in one
-  process (``parallel=False``), to show what the helper saves.
+* ``ogcp plan box -n 200 -m 3`` cold (the kernels that ship with ogcp, :mod:`ogcp.planner.grasp.kernel.shipped`,
+  load; nothing compiles), and the same command warm (its cache from the cold run) as the
+  reference of the same round;
+* the same cold plan with the shipped kernels turned off (``OGCP_SHIPPED_KERNELS=0``: it compiles
+  what A* needs), to show what shipping them saves;
+* a suite's warm-up (:func:`ogcp.planner.methods.warm_up.warm_up`, every kernel family) cold, with
+  the shipped kernels, and without them with the search family compiled in a helper process
+  alongside (the default) and in one process (``parallel=False``), to show what the helper saves.
 
 Prints each case's median over ``--runs`` rounds, the ratio of the cold plan to the warm one, and
 the issue's targets (first plan at most 15 s, a suite's warm-up at most 30 s, on two cores).
@@ -43,13 +46,20 @@ def one_round() -> dict[str, float]:
     """Every case once, each cold case with caches of its own."""
     out: dict[str, float] = {}
     cases = {
-        "plan, cold": [*ogcp_command(), *PLAN_ARGS],
-        "warm-up, helper process": [sys.executable, "-c", _WARM_UP.format(parallel=True)],
-        "warm-up, one process": [sys.executable, "-c", _WARM_UP.format(parallel=False)],
+        "plan, cold": ([*ogcp_command(), *PLAN_ARGS], "1"),
+        "plan, cold, compiled": ([*ogcp_command(), *PLAN_ARGS], "0"),
+        "warm-up": ([sys.executable, "-c", _WARM_UP.format(parallel=True)], "1"),
+        "warm-up, helper process": ([sys.executable, "-c", _WARM_UP.format(parallel=True)], "0"),
+        "warm-up, one process": ([sys.executable, "-c", _WARM_UP.format(parallel=False)], "0"),
     }
-    for name, argv in cases.items():
+    for name, (argv, ships) in cases.items():
         with tempfile.TemporaryDirectory(prefix="ogcp-first-run-") as folder:
-            env = {**os.environ, "NUMBA_CACHE_DIR": f"{folder}/numba", "OGCP_CACHE": f"{folder}/ogcp"}
+            env = {
+                **os.environ,
+                "NUMBA_CACHE_DIR": f"{folder}/numba",
+                "OGCP_CACHE": f"{folder}/ogcp",
+                "OGCP_SHIPPED_KERNELS": ships,
+            }
             out[name] = timed(argv, env)
             if name == "plan, cold":
                 out["plan, warm"] = timed(argv, env)
@@ -67,7 +77,9 @@ def main(argv: list[str] | None = None) -> None:
         print(f"  {name:<26} {value:6.1f} s")
     print(f"  cold plan / warm plan     x{medians['plan, cold'] / medians['plan, warm']:.1f}")
     saved = medians["warm-up, one process"] - medians["warm-up, helper process"]
-    print(f"  the helper process saves  {saved:.1f} s of the warm-up")
+    print(f"  the helper process saves  {saved:.1f} s of the warm-up without shipped kernels")
+    shipped = medians["plan, cold, compiled"] - medians["plan, cold"]
+    print(f"  the shipped kernels save  {shipped:.1f} s of the first plan")
     print(f"targets: first plan <= {PLAN_TARGET:g} s, warm-up <= {WARM_UP_TARGET:g} s (two cores)")
 
 

@@ -105,7 +105,7 @@ def families_for(methods: Iterable[str]) -> tuple[str, ...]:
 
 
 def cold_kernels(families: Iterable[str]) -> list[str]:
-    """Entry kernels of the families with no cache index on disk: the ones a first call will compile.
+    """Entry kernels of the families with no cache index on disk, local or shipped: the ones a first call will compile.
 
     A kernel whose index exists may still compile (another numba, an edited source); this is
     the cheap check that decides whether to say that compiling is coming, not a promise.
@@ -117,7 +117,8 @@ def cold_kernels(families: Iterable[str]) -> list[str]:
             dispatcher = dispatchers[name]
             cache = getattr(dispatcher, "_cache", None)
             index = getattr(getattr(cache, "_cache_file", None), "_index_path", None)
-            if not dispatcher.signatures and (index is None or not os.path.exists(index)):
+            ships = bool(getattr(cache, "ships", False))  # shipped with ogcp for these sources
+            if not dispatcher.signatures and not ships and (index is None or not os.path.exists(index)):
                 cold.append(name)
     return cold
 
@@ -135,6 +136,19 @@ def _run_search() -> None:
 
     contacts = sample_contacts(builtin_mesh("box"), n=WARM_UP_CONTACTS, seed=0)
     GraspPlanner(method="astar").plan(contacts, 2)
+    _run_open_list()
+
+
+def _run_open_list() -> None:
+    """What a search too short to meet its memory limit or a better grasp's cutoff never calls:
+    the open list's purge and forgetting (a long search calls them)."""
+    from ogcp.planner.search.open_list import OpenList
+
+    entries = OpenList()
+    for ident in range(4):
+        entries.push(float(ident), -1, float(ident), 0, 0.0, ident)
+    entries.purge(2.5)
+    entries.forget(1.5)
 
 
 def _run_search_alone() -> None:

@@ -14,6 +14,10 @@ are never read. A file that fails its check is reported in one line
 the kernel again and writes it back. A damaged cache costs one compilation, never a failed
 run. A file of another numba version is stale, not damaged: it is overwritten silently.
 
+Where the local cache has no entry for a signature, the kernels that ship with ogcp are looked
+up (:mod:`.shipped`: compiled for the x86-64-v3 level, keyed by the sources' content), so a
+fresh install does not compile.
+
 This leans on numba's cache classes (``FunctionCache``, ``IndexDataCacheFile``), which have
 kept their shape since numba 0.49; the tests of this module damage real cache files.
 """
@@ -31,9 +35,10 @@ import numba
 from numba import njit
 from numba.core.caching import FunctionCache, IndexDataCacheFile
 
+from ogcp.planner.grasp.kernel import shipped
 from ogcp.planner.infra.cache import CacheEntryWarning
 
-__all__ = ["HEADER", "cached_njit"]
+__all__ = ["HEADER", "cached_njit", "restamp_index"]
 
 HEADER = "ogcp.numba-cache/1"
 #: The header line is short; a file without a newline this early is not one of ours.
@@ -65,6 +70,26 @@ class _SealedFunctionCache(FunctionCache):
             filename_base=f"{self._impl.filename_base}.ogcp",
             source_stamp=self._impl.locator.get_source_stamp(),
         )
+        self._shipped: _ShippedCacheFile | None = None
+        if shipped.enabled() and shipped.shipped_index(self._impl.filename_base).is_file():
+            self._shipped = _ShippedCacheFile(
+                cache_path=str(shipped.SHIPPED),
+                filename_base=f"{self._impl.filename_base}.ogcp",
+                source_stamp=shipped.shipped_stamp(),
+            )
+
+    @property
+    def ships(self) -> bool:
+        """Whether this kernel has a shipped cache for the current sources (it may still lack a signature)."""
+        return self._shipped is not None and bool(self._shipped.overloads())
+
+    def _load_overload(self, sig: Any, target_context: Any) -> Any:
+        data = super()._load_overload(sig, target_context)
+        if data is None and self._shipped is not None:
+            found = self._shipped.load(shipped.shipped_key(self._index_key(sig, target_context.codegen())))
+            if found is not None:
+                data = self._impl.rebuild(target_context, found)
+        return data
 
 
 class _SealedCacheFile(IndexDataCacheFile):
@@ -133,3 +158,45 @@ class _SealedCacheFile(IndexDataCacheFile):
             Path(path).unlink(missing_ok=True)
         except OSError:
             pass  # not ours to remove: the next save replaces it, or the next run reports it again
+
+
+class _ShippedCacheFile(_SealedCacheFile):
+    """A shipped kernel's files (:mod:`.shipped`): read only, the index read once."""
+
+    _index: dict[Any, str] | None = None
+
+    def overloads(self) -> dict[Any, str]:
+        """The index's entries; empty when it is stale (other sources) or damaged."""
+        if self._index is None:
+            self._index = super()._load_index()
+        return self._index
+
+    def _load_index(self) -> dict[Any, str]:
+        return self.overloads()
+
+    def _save_index(self, overloads: dict[Any, str]) -> None:
+        raise RuntimeError("shipped kernels are read only")
+
+    def _save_data(self, name: str, data: Any) -> None:
+        raise RuntimeError("shipped kernels are read only")
+
+    @staticmethod
+    def _discard(path: str, reason: str) -> None:
+        # Part of the installation: reported and skipped (the kernel compiles), never removed.
+        warnings.warn(
+            f"shipped kernel file {path} is damaged ({reason}); skipped, the kernel is compiled", CacheEntryWarning, 3
+        )
+
+
+def restamp_index(source: str | Path, target: str | Path, stamp: tuple[str, str]) -> None:
+    """Copy a sealed index from ``source`` to ``target`` with its source stamp replaced by ``stamp``.
+
+    Raises:
+        ValueError: When ``source`` is not a readable sealed index.
+    """
+    reader = _SealedCacheFile(cache_path=str(Path(source).parent), filename_base="unused", source_stamp=None)
+    content = reader._read(str(source))
+    if not (isinstance(content, tuple) and len(content) == 2 and isinstance(content[1], dict)):
+        raise ValueError(f"{source} is not a sealed numba cache index")
+    writer = _SealedCacheFile(cache_path=str(Path(target).parent), filename_base="unused", source_stamp=stamp)
+    writer._write(str(target), (stamp, content[1]))

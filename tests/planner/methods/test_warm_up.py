@@ -12,6 +12,7 @@ from ogcp.planner.infra.errors import OgcpError
 from ogcp.planner.methods import warm_up as warm
 from ogcp.planner.methods.registry import METHODS
 from ogcp.planner.methods.runners import RunOptions
+from ogcp.planner.search.open_list import OpenList
 
 
 def test_planning_with_every_method_after_the_warm_up_compiles_nothing() -> None:
@@ -29,6 +30,12 @@ def test_planning_with_every_method_after_the_warm_up_compiles_nothing() -> None
     table = support_table(contacts.wrenches, default_directions())
     exact_q1_batch(contacts.wrenches, np.array([[0, 7, 15], [1, 2, 3]]), table)
     exact_q1_batch(np.array(contacts.wrenches), np.array([[0, 7, 15]]), table, cut=0.1)
+    # What only a long search calls: a purge after a better grasp, forgetting at the memory limit.
+    entries = OpenList()
+    for ident in range(6):
+        entries.push(0.5 * ident, -2, 0.5 * ident, 1, 0.1, ident)
+    entries.purge(1.2)
+    entries.forget(0.7, keep=0)
     grown = {name: count - before[name] for name, count in warm.compiled_signatures().items() if count != before[name]}
     assert grown == {}, f"compiled after the warm-up: {grown}"
 
