@@ -32,6 +32,7 @@ import math
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
@@ -40,7 +41,7 @@ from numpy.typing import NDArray
 
 from ogcp.planner.config.methods import DEFAULT_HAND_THRESHOLD
 from ogcp.planner.grasp.contact_set import ContactSet
-from ogcp.planner.hands.box_index import BoxIndex
+from ogcp.planner.hands.box_index import BoxIndex, boxes_within, pair_bounds
 from ogcp.planner.hands.descriptor import HandDescriptor
 from ogcp.planner.hands.registry import resolve_hand
 from ogcp.planner.infra.cache import cache_dir as default_cache_dir
@@ -118,6 +119,15 @@ class _FingerModel:
     codes: NDArray[np.float64]
     tree: Any
     boxes: BoxIndex
+
+
+@lru_cache(maxsize=MAX_FINGERS)
+def _assignments(m: int) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """Every assignment of m super-contacts to the fingers, shape (m!, m), and the finger pairs
+    i < j in :func:`pair_code`'s order, shape (C(m, 2), 2)."""
+    assignments = np.array(list(itertools.permutations(range(m))), dtype=np.int64)
+    pairs = np.array(list(itertools.combinations(range(m), 2)), dtype=np.int64).reshape(-1, 2)
+    return assignments, pairs
 
 
 class HandReachability:
@@ -326,27 +336,19 @@ class HandReachability:
         """Sound: False only if no grasp drawn from the super-contacts is accepted."""
         m = len(super_contacts)
         model = self._model(m)
+        members = np.concatenate([np.asarray(s, dtype=np.int64) for s in super_contacts])
+        offsets = np.zeros(m + 1, dtype=np.int64)
+        offsets[1:] = np.cumsum([len(s) for s in super_contacts])
         # bounds[x, y]: the interval of every code dimension of contact x (finger i) and y (finger j).
-        bounds = np.zeros((m, m, 2, 4))
-        for x, y in itertools.permutations(range(m), 2):
-            px, py = contacts.positions[super_contacts[x]], contacts.positions[super_contacts[y]]
-            nx, ny = contacts.normals[super_contacts[x]], contacts.normals[super_contacts[y]]
-            line = py[None, :, :] - px[:, None, :]
-            length = np.linalg.norm(line, axis=-1)
-            u = line / np.maximum(length, 1e-12)[..., None]
-            values = (
-                length,
-                np.linalg.norm(nx[:, None, :] - ny[None, :, :], axis=-1),
-                np.einsum("ak,abk->ab", nx, u),
-                np.einsum("bk,abk->ab", ny, u),
+        bounds = pair_bounds(contacts.positions, contacts.normals, members, offsets)
+        assignments, pairs = _assignments(m)
+        boxes = model.boxes
+        radius2 = self.threshold * self.threshold
+        return bool(
+            boxes_within(
+                bounds, assignments, pairs, model.scale, radius2, boxes.low, boxes.high, boxes.points, boxes.starts
             )
-            bounds[x, y, 0] = [v.min() for v in values]
-            bounds[x, y, 1] = [v.max() for v in values]
-        pairs = list(itertools.combinations(range(m), 2))
-        assignments = list(itertools.permutations(range(m)))
-        box_lo = np.array([np.concatenate([bounds[a[i], a[j], 0] for i, j in pairs]) for a in assignments])
-        box_hi = np.array([np.concatenate([bounds[a[i], a[j], 1] for i, j in pairs]) for a in assignments])
-        return model.boxes.any_within(box_lo / model.scale, box_hi / model.scale, self.threshold)
+        )
 
     def describe(self) -> dict[str, object]:
         """JSON-ready description (the same whatever grasps were asked about before)."""

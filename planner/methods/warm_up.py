@@ -43,6 +43,7 @@ FAMILIES: dict[str, tuple[str, ...]] = {
     ),
     "search": (
         "ogcp.planner.grasp.kernel.ray_bound",
+        "ogcp.planner.hands.box_index",
         "ogcp.planner.search.children_kernel",
         "ogcp.planner.search.expansion",
         "ogcp.planner.search.open_list",
@@ -58,6 +59,9 @@ ENTRY_KERNELS: dict[str, tuple[str, ...]] = {
         "ogcp.planner.grasp.kernel.refit._canonical_plane",
     ),
     "search": (
+        "ogcp.planner.hands.box_index._box_within",
+        "ogcp.planner.hands.box_index.boxes_within",
+        "ogcp.planner.hands.box_index.pair_bounds",
         "ogcp.planner.search.children_kernel.decode_children",
         "ogcp.planner.search.children_kernel.shared_tree_children",
         "ogcp.planner.search.children_kernel.stale_children",
@@ -137,6 +141,23 @@ def _run_search() -> None:
     contacts = sample_contacts(builtin_mesh("box"), n=WARM_UP_CONTACTS, seed=0)
     GraspPlanner(method="astar").plan(contacts, 2)
     _run_open_list()
+    _run_hand_boxes(contacts)
+
+
+def _run_hand_boxes(contacts: Any) -> None:
+    """A hand's reachability test of a search state (:meth:`HandReachability.admits`), on a made-up
+    index: loading a real hand needs MuJoCo and minutes of sampling."""
+    import numpy as np
+
+    from ogcp.planner.hands.box_index import BoxIndex, boxes_within, pair_bounds
+
+    index = BoxIndex(np.random.default_rng(0).normal(size=(100, 12)))
+    index.any_within(np.zeros((1, 12)), np.ones((1, 12)), 0.5)
+    members, offsets = np.arange(6, dtype=np.int64), np.array([0, 2, 4, 6], dtype=np.int64)
+    bounds = pair_bounds(contacts.positions, contacts.normals, members, offsets)
+    assignments = np.array([[0, 1, 2], [2, 1, 0]], dtype=np.int64)
+    pairs = np.array([[0, 1], [0, 2], [1, 2]], dtype=np.int64)
+    boxes_within(bounds, assignments, pairs, np.ones(12), 0.25, index.low, index.high, index.points, index.starts)
 
 
 def _run_open_list() -> None:

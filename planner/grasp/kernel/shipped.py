@@ -71,6 +71,7 @@ SOURCES = (
     "grasp/kernel/ray_bound.py",
     "grasp/kernel/refit.py",
     "grasp/subset_quality.py",
+    "hands/box_index.py",
     "infra/arrays.py",
     "search/children_kernel.py",
     "search/expansion.py",

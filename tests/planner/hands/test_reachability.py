@@ -96,6 +96,48 @@ def test_pruning_is_sound_against_brute_force(hand, donut):
     assert pruned > 0  # and it does prune
 
 
+def _admits_in_numpy(hand, super_contacts, contacts):
+    """admits as it was before it was compiled: every pair's code ranges, then every assignment's box."""
+    m = len(super_contacts)
+    model = hand._model(m)
+    bounds = np.zeros((m, m, 2, 4))
+    for x, y in itertools.permutations(range(m), 2):
+        px, py = contacts.positions[super_contacts[x]], contacts.positions[super_contacts[y]]
+        nx, ny = contacts.normals[super_contacts[x]], contacts.normals[super_contacts[y]]
+        line = py[None, :, :] - px[:, None, :]
+        length = np.linalg.norm(line, axis=-1)
+        u = line / np.maximum(length, 1e-12)[..., None]
+        values = (
+            length,
+            np.linalg.norm(nx[:, None, :] - ny[None, :, :], axis=-1),
+            np.einsum("ak,abk->ab", nx, u),
+            np.einsum("bk,abk->ab", ny, u),
+        )
+        bounds[x, y, 0] = [v.min() for v in values]
+        bounds[x, y, 1] = [v.max() for v in values]
+    pairs = list(itertools.combinations(range(m), 2))
+    low = np.array(
+        [np.concatenate([bounds[a[i], a[j], 0] for i, j in pairs]) for a in itertools.permutations(range(m))]
+    )
+    high = np.array(
+        [np.concatenate([bounds[a[i], a[j], 1] for i, j in pairs]) for a in itertools.permutations(range(m))]
+    )
+    gap = np.maximum(low[:, None] / model.scale - model.codes[None], 0.0)
+    gap += np.maximum(model.codes[None] - high[:, None] / model.scale, 0.0)
+    return bool((np.einsum("bnd,bnd->bn", gap, gap) <= hand.threshold**2).any())
+
+
+def test_the_compiled_test_of_a_state_answers_as_numpy_did(hand, donut):
+    rng = np.random.default_rng(7)
+    answers = []
+    for _ in range(400):
+        sets = [np.sort(rng.choice(18, int(rng.integers(1, 5)), replace=False)) for _ in range(3)]
+        answer = hand.admits(sets, donut)
+        assert answer == _admits_in_numpy(hand, sets, donut)
+        answers.append(answer)
+    assert 0 < sum(answers) < len(answers)
+
+
 def test_constrained_astar_equals_constrained_enumeration(hand, donut):
     valid = [g for g in itertools.combinations(range(18), 3) if hand.accepts(g, donut)]
     assert 0 < len(valid) < 816
