@@ -361,7 +361,7 @@ class ExhaustiveSearch:
         results, partial = dict(done), []
 
         def line() -> str:
-            best = max((r.best_q1 for r in results.values()), default=0.0)
+            best = max((r.best_q1 for r in list(results.values())), default=0.0)  # a copy: the work adds to it
             return (
                 f"{config['method']}: {covered:.4g} of {total:.4g} grasps ({100 * covered / total:.2g} %), "
                 f"best Q1 {best:.6f}, {time.perf_counter() - wall0:.0f} s elapsed"

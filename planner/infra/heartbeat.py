@@ -49,4 +49,8 @@ class Heartbeat:
     def _beat(self) -> None:
         assert self.say is not None
         while not self._done.wait(self.every):
-            self.say(self.describe())
+            try:
+                line = self.describe()
+            except Exception:  # noqa: BLE001 - a progress line is not worth a traceback; the work goes on
+                return
+            self.say(line)
