@@ -289,14 +289,16 @@ class HandReachability:
         """Residual of a grasp over all finger assignments, with the nearest sample."""
         m = len(grasp)
         model = self._model(m)
-        assignments = list(itertools.permutations(range(m)))
-        p, n = contacts.positions[list(grasp)], contacts.normals[list(grasp)]
-        codes = np.array([pair_code(p[list(a)], n[list(a)]) for a in assignments]) / model.scale
+        assignments = _assignments(m)[0]
+        # Every assignment's contacts at once, shape (m!, m): one code computation, not m! of them.
+        ordered = np.asarray(grasp, dtype=np.intp)[assignments]
+        codes = pair_code(contacts.positions[ordered], contacts.normals[ordered]) / model.scale
         distance, nearest = model.tree.query(codes, k=1)
         best = int(np.argmin(distance))
         angles = self.sampled.angles[model.rows[nearest[best]]]
         names = tuple(self.descriptor.finger_names[f] for f in self.chosen(m))
-        return Reach(float(distance[best]), tuple(float(v) for v in angles), assignments[best], names)
+        order = tuple(int(f) for f in assignments[best])
+        return Reach(float(distance[best]), tuple(float(v) for v in angles), order, names)
 
     def starts(self, grasp: Sequence[int], contacts: ContactSet, count: int) -> list[Reach]:
         """``count`` near samples, each assignment's nearest first: starts for a fit.
