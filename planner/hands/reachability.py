@@ -130,6 +130,16 @@ def _assignments(m: int) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
     return assignments, pairs
 
 
+def _assignment_codes(
+    grasp: Sequence[int], contacts: ContactSet, model: _FingerModel
+) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
+    """Every assignment of a grasp's contacts to the fingers, shape (m!, m), and its scaled codes,
+    shape (m!, 4 C(m, 2)): one code computation for all of them."""
+    assignments = _assignments(len(grasp))[0]
+    ordered = np.asarray(grasp, dtype=np.intp)[assignments]
+    return assignments, pair_code(contacts.positions[ordered], contacts.normals[ordered]) / model.scale
+
+
 class HandReachability:
     """Constraint P(g): the hand can place the chosen fingers' pads on the grasp's contacts.
 
@@ -280,8 +290,8 @@ class HandReachability:
         """
         m = positions.shape[1]
         model = self._model(m)
-        assignments = list(itertools.permutations(range(m)))
-        codes = np.stack([pair_code(positions[:, list(a)], normals[:, list(a)]) for a in assignments], axis=1)
+        assignments = _assignments(m)[0]
+        codes = pair_code(positions[:, assignments], normals[:, assignments])  # (B, m!, codes)
         distance, _ = model.tree.query(codes.reshape(-1, codes.shape[-1]) / model.scale, k=1)
         return distance.reshape(len(positions), len(assignments)).min(axis=1)
 
@@ -289,10 +299,7 @@ class HandReachability:
         """Residual of a grasp over all finger assignments, with the nearest sample."""
         m = len(grasp)
         model = self._model(m)
-        assignments = _assignments(m)[0]
-        # Every assignment's contacts at once, shape (m!, m): one code computation, not m! of them.
-        ordered = np.asarray(grasp, dtype=np.intp)[assignments]
-        codes = pair_code(contacts.positions[ordered], contacts.normals[ordered]) / model.scale
+        assignments, codes = _assignment_codes(grasp, contacts, model)
         distance, nearest = model.tree.query(codes, k=1)
         best = int(np.argmin(distance))
         angles = self.sampled.angles[model.rows[nearest[best]]]
@@ -310,9 +317,7 @@ class HandReachability:
         """
         m = len(grasp)
         model = self._model(m)
-        assignments = list(itertools.permutations(range(m)))
-        p, n = contacts.positions[list(grasp)], contacts.normals[list(grasp)]
-        codes = np.array([pair_code(p[list(a)], n[list(a)]) for a in assignments]) / model.scale
+        assignments, codes = _assignment_codes(grasp, contacts, model)
         k = min(count, len(model.rows))
         distance, nearest = model.tree.query(codes, k=k)
         distance, nearest = distance.reshape(len(assignments), k), nearest.reshape(len(assignments), k)
@@ -323,7 +328,8 @@ class HandReachability:
         for flat in order:
             a, j = divmod(int(flat), k)
             angles = self.sampled.angles[model.rows[nearest[a, j]]]
-            found.append(Reach(float(distance[a, j]), tuple(float(v) for v in angles), assignments[a], names))
+            fingers = tuple(int(f) for f in assignments[a])
+            found.append(Reach(float(distance[a, j]), tuple(float(v) for v in angles), fingers, names))
         return found
 
     def accepts(self, grasp: Sequence[int], contacts: ContactSet) -> bool:
