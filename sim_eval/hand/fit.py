@@ -5,7 +5,8 @@ The unknowns are the hand's independent finger joints and the palm's pose. :func
 ``min  sum_k |centre_k - (c_k - r_k n_k)|^2 + w^2 |pad_k - n_k|^2 + sum_g depth_g^2 + lam^2 |q_o - q_o0|^2``
 
 by bounded least squares (``scipy.optimize.least_squares``, trust region reflective; joints within
-their limits), in MuJoCo (``mj_kinematics``, ``mj_collision``). ``centre_k`` is chosen finger k's
+their limits), in MuJoCo (``mj_kinematics``, ``mj_collision``), with analytic Jacobians
+(:mod:`~ogcp.sim_eval.hand.fit_jacobian`; a depth's row from its deepest contact's normal). ``centre_k`` is chosen finger k's
 centre of pad rounding (the pad point moved ``r_k``, its ``tip_radius``, back along the pad normal)
 and ``c_k``, ``n_k`` the contact and its inward normal, so a pad of that rounding touches the
 contact; ``pad_k`` is the pad normal; ``depth_g`` how far hand geom g is inside the object or
@@ -49,6 +50,9 @@ START_INSET = 1e-3
 #: How far along the pad normals the rigid start also matches the pads [in pad radii]: it turns the
 #: pads toward the surface, not only onto it.
 RIGID_REACH_RADII = 3.0
+#: Most residual evaluations of one solve: past a few hundred, a solve only creeps (a collision
+#: solve ran to scipy's 100 per unknown, 2,800, within 1e-6 of its cost at 400).
+MAX_EVALUATIONS = 400
 
 
 @dataclass(frozen=True, eq=False)
@@ -260,8 +264,7 @@ def fit_hand(
             parts.append(COLLISION_WEIGHT * np.maximum(np.maximum(into_object, into_hand) - 0.5 * LINK_TOLERANCE, 0.0))
         return np.concatenate(parts)
 
-    def jacobian(x: NDArray[np.float64], variables: NDArray[np.intp], _: bool) -> NDArray[np.float64]:
-        # The pads' rows only: the collision solve differences its residuals (see solve).
+    def jacobian(x: NDArray[np.float64], variables: NDArray[np.intp], collide: bool) -> NDArray[np.float64]:
         pose = unpack(x, variables)
         scene.pose(*pose)
         palm = (x[len(variables) : len(variables) + 3], pose[2]) if pose_variables else None
@@ -274,7 +277,10 @@ def fit_hand(
             normal_rows.append(weight * turned)
         rest = np.zeros((len(resting), jac.columns))
         rest[:, : len(variables)] = REST_WEIGHT * kin.complete_derivative(pose[0])[np.ix_(resting, variables)]
-        return np.vstack([*centre_rows, *normal_rows, rest])
+        rows = [*centre_rows, *normal_rows, rest]
+        if collide:
+            rows.append(COLLISION_WEIGHT * _depth_rows(scene, jac))
+        return np.vstack(rows)
 
     def solve(start: NDArray[np.float64], variables: NDArray[np.intp], collide: bool) -> NDArray[np.float64]:
         low = np.concatenate([kin.limits[variables, 0], np.full(pose_variables, -np.inf)])
@@ -282,13 +288,12 @@ def fit_hand(
         solved = least_squares(
             residual,
             start,
-            # Depths are piecewise smooth (their deepest contact changes): contact-normal gradients
-            # stalled the trust region early (xtol) where differences still make progress.
-            jac="2-point" if collide else jacobian,
+            jac=jacobian,
             bounds=(low, high),
             args=(variables, collide),
             method="trf",
             x_scale="jac",
+            max_nfev=MAX_EVALUATIONS,
         )
         return np.asarray(solved.x)
 
@@ -304,6 +309,27 @@ def fit_hand(
         second = aim.summary(unpack(x, free))
         fit = second if _better(second, fit) else fit
     return fit
+
+
+def _depth_rows(scene: FitScene, jac: PoseJacobian) -> NDArray[np.float64]:
+    """d depth / d unknowns of each solid hand geom beyond half the tolerance, shape (G, columns).
+
+    A geom's depth is that of its deepest contact: ``-n . (v2 - v1)`` at the contact point, ``n``
+    the contact normal from geom 1 to geom 2 and ``v`` the velocity of the point moving with each
+    geom's body (the object's is still).
+    """
+    into_object, into_hand, which = scene.deepest()
+    active = np.maximum(into_object, into_hand) - 0.5 * LINK_TOLERANCE > 0.0
+    rows = np.zeros((len(which), jac.columns))
+    contact = scene.data.contact
+    for g in np.flatnonzero(active):
+        k = int(which[g])
+        normal, point = contact.frame[k, :3].copy(), contact.pos[k].copy()
+        for side, sign in ((0, 1.0), (1, -1.0)):
+            geom = int(contact.geom[k, side])
+            if geom in scene.hand_geom_ids:
+                rows[g] += sign * normal @ jac.point(point, int(scene.model.geom_bodyid[geom]))
+    return rows
 
 
 def _rotvec_matrix(vector: NDArray[np.float64]) -> NDArray[np.float64]:

@@ -65,6 +65,14 @@ class PoseJacobian:
         dofs = self.scene.dofs
         return self._jacp[:, dofs] @ self._coupling, self._jacr[:, dofs] @ self._coupling
 
+    def point(self, point: NDArray[np.float64], body: int) -> NDArray[np.float64]:
+        """d point / d unknowns for a point fixed to a hand body, shape (3, columns)."""
+        moved, _ = self._joint_parts(point, body)
+        if self._palm is None:
+            return moved
+        left, translation = self._palm
+        return np.hstack([moved, -skew(point - translation) @ left, np.eye(3)])
+
     def point_and_direction(
         self, point: NDArray[np.float64], direction: NDArray[np.float64], body: int
     ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:

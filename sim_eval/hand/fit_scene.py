@@ -59,6 +59,8 @@ class FitScene:
         model.body_conaffinity[:] = 1
         model.geom_margin[:] = 0.0
         self._slot = {int(g): i for i, g in enumerate(self.hand.geoms)}
+        #: Scene ids of the hand's solid geoms.
+        self.hand_geom_ids = frozenset(self._slot)
         self._object = set(self.object_geoms.tolist())
         designed = kinematics.designed_pairs()
         names = self.hand.geom_names
@@ -79,24 +81,34 @@ class FitScene:
 
     def depths(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Per solid hand geom, its depth inside the object and inside other links, each shape (G,) [m]."""
+        into_object, into_hand, _ = self.deepest()
+        return into_object, into_hand
+
+    def deepest(self) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.intp]]:
+        """:meth:`depths`, and per solid hand geom the contact (index into ``data.contact``) of its
+        larger depth, -1 where it is inside nothing, shape (G,)."""
         mujoco.mj_collision(self.model, self.data)
         into_object = np.zeros(len(self.hand.geoms))
         into_hand = np.zeros(len(self.hand.geoms))
+        which = np.full(len(self.hand.geoms), -1, dtype=np.intp)
         ncon = self.data.ncon
         if not ncon:
-            return into_object, into_hand
+            return into_object, into_hand, which
         depth = -self.data.contact.dist[:ncon]
         pairs = self.data.contact.geom[:ncon]
         for k in np.flatnonzero(depth > 0):  # the few penetrating contacts, not every candidate
             a, b = int(pairs[k, 0]), int(pairs[k, 1])
             if a in self._object or b in self._object:
                 g = self._slot.get(b if a in self._object else a)
-                if g is not None:
-                    into_object[g] = max(into_object[g], depth[k])
+                if g is not None and depth[k] > into_object[g]:
+                    into_object[g] = depth[k]
+                    which[g] = k if depth[k] >= into_hand[g] else which[g]
             elif (min(a, b), max(a, b)) not in self._designed and a in self._slot and b in self._slot:
                 for g in (self._slot[a], self._slot[b]):
-                    into_hand[g] = max(into_hand[g], depth[k])
-        return into_object, into_hand
+                    if depth[k] > into_hand[g]:
+                        into_hand[g] = depth[k]
+                        which[g] = k if depth[k] >= into_object[g] else which[g]
+        return into_object, into_hand, which
 
 
 def _wxyz(rotation: NDArray[np.float64]) -> NDArray[np.float64]:
