@@ -23,12 +23,30 @@ def _soft_text(contacts: ContactSet) -> str:
 
 def describe(run: MethodRun, contacts: ContactSet) -> str:
     """Readable multi-line summary of any method's run."""
-    if isinstance(run.result, ESResult):
-        return es_summary(run.result, contacts)
     plan = PlanView(run.record)
-    if isinstance(run.result, HFTSResult):
-        return hfts_summary(run.result, contacts) + _optimum_text(run.result, plan.optimum)
-    return search_summary(run.result, contacts) + _hand_text(plan.hand)
+    if isinstance(run.result, ESResult):
+        text = es_summary(run.result, contacts)
+    elif isinstance(run.result, HFTSResult):
+        text = hfts_summary(run.result, contacts) + _optimum_text(run.result, plan.optimum)
+    else:
+        text = search_summary(run.result, contacts) + _hand_text(plan.hand)
+    return text + _closure_note(run.result.q1, len(run.result.grasp), contacts, plan.hand is not None)
+
+
+def _closure_note(q1: float, m: int, contacts: ContactSet, hand: bool) -> str:
+    """A line saying what to change when the answer resists no wrench at all (Q1 = 0), else nothing."""
+    if q1 > 0:
+        return ""
+    if m == 2 and contacts.torsional_friction <= 0:
+        remedy = "two hard contacts never resist a torsion about their line: plan with --contact-model soft"
+    elif hand:
+        remedy = (
+            "none of the grasps the hand can reach on these contacts is in force closure: sample more "
+            "contacts (-n), choose other fingers (--hand-fingers), or scale the object to the hand (--diagonal)"
+        )
+    else:
+        remedy = "no grasp the search admits is in force closure: sample more contacts (-n) or relax the constraints"
+    return f"\nnote: Q1 = 0, the grasp resists no wrench in some direction; {remedy}"
 
 
 def search_summary(result: SearchResult, contacts: ContactSet) -> str:

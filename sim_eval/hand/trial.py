@@ -37,7 +37,7 @@ from ogcp.sim_eval.hand.scene import SQUEEZE_LADDER, HandScene, build_hand_scene
 from ogcp.sim_eval.hand.squeeze import balanced_grip
 from ogcp.sim_eval.protocols.dexgraspbench import hold_test, physics_settings, use_object_defaults
 from ogcp.sim_eval.protocols.directions import direction_set
-from ogcp.sim_eval.protocols.gates import gate_failures
+from ogcp.sim_eval.protocols.gates import gate_failures, not_in_force_closure
 from ogcp.sim_eval.protocols.metrics import fidelity
 from ogcp.sim_eval.protocols.phases import CONTACT_FRACTION, FULL_STATE, Settled, settle
 from ogcp.sim_eval.protocols.trial import (
@@ -238,7 +238,7 @@ def simulate_hand_grasp(
             break
     planned = q1_certificate(contacts.subset_wrenches(idx))
     moved = dataclasses.replace(contacts, positions=placement.points, normals=placement.normals, source={})
-    achieved = q1_certificate(moved.wrenches.reshape(-1, 6)).q1
+    achieved = q1_certificate(moved.wrenches.reshape(-1, 6))
     dirs = direction_set(
         settings.directions, settings.direction_seed, planned.direction if planned.force_closure else None
     )
@@ -286,6 +286,8 @@ def simulate_hand_grasp(
         }
     )
     reasons = list(gate_failures(settled.gates, settled.normal_forces, settings))
+    if reasons and not achieved.force_closure:  # the first thing to change, as for fingertips
+        reasons.insert(0, not_in_force_closure(achieved.q1))
     return GraspSimResult(
         grasp,
         label,
@@ -301,7 +303,7 @@ def simulate_hand_grasp(
         fit.surface.signed_distance(positions, nearest=False)[0],
         holds,
         invalid_reasons=tuple(r.to_dict() for r in reasons),
-        realized=realized_summary(placement, planned.q1, achieved),
+        realized=realized_summary(placement, planned.q1, achieved.q1),
         collision={**fit.to_dict(), "note": fit.note(body.diagonal)},
         hand=hand,
     )

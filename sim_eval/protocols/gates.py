@@ -52,7 +52,7 @@ class GateFailure:
         elif self.gate == "creep":
             what = f"the object drifts {_um(self.value)} at the end of settling (limit {_um(self.limit)})"
         elif self.gate == "force_closure":
-            what = f"the grasp the tips realize is not in force closure (Q1 {self.value:.2g})"
+            what = f"the realized contacts are not in force closure (Q1 {self.value:.2g})"
         else:
             what = "the simulation diverged while settling"
         return f"{what}: {self.advice}"

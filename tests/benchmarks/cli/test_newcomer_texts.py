@@ -104,3 +104,13 @@ def test_a_request_too_big_to_finish_says_so_in_one_line_with_the_flags_that_bou
     assert "the time limit of 5 s returns" in (size_note(astar, astar.config(), 60, 30, 5.0) or "")
     assert size_note(es, es.config(), 200, 3, None) is None
     assert "C(60, 20) = 4.2e+15 grasps" in (size_note(es, es.config(), 60, 20, None) or "")
+
+
+def test_a_plan_that_resists_nothing_says_what_to_change(tmp_path: Path, capsys) -> None:
+    """Q1 = 0 (two hard contacts never resist a torsion about their line) gets a note with the remedy; Q1 > 0 none."""
+    assert main(["plan", "box", "-n", "12", "-m", "2", "-o", str(tmp_path / "hard.json")]) == 0
+    hard = capsys.readouterr().out
+    assert "Q1 = 0.000000" in hard
+    assert "note: Q1 = 0, the grasp resists no wrench in some direction" in hard and "--contact-model soft" in hard
+    assert main(["plan", "box", "-n", "12", "-m", "3", "-o", str(tmp_path / "three.json")]) == 0
+    assert "note: Q1 = 0" not in capsys.readouterr().out

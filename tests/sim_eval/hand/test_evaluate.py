@@ -128,3 +128,20 @@ def test_dexgraspbenchs_test_runs_on_a_closed_hand(sdh_plan):
     assert None not in test["passed"] and test["success"] == (test["gates_passed"] and all(test["passed"]))
     assert grasp.hand["squeeze_share"] == 1.0  # their sequence closes once: no ladder of grips
     assert np.isnan(grasp.measured).all()  # their fixed loads replace the ramps, as for fingertips
+
+
+def test_an_invalid_hand_grasp_not_in_force_closure_says_so_first():
+    """Its realised contacts resist no wrench in some direction: that is the first reason, as for fingertips."""
+    mesh = builtin_mesh("box", 0.1)
+    contacts = sample_contacts(mesh, 30, seed=0)
+    setup = HandSetup.of(HandKinematics(resolve_hand("sdh")))
+    evaluator = GraspEvaluator(decomposition=DecompositionSettings(method="convex_hull"), hand=setup)
+    (grasp,) = evaluator.evaluate(
+        mesh, contacts, [(0, 1, 26)]
+    ).grasps  # inward normals -y, -z, +z: nothing opposes the first
+    assert grasp.hand["fit"]["realised"] and grasp.q1 == 0.0
+    assert not grasp.valid and len(grasp.invalid_reasons) >= 2
+    first = grasp.invalid_reasons[0]
+    assert first["gate"] == "force_closure" and first["message"].startswith(
+        "the realized contacts are not in force closure"
+    )
