@@ -333,8 +333,14 @@ class HandReachability:
         return found
 
     def accepts(self, grasp: Sequence[int], contacts: ContactSet) -> bool:
-        """P(g): the residual is within the threshold."""
-        return self.reach(grasp, contacts).residual <= self.threshold
+        """P(g): the residual is within the threshold.
+
+        Asked as :meth:`admits` asks it of single contacts (some assignment's code within the
+        threshold of some sample's), compiled: the nearest sample that :meth:`reach` finds in the
+        k-d tree is not needed, and took 0.6 ms of every grasp a search met.
+        """
+        members = np.asarray(grasp, dtype=np.int64)
+        return self._within(contacts, members, np.arange(len(members) + 1, dtype=np.int64))
 
     def accepts_many(self, grasps: NDArray[np.intp], contacts: ContactSet) -> NDArray[np.bool_]:
         """P(g) for many grasps of one size at once, shape (B,)."""
@@ -342,11 +348,16 @@ class HandReachability:
 
     def admits(self, super_contacts: Sequence[NDArray[np.intp]], contacts: ContactSet) -> bool:
         """Sound: False only if no grasp drawn from the super-contacts is accepted."""
-        m = len(super_contacts)
-        model = self._model(m)
         members = np.concatenate([np.asarray(s, dtype=np.int64) for s in super_contacts])
-        offsets = np.zeros(m + 1, dtype=np.int64)
+        offsets = np.zeros(len(super_contacts) + 1, dtype=np.int64)
         offsets[1:] = np.cumsum([len(s) for s in super_contacts])
+        return self._within(contacts, members, offsets)
+
+    def _within(self, contacts: ContactSet, members: NDArray[np.int64], offsets: NDArray[np.int64]) -> bool:
+        """Whether some sample's code lies within the threshold of the box of codes that super-contacts
+        ``members[offsets[x]:offsets[x + 1]]`` span, under some assignment to the fingers."""
+        m = len(offsets) - 1
+        model = self._model(m)
         # bounds[x, y]: the interval of every code dimension of contact x (finger i) and y (finger j).
         bounds = pair_bounds(contacts.positions, contacts.normals, members, offsets)
         assignments, pairs = _assignments(m)

@@ -84,6 +84,15 @@ def test_residual_ignores_contact_order_and_reports_a_configuration(hand, donut)
     assert hand.accepts((2, 7, 11), donut) == (reach.residual <= hand.threshold)
 
 
+def test_the_compiled_grasp_test_answers_as_the_nearest_sample_does(hand, donut):
+    """accepts (compiled, no nearest sample) equals the k-d tree's residual <= threshold on every triple."""
+    grasps = np.array(list(itertools.combinations(range(len(donut)), 3)))
+    residuals = hand.residuals(donut.positions[grasps], donut.normals[grasps])
+    accepted = np.array([hand.accepts(tuple(g), donut) for g in grasps])
+    assert 0 < accepted.sum() < len(grasps)
+    np.testing.assert_array_equal(accepted, residuals <= hand.threshold)
+
+
 def test_pruning_is_sound_against_brute_force(hand, donut):
     rng = np.random.default_rng(0)
     pruned = 0
