@@ -13,7 +13,7 @@ worst pad residual, grasps valid after closing, the median fidelity of the valid
 frequent reason of the invalid ones, seconds per hand grasp, and the tips' side: grasps valid
 with fingertips, how many of those the hand realised and held, the tips' median fidelity, and the
 median ratio of the hand trial (fit, close, protocol) to the fingertip trial of the grasps valid
-with both, timed in the same run.
+with both, timed in the same run; after the table, each case's median seconds per phase.
 With ``--out``, every grasp's row goes to ``DIR/hand_fit.json`` and the tips-versus-hand figure
 (:func:`ogcp.benchmarks.plots.tips_hand.fig_tips_vs_hand`) to ``DIR/tips_vs_hand.{pdf,png}``.
 """
@@ -88,6 +88,7 @@ def run_case(hand: str, name: str, m: int, args: argparse.Namespace) -> dict[str
                 "tips_valid": bool(tips.valid),
                 "tips_fidelity": _fidelity(tips),
                 "tips_seconds": tips_seconds,
+                "hand_phase_seconds": held.hand.get("seconds", {}),
             }
         )
     return {"hand": hand, "object": name, "m": m, "accepted": accepted, "rows": rows}
@@ -114,6 +115,18 @@ def table_row(case: dict[str, Any]) -> str:
         f"| {_median([r['tips_fidelity'] for r in tips if r['tips_fidelity'] is not None], 2)} "
         f"| {_median([r['hand_seconds'] / r['tips_seconds'] for r in valid if r['tips_valid']], 1)} |"
     )
+
+
+def phase_line(case: dict[str, Any]) -> str:
+    """Where the hand trials of a case spent their time: median seconds of each phase, and of the tips' trial."""
+    rows = [r for r in case["rows"] if r["hand_valid"] and r["tips_valid"]]
+    phases = ("fit", "close", "protocol")
+    times = {
+        p: [r["hand_phase_seconds"].get(p) for r in rows if r.get("hand_phase_seconds", {}).get(p) is not None]
+        for p in phases
+    }
+    parts = ", ".join(f"{p} {_median(times[p], 1)}" for p in phases)
+    return f"{case['hand']}, {case['object']}: median s of the grasps valid with both: {parts}; tips {_median([r['tips_seconds'] for r in rows], 1)}"
 
 
 HEADER = (
@@ -144,6 +157,8 @@ def main(argv: list[str] | None = None) -> None:
         hand, name, m = spec.rsplit(":", 2)
         cases.append(run_case(hand, name, int(m), args))
         print(table_row(cases[-1]), flush=True)
+    for case in cases:
+        print(phase_line(case))
     if args.out is not None:
         from ogcp.benchmarks.plots.style import save_figure
         from ogcp.benchmarks.plots.tips_hand import fig_tips_vs_hand

@@ -17,6 +17,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
+import time
 from collections.abc import Sequence
 from typing import Any
 
@@ -197,6 +198,7 @@ def simulate_hand_grasp(
     points = np.where(placement.placed[:, None], placement.points, positions)
     inward = np.where(placement.placed[:, None], placement.normals, normals)
     parts = fit.decomposition.parts
+    started = time.perf_counter()
     if given is None:
         check = SqueezeCheck(body.com, contacts.torque_scale, mu, settings.max_normal_force)
         posed, order = fit_grasp(setup, FitScene(kinematics, parts), contacts, grasp, points, inward, check)
@@ -211,6 +213,8 @@ def simulate_hand_grasp(
     }
     hand["fit_residuals"] = hand["fit"]["fit_residuals"]
     hand["joint_angles"] = hand["fit"]["joint_angles"]
+    seconds = {"fit": time.perf_counter() - started}
+    hand["seconds"] = seconds  # [s] wall time of each phase: where a hand trial's cost goes
     if given is not None:
         hand["given"] = {"pregrasp": given.pregrasp is not None, "squeeze": given.squeeze is not None}
         if posed.penetration > GIVEN_MAX_PENETRATION:
@@ -236,6 +240,7 @@ def simulate_hand_grasp(
         settled = settle(closed.scene, settings)
         if settled.gates["valid"]:
             break
+    seconds["close"] = time.perf_counter() - started - seconds["fit"]
     planned = q1_certificate(contacts.subset_wrenches(idx))
     moved = dataclasses.replace(contacts, positions=placement.points, normals=placement.normals, source={})
     achieved = q1_certificate(moved.wrenches.reshape(-1, 6))
@@ -274,6 +279,7 @@ def simulate_hand_grasp(
         )
         fid = fidelity(measured, predicted, FIDELITY_FLOOR * settings.max_normal_force)
         fid[censored] = math.nan
+    seconds["protocol"] = time.perf_counter() - started - seconds["fit"] - seconds["close"]
     hand.update(
         {
             "extra_contacts": extra,

@@ -1,0 +1,20 @@
+"""The hands study prints its table row and where each case's hand trials spent their time."""
+
+from __future__ import annotations
+
+import json
+
+
+def test_the_study_writes_rows_with_each_phases_seconds(tmp_path, capsys, monkeypatch):
+    from ogcp.benchmarks.studies import hand_fit
+
+    monkeypatch.setenv("OGCP_CACHE", str(tmp_path / "cache"))
+    out = tmp_path / "out"
+    args = ["--cases", "sdh:box:3", "--contacts", "24", "--seeds", "1", "--directions", "2", "--out", str(out)]
+    hand_fit.main(args)
+    text = capsys.readouterr().out
+    assert "| sdh, box, 3 |" in text
+    assert "sdh, box: median s of the grasps valid with both: fit " in text and ", protocol " in text
+    (row,) = json.loads((out / "hand_fit.json").read_text())["cases"][0]["rows"]
+    assert row["realised"] and set(row["hand_phase_seconds"]) == {"fit", "close", "protocol"}
+    assert (out / "tips_vs_hand.pdf").exists()
