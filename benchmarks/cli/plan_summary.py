@@ -34,7 +34,7 @@ def describe(run: MethodRun, contacts: ContactSet) -> str:
 
 
 def _closure_note(q1: float, m: int, contacts: ContactSet, hand: bool) -> str:
-    """A line saying what to change when the answer resists no wrench at all (Q1 = 0), else nothing."""
+    """A line saying what to change when the answer cannot resist every wrench (Q1 = 0), else nothing."""
     if q1 > 0:
         return ""
     if m == 2 and contacts.torsional_friction <= 0:

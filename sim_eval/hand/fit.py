@@ -6,10 +6,10 @@ The unknowns are the hand's independent finger joints and the palm's pose. :func
 
 by bounded least squares (``scipy.optimize.least_squares``, trust region reflective; joints within
 their limits), in MuJoCo (``mj_kinematics``, ``mj_collision``), with analytic Jacobians
-(:mod:`~ogcp.sim_eval.hand.fit_jacobian`; a depth's row from its deepest contact's normal). ``centre_k`` is chosen finger k's
-centre of pad rounding (the pad point moved ``r_k``, its ``tip_radius``, back along the pad normal)
-and ``c_k``, ``n_k`` the contact and its inward normal, so a pad of that rounding touches the
-contact; ``pad_k`` is the pad normal; ``depth_g`` how far hand geom g is inside the object or
+(:mod:`~ogcp.sim_eval.hand.fit_jacobian`; a depth's row from its deepest contact's normal).
+``centre_k`` is chosen finger k's centre of pad rounding (the pad point moved ``r_k``, its
+``tip_radius``, back along the pad normal) and ``c_k``, ``n_k`` the contact and its inward normal,
+so a pad of that rounding touches the contact; ``pad_k`` is the pad normal; ``depth_g`` how far hand geom g is inside the object or
 inside another link beyond :data:`LINK_TOLERANCE` (pairs that touch in the hand's reference pose
 are its design); ``q_o`` the joints of the fingers that take no contact, kept near their start.
 The first solve leaves collisions out; when a link ends up inside the object, a second solve adds
