@@ -399,6 +399,8 @@ def run_evaluate(args: argparse.Namespace) -> int:
     # Before the simulation: an output with nowhere to go would waste it.
     check_output(args.output)
     check_output(args.render)
+    if args.render is not None and args.render.suffix.lower() != ".png":
+        raise OgcpError(f"--render {args.render}: the picture is a PNG; give a file name ending in .png")
     record = load_plan(args.plan)
     if args.render is not None:
         from ogcp.sim_eval.render import check_offscreen_rendering

@@ -114,3 +114,25 @@ def test_a_plan_that_resists_nothing_says_what_to_change(tmp_path: Path, capsys)
     assert "note: Q1 = 0, the grasp resists no wrench in some direction" in hard and "--contact-model soft" in hard
     assert main(["plan", "box", "-n", "12", "-m", "3", "-o", str(tmp_path / "three.json")]) == 0
     assert "note: Q1 = 0" not in capsys.readouterr().out
+
+
+def test_a_render_that_is_not_a_png_is_refused_before_simulating(small_plan: Path, tmp_path: Path, capsys) -> None:
+    assert main(["evaluate", str(small_plan), "--render", str(tmp_path / "picture")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == f"ogcp: error: --render {tmp_path / 'picture'}: the picture is a PNG; give a file name ending in .png"
+
+
+def test_a_mujoco_gl_that_mujoco_cannot_load_is_one_line(tmp_path: Path) -> None:
+    """An unknown backend breaks ``import mujoco`` itself: one line, exit 2, never its traceback."""
+    import os
+    import subprocess
+    import sys
+
+    env = {**os.environ, "MUJOCO_GL": "bogus"}
+    argv = [sys.executable, "-m", "ogcp.benchmarks.cli", "evaluate", "missing.json"]
+    done = subprocess.run(argv, capture_output=True, text=True, timeout=300, check=False, cwd=tmp_path, env=env)
+    assert done.returncode == 2 and "Traceback" not in done.stderr
+    (line,) = done.stderr.strip().splitlines()
+    assert (
+        line.startswith("ogcp: error: MUJOCO_GL=bogus: MuJoCo cannot load this OpenGL backend here") and "unset" in line
+    )
