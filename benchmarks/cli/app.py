@@ -53,31 +53,15 @@ def _one_line_warning(message: Warning | str, category: type[Warning], *_: objec
     return f"ogcp: warning: {first}\n"
 
 
-def _check_mujoco_gl() -> None:
-    """Refuse, in one line, a ``MUJOCO_GL`` that MuJoCo cannot load (its import fails with a traceback).
-
-    Only when the variable is set: it names an OpenGL backend, and a missing library (OSMesa) or an
-    unknown name breaks ``import mujoco`` itself, wherever a command first imports it.
-    """
-    backend = os.environ.get("MUJOCO_GL")
-    if not backend:
-        return
-    try:
-        import mujoco  # noqa: F401
-    except Exception as exc:
-        raise OgcpError(
-            f"MUJOCO_GL={backend}: MuJoCo cannot load this OpenGL backend here ({type(exc).__name__}: {exc}); "
-            "install its library (OSMesa: Debian's libosmesa6; EGL: libegl1), choose egl, osmesa or glfw, "
-            "or unset MUJOCO_GL"
-        ) from exc
-
-
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``ogcp`` console script."""
     warnings.formatwarning = _one_line_warning
     args = build_parser().parse_args(argv)
     try:
-        _check_mujoco_gl()
+        if os.environ.get("MUJOCO_GL"):  # else MuJoCo is not imported here: `ogcp plan` never pays for it
+            from ogcp.sim_eval.gl_backend import check_mujoco_gl
+
+            check_mujoco_gl()
         return int(args.handler(args))
     except OgcpError as exc:
         print(f"ogcp: error: {exc}", file=sys.stderr)
