@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import warnings
+from pathlib import Path
 
 import mujoco
 import numpy as np
@@ -13,6 +14,8 @@ from ogcp.sim_eval.decomposition.decompose import DecompositionSettings
 from ogcp.sim_eval.decomposition.ladder import DecompositionLadder
 from ogcp.sim_eval.evaluate import object_diagonal, tip_radius
 from ogcp.sim_eval.protocols.phases import FULL_STATE, Settled, settle
+from ogcp.sim_eval.protocols.trial import ObjectBody, contact_torsion
+from ogcp.sim_eval.result import GraspSimResult
 from ogcp.sim_eval.scene.body import object_inertia
 from ogcp.sim_eval.scene.collision import place_tips
 from ogcp.sim_eval.scene.grasp_scene import GraspScene, build_scene
@@ -26,6 +29,7 @@ def render_grasp(
     height: int = 480,
     azimuth: float = 135.0,
     elevation: float = -25.0,
+    framed: NDArray[np.intp] | None = None,
 ) -> NDArray[np.uint8]:
     """Render the settled grasp from a free camera looking at the object.
 
@@ -36,6 +40,8 @@ def render_grasp(
         height: Image height [px].
         azimuth: Camera azimuth [deg].
         elevation: Camera elevation [deg].
+        framed: Geom ids the picture must show (e.g. a hand's palm and fingers, not its forearm);
+            None: every geom.
 
     Returns:
         RGB image, shape (height, width, 3).
@@ -53,14 +59,33 @@ def render_grasp(
     mujoco.mj_setState(model, data, settled.state, FULL_STATE)
     mujoco.mj_forward(model, data)
     camera = mujoco.MjvCamera()
-    camera.lookat[:] = data.xipos[scene.object_body]
-    camera.distance = 4.0 * float(np.max(model.geom_rbound[scene.object_geoms])) + 10 * scene.tip_radius
+    lookat, distance = _frame(model, data, scene, framed)
+    camera.lookat[:] = lookat
+    camera.distance = distance
     camera.azimuth, camera.elevation = azimuth, elevation
     try:
         renderer.update_scene(data, camera)
         return renderer.render().copy()
     finally:
         renderer.close()
+
+
+def _frame(
+    model: mujoco.MjModel, data: mujoco.MjData, scene: GraspScene, framed: NDArray[np.intp] | None
+) -> tuple[NDArray[np.float64], float]:
+    """Where the camera looks and from how far [m]: the object and whatever grips it (tips, or a hand).
+
+    The bounding spheres of the framed geoms give the box to show; planes (rbound 0) are left out.
+    """
+    shown = model.geom_rbound > 0
+    if framed is not None:
+        shown &= np.isin(np.arange(model.ngeom), np.concatenate([framed, scene.object_geoms]))
+    centres, radii = data.geom_xpos[shown], model.geom_rbound[shown][:, None]
+    low, high = (centres - radii).min(axis=0), (centres + radii).max(axis=0)
+    half = 0.5 * float(np.linalg.norm(high - low))
+    # A sphere of radius r fills the 45-degree default field of view from r / sin(22.5 deg) = 2.6 r.
+    own = 4.0 * float(np.max(model.geom_rbound[scene.object_geoms])) + 10 * scene.tip_radius
+    return 0.5 * (low + high), max(own, 2.4 * half)
 
 
 def check_offscreen_rendering() -> None:
@@ -95,27 +120,72 @@ def render_plan(
     grasp_index: int = 0,
     width: int = 640,
     height: int = 480,
+    tips: bool = False,
+    plan_file: str | Path | None = None,
 ) -> NDArray[np.uint8]:
     """Picture of one grasp of an ``ogcp.plan/1`` record after settling (default: the best grasp).
 
     The grasp is the one ``evaluate`` simulates: on the decomposition the grasp's contacts call
-    for, with the tips started on its surface.
+    for, with the tips started on its surface; or, for a plan made with a hand, that hand fitted,
+    closed by its servos and settled (``tips``: fingertip spheres even then).
+
+    Args:
+        record: The plan record.
+        settings: Simulation settings (default :class:`SimSettings`).
+        decomposition: Decomposition settings (default CoACD with its defaults).
+        grasp_index: Which of the plan's grasps, best first.
+        width: Image width [px].
+        height: Image height [px].
+        tips: Draw fingertip spheres even when the plan has a hand.
+        plan_file: Where the record was read from (a mesh next to it is looked for first).
+
+    Returns:
+        RGB image, shape (height, width, 3).
+
+    Raises:
+        OgcpError: For a grasp index outside the plan, a hand that cannot realise the grasp, or
+            no OpenGL context.
     """
+    from ogcp.sim_eval.evaluate import plan_hand
     from ogcp.sim_eval.inputs.plan_input import plan_input
 
-    plan = plan_input(record)
-    settings = (settings or SimSettings()).scaled(object_diagonal(plan.mesh))
+    plan = plan_input(record, plan_file)
+    diagonal = object_diagonal(plan.mesh)
+    settings = (settings or SimSettings()).scaled(diagonal)
     if not 0 <= grasp_index < len(plan.grasps):
         raise OgcpError(f"grasp index {grasp_index} outside the plan's {len(plan.grasps)} grasps")
-    idx = np.asarray(plan.grasps[grasp_index], dtype=np.intp)
+    grasp = tuple(int(i) for i in plan.grasps[grasp_index])
+    idx = np.asarray(grasp, dtype=np.intp)
     com, inertia = object_inertia(plan.mesh, settings.body_mass)
     mu = settings.mu if settings.mu is not None else plan.contacts.mu
     radius = tip_radius(plan.mesh, settings)
-    ladder = DecompositionLadder(
-        plan.mesh, decomposition or DecompositionSettings(), object_diagonal(plan.mesh), radius
-    )
+    ladder = DecompositionLadder(plan.mesh, decomposition or DecompositionSettings(), diagonal, radius)
     positions, normals = plan.contacts.positions[idx], plan.contacts.normals[idx]
     fit = ladder.fit(positions, normals)
+    hand = None if tips else plan_hand(record)
+    if hand is not None:
+        from ogcp.sim_eval.hand.trial import close_on_grasp
+
+        body = ObjectBody(com, inertia, radius, diagonal)
+        torsion = contact_torsion(plan.contacts, settings)
+        closed = close_on_grasp(plan.contacts, grasp, "render", fit, body, settings, hand, mu, torsion)
+        if isinstance(closed, GraspSimResult):
+            raise OgcpError(f"nothing to draw for grasp {grasp_index}: {closed.error} (--tips draws fingertips)")
+        from ogcp.sim_eval.hand.mount import PREFIX
+
+        scene = closed.closed.scene
+        framed = palm_and_fingers(scene.model, PREFIX + hand.kinematics.descriptor.palm)
+        return render_grasp(scene, closed.settled, width, height, framed=framed)
     placed = place_tips(fit.surface, positions, normals, radius, max_inward=radius)
     scene = build_scene(fit.decomposition.parts, com, inertia, placed.points, placed.normals, settings, mu, radius)
     return render_grasp(scene, settle(scene, settings), width, height)
+
+
+def palm_and_fingers(model: mujoco.MjModel, palm_body: str) -> NDArray[np.intp]:
+    """Geom ids of the body ``palm_body`` and every body below it: the grip, without a forearm or an arm."""
+    palm = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, palm_body)
+    below = np.zeros(model.nbody, dtype=bool)
+    below[palm] = palm >= 0
+    for body in range(1, model.nbody):  # MuJoCo numbers a parent before its children
+        below[body] |= below[model.body_parentid[body]]
+    return np.flatnonzero(below[model.geom_bodyid]).astype(np.intp)

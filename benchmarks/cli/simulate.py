@@ -169,7 +169,8 @@ def register(commands: Any) -> None:
         type=Path,
         default=None,
         metavar="PNG",
-        help="also save a picture of the best grasp after settling (needs MUJOCO_GL=egl/osmesa)",
+        help="also save a picture of the best grasp after settling, with the plan's hand unless --tips "
+        "(needs MUJOCO_GL=egl/osmesa)",
     )
     evaluate.add_argument("--json", action="store_true", help="print the ogcp.sim/2 record instead of a table")
     evaluate.add_argument("-o", "--output", type=Path, default=None, help="also write the ogcp.sim/2 record here")
@@ -436,7 +437,7 @@ def _render(record: dict[str, Any], args: argparse.Namespace) -> None:
 
     from ogcp.sim_eval.render import render_plan
 
-    image = render_plan(record, _settings(args), _decomposition(args))
+    image = render_plan(record, _settings(args), _decomposition(args), tips=args.tips, plan_file=args.plan)
     try:
         plt.imsave(args.render, image)
     except OSError as exc:

@@ -51,7 +51,7 @@ from ogcp.sim_eval.protocols.trial import (
     weight_test,
 )
 from ogcp.sim_eval.result import GraspSimResult
-from ogcp.sim_eval.scene.collision import place_tips
+from ogcp.sim_eval.scene.collision import TipPlacement, place_tips
 from ogcp.sim_eval.settings import SimSettings
 
 #: Samples a fit starts from, nearest first, until one fit is realised.
@@ -156,7 +156,36 @@ def _rank(fit: HandFit) -> tuple[bool, float]:
     return (not fit.realised, float(max(fit.residuals.max(), deepest)))
 
 
-def simulate_hand_grasp(
+@dataclasses.dataclass(frozen=True, eq=False)
+class ClosedGrasp:
+    """A hand closed on one grasp and settled: what the protocol tests, and what a picture shows.
+
+    Attributes:
+        closed: The compiled scene with the hand closed by the chosen squeeze.
+        settled: The settled state and its gates.
+        share: The share of the balanced grip that settled (1.0 where there is no ladder).
+        posed: The fit (or the given pose, measured).
+        order: Contact index (into the grasp) each chosen finger takes, in finger order.
+        placement: Where pads of the hand's rounding touch the simulated parts, per contact.
+        points: The pads' targets in finger order, shape (m, 3) [m].
+        settings: The settings the trial ran with (DexGraspBench's physics in that mode).
+        mu: The friction coefficient simulated.
+        hand: The record's ``hand`` block so far (descriptor, fit, ``seconds``).
+    """
+
+    closed: HandScene
+    settled: Settled
+    share: float
+    posed: HandFit
+    order: tuple[int, ...]
+    placement: TipPlacement
+    points: NDArray[np.float64]
+    settings: SimSettings
+    mu: float
+    hand: dict[str, Any]
+
+
+def close_on_grasp(
     contacts: ContactSet,
     grasp: tuple[int, ...],
     label: str,
@@ -167,24 +196,14 @@ def simulate_hand_grasp(
     mu: float,
     torsion: float,
     given: GivenPose | None = None,
-) -> GraspSimResult:
-    """Fit, close and test the hand on one grasp.
+) -> ClosedGrasp | GraspSimResult:
+    """Fit the hand to one grasp, close it and settle: the trial before its protocol.
 
-    Args:
-        contacts: The contact set the grasp indexes.
-        grasp: Contact indices, length m.
-        label: Where the grasp came from.
-        fit: The decomposition chosen for the grasp (its parts are what collides).
-        body: Mass properties and size of the object.
-        settings: Simulation settings, lengths scaled to the object.
-        setup: The hand.
-        mu: Friction coefficient of hand-object contacts.
-        torsion: Torsional friction [m]; 0: hard contacts.
-        given: The hand as another planner posed it (not fitted; finger k takes contact k), or
-            None: fitted here.
+    Takes the arguments of :func:`simulate_hand_grasp`.
 
     Returns:
-        The result; an unreachable grasp's has ``error`` and ``hand.fit`` saying why.
+        The closed, settled hand; or, for a grasp the hand cannot realise (or a given pose inside
+        the object), the trial's result, with ``error`` and ``hand.fit`` saying why.
     """
     kinematics = setup.kinematics
     compat = settings.protocol == "dexgraspbench"
@@ -241,6 +260,49 @@ def simulate_hand_grasp(
         if settled.gates["valid"]:
             break
     seconds["close"] = time.perf_counter() - started - seconds["fit"]
+    return ClosedGrasp(closed, settled, share, posed, order, placement, ordered_points, settings, mu, hand)
+
+
+def simulate_hand_grasp(
+    contacts: ContactSet,
+    grasp: tuple[int, ...],
+    label: str,
+    fit: ContactFit,
+    body: ObjectBody,
+    settings: SimSettings,
+    setup: HandSetup,
+    mu: float,
+    torsion: float,
+    given: GivenPose | None = None,
+) -> GraspSimResult:
+    """Fit, close and test the hand on one grasp.
+
+    Args:
+        contacts: The contact set the grasp indexes.
+        grasp: Contact indices, length m.
+        label: Where the grasp came from.
+        fit: The decomposition chosen for the grasp (its parts are what collides).
+        body: Mass properties and size of the object.
+        settings: Simulation settings, lengths scaled to the object.
+        setup: The hand.
+        mu: Friction coefficient of hand-object contacts.
+        torsion: Torsional friction [m]; 0: hard contacts.
+        given: The hand as another planner posed it (not fitted; finger k takes contact k), or
+            None: fitted here.
+
+    Returns:
+        The result; an unreachable grasp's has ``error`` and ``hand.fit`` saying why.
+    """
+    outcome = close_on_grasp(contacts, grasp, label, fit, body, settings, setup, mu, torsion, given)
+    if isinstance(outcome, GraspSimResult):
+        return outcome
+    started = time.perf_counter()
+    closed, settled, placement, hand = outcome.closed, outcome.settled, outcome.placement, outcome.hand
+    settings, mu, posed = outcome.settings, outcome.mu, outcome.posed
+    compat = settings.protocol == "dexgraspbench"
+    idx = np.asarray(grasp, dtype=np.intp)
+    positions = contacts.positions[idx]
+    seconds = hand["seconds"]
     planned = q1_certificate(contacts.subset_wrenches(idx))
     moved = dataclasses.replace(contacts, positions=placement.points, normals=placement.normals, source={})
     achieved = q1_certificate(moved.wrenches.reshape(-1, 6))
@@ -262,7 +324,7 @@ def simulate_hand_grasp(
         dirs.vectors,
         travel=settings.move_threshold,  # the servos' stiffness bounds what they resist within it
     )
-    pads_ok, extra = _pad_gate(closed, realised, ordered_points, model)
+    pads_ok, extra = _pad_gate(closed, realised, outcome.points, model)
     gates = dict(settled.gates)
     gates["pads_on_contacts"] = pads_ok.tolist()
     gates["valid"] = bool(gates["valid"] and pads_ok.all())
@@ -279,7 +341,7 @@ def simulate_hand_grasp(
         )
         fid = fidelity(measured, predicted, FIDELITY_FLOOR * settings.max_normal_force)
         fid[censored] = math.nan
-    seconds["protocol"] = time.perf_counter() - started - seconds["fit"] - seconds["close"]
+    seconds["protocol"] = time.perf_counter() - started
     hand.update(
         {
             "extra_contacts": extra,
@@ -288,7 +350,7 @@ def simulate_hand_grasp(
             "palm_position": posed.translation.tolist(),
             "pregrasp": closed.pregrasp.tolist(),
             "squeeze_forces": closed.squeeze_forces.tolist(),
-            "squeeze_share": share,
+            "squeeze_share": outcome.share,
         }
     )
     reasons = list(gate_failures(settled.gates, settled.normal_forces, settings))

@@ -21,16 +21,6 @@ from tests.planner.hands.hand_files import write_mesh_hand
 HULL = {"method": "convex_hull"}
 
 
-@pytest.fixture(scope="module")
-def sdh_plan(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("plan")
-    path = folder / "plan.json"
-    with pytest.MonkeyPatch.context() as patch:
-        patch.setenv("OGCP_CACHE", str(folder / "cache"))
-        assert main(["plan", "box", "-n", "80", "-m", "3", "--hand", "sdh", "-o", str(path)]) == 0
-    return json.loads(path.read_text())
-
-
 def test_a_plan_with_a_hand_is_closed_by_that_hand_and_recorded(sdh_plan):
     result = evaluate_plan(sdh_plan, {"directions": 4}, HULL)
     (grasp,) = result.grasps
