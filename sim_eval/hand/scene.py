@@ -31,6 +31,7 @@ from ogcp.planner.hands.kinematics import HandKinematics
 from ogcp.sim_eval.hand.fit import HandFit, fit_hand
 from ogcp.sim_eval.hand.fit_scene import FitScene
 from ogcp.sim_eval.hand.mount import MOUNT, PREFIX, MountedHand, attach_hand
+from ogcp.sim_eval.hand.servo_step import steady_servos
 from ogcp.sim_eval.hand.squeeze import Grip, balanced_grip
 from ogcp.sim_eval.scene.collision import Part
 from ogcp.sim_eval.scene.grasp_scene import GraspScene, add_object, contact_friction, set_options
@@ -193,6 +194,8 @@ def build_hand_scene(
     grasp_qpos = start.copy()
     grasp_qpos[hand.qpos] = fit.joint_angles
     start[hand.qpos] = pregrasp
+    if settings.protocol != "dexgraspbench":  # their mode steps the hand as their simulator does
+        steady_servos(model, grasp_qpos)  # servos the time step integrates
     ordered = (np.asarray(points, dtype=float), np.asarray(normals, dtype=float))
     grip = balanced_grip(
         model, hand, grasp_qpos, fit.fingers, *ordered, com, torque_scale, mu, settings.max_normal_force

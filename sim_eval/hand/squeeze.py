@@ -9,7 +9,9 @@ contacts), with
     sum_k [f_k, (p_k - c) x f_k / rho] = 0           (no net wrench: the object stays put)
     sum_k J_k^T f_k = M^T u + E^T eta,  u within the actuators' force ranges
 
-maximising the smallest normal force (capped at ``max_normal_force`` only when no actuator limits it).
+maximising the smallest normal force. A hand with an actuator that has no force limit is capped at
+``max_normal_force`` (F_max) there, as fingertips are, and then presses the least total force that
+keeps every pad at that level.
 Each position servo's target is then its length at the pose plus ``u / kp``: at equilibrium it
 pushes exactly ``u``, so the hand holds the object with those balanced forces, at its actuators'
 limits where the program needs them (as fingertips press at F_max).
@@ -92,7 +94,8 @@ def balanced_grip(
         com: The object's centre of mass, shape (3,) [m].
         torque_scale: rho [m].
         mu: Friction coefficient.
-        max_normal_force: Cap on the smallest normal force where no actuator limit binds [N].
+        max_normal_force: Cap on the smallest normal force of a hand with an actuator that has no
+            force limit, or whose grip nothing else bounds [N].
     """
     data = mujoco.MjData(model)
     data.qpos[:] = grasp_qpos
@@ -112,11 +115,23 @@ def balanced_grip(
     at_least[:, -1] = 1.0
     bounds = _servo_reach(model, data, statics.bounds, n_lambda)
     problem = {"A_ub": at_least, "b_ub": np.zeros(m), "A_eq": equalities, "b_eq": np.zeros(len(equalities))}
-    result = linprog(cost, bounds=[*bounds, (0.0, None)], method="highs", **problem)
+    # An actuator without a force limit (a model that leaves them out) presses as far as its
+    # control range lets a stiff servo: tens of newtons, which it holds only while nothing slips.
+    # Such a hand grips as fingertips do, its weakest pad at F_max.
+    capped = not model.actuator_forcelimited.all()
+    result = linprog(cost, bounds=[*bounds, (0.0, max_normal_force if capped else None)], method="highs", **problem)
     if result.status == 3:  # unbounded: no actuator limits the grip, so the settings' F_max does
+        capped = True
         result = linprog(cost, bounds=[*bounds, (0.0, max_normal_force)], method="highs", **problem)
     if result.status != 0 or result.x[-1] <= 0:
         return None
+    if capped:  # the least total force with every pad at that level: none presses more than balance needs
+        weakest = float(result.x[-1])
+        least = np.zeros_like(cost)
+        least[:n_lambda] = 1.0
+        bounds_least = [*bounds, ((1.0 - 1e-9) * weakest, weakest)]
+        tighter = linprog(least, bounds=bounds_least, method="highs", **problem)
+        result = tighter if tighter.status == 0 else result
     return Grip(
         data.actuator_length.copy(),
         result.x[n_lambda : n_lambda + n_u].copy(),

@@ -7,7 +7,8 @@ grasp it cannot realise is recorded as unreachable with the finger and its resid
 and its depth, and not simulated. A realised one is closed (:mod:`ogcp.sim_eval.hand.scene`) with
 the strongest balanced grip of :data:`~ogcp.sim_eval.hand.scene.SQUEEZE_LADDER` that settles
 steadily, and gated by the fingertip protocol, with one more gate: each chosen pad must press on
-the object with its centre of pressure within :data:`PAD_REACH_RADII` pad radii of its contact.
+the object with a patch that passes within :data:`~ogcp.sim_eval.hand.pads.PAD_REACH_RADII` pad
+radii of its contact (:mod:`ogcp.sim_eval.hand.pads`).
 Contacts of other links are kept in the record (``hand.extra_contacts``), never hidden. The prediction is the same hand's
 (:mod:`ogcp.sim_eval.hand.predict`): its realised contacts, friction and actuator limits.
 """
@@ -33,6 +34,7 @@ from ogcp.sim_eval.decomposition.ladder import ContactFit
 from ogcp.sim_eval.hand.fit import HandFit, fit_hand, measure_pose
 from ogcp.sim_eval.hand.fit_scene import FitScene
 from ogcp.sim_eval.hand.given import GIVEN_MAX_PENETRATION, GivenPose, given_scene
+from ogcp.sim_eval.hand.pads import pad_gate
 from ogcp.sim_eval.hand.predict import hand_resistance, realised_contacts
 from ogcp.sim_eval.hand.scene import SQUEEZE_LADDER, HandScene, build_hand_scene, close_hand, squeezed
 from ogcp.sim_eval.hand.squeeze import balanced_grip
@@ -59,8 +61,6 @@ FIT_STARTS = 16
 #: The weakest pad force of a grip a fit is taken for, as a fraction of F_max: twice what the contact
 #: gate counts as touching (``CONTACT_FRACTION``), so that half the grip still touches.
 PRESS_FRACTION = 2 * CONTACT_FRACTION
-#: A pad counts as on its contact when its centre of pressure lies within this many pad radii of it.
-PAD_REACH_RADII = 3.0
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -324,7 +324,7 @@ def simulate_hand_grasp(
         dirs.vectors,
         travel=settings.move_threshold,  # the servos' stiffness bounds what they resist within it
     )
-    pads_ok, extra = _pad_gate(closed, realised, outcome.points, model)
+    pads_ok, extra = pad_gate(closed, realised, outcome.points, model)
     gates = dict(settled.gates)
     gates["pads_on_contacts"] = pads_ok.tolist()
     gates["valid"] = bool(gates["valid"] and pads_ok.all())
@@ -384,26 +384,3 @@ def _settled_data(closed: HandScene, settled: Settled) -> mujoco.MjData:
     data.ctrl[:] = closed.scene.preload_ctrl
     mujoco.mj_forward(model, data)
     return data
-
-
-def _pad_gate(
-    closed: HandScene, realised: Any, targets: NDArray[np.float64], model: mujoco.MjModel
-) -> tuple[NDArray[np.bool_], list[dict[str, Any]]]:
-    """Whether each chosen pad presses near its contact; the other links' contacts (geom name, force [N])."""
-    finger_geoms = closed.scene.finger_geoms or ()
-    radii = np.array([closed.hand.kinematics.fingers[f].radius for f in closed.fingers])
-    ok = np.zeros(len(finger_geoms), dtype=bool)
-    pad_geoms = {int(g) for geoms in finger_geoms for g in geoms}
-    for k, geoms in enumerate(finger_geoms):
-        mine = np.isin(realised.geoms, geoms) & (realised.forces > 0)
-        if mine.any():
-            # A flat pad touches in a patch whose corners MuJoCo reports: its centre of pressure counts.
-            weights = realised.forces[mine] / realised.forces[mine].sum()
-            centre = weights @ realised.points[mine]
-            ok[k] = np.linalg.norm(centre - targets[k]) <= PAD_REACH_RADII * radii[k]
-    extra: dict[str, float] = {}
-    for geom, force in zip(realised.geoms, realised.forces, strict=True):
-        if int(geom) not in pad_geoms:
-            name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_GEOM, int(geom)) or f"geom {int(geom)}"
-            extra[name] = extra.get(name, 0.0) + float(force)
-    return ok, [{"link": name, "force": force} for name, force in sorted(extra.items())]

@@ -114,3 +114,47 @@ def write_urdf_gripper(folder: Path) -> Path:
     path = folder / "urdf_gripper.toml"
     path.write_text(URDF_DESCRIPTOR)
     return path
+
+
+#: A hand as light as an Allegro hand's model and as stiffly servoed: three two-hinge fingers of
+#: 5-8 g capsule links, joint damping, and position actuators with no force limit (kp 10 N·m/rad):
+#: its distal servos would ring at the simulation's step without the armature the scene adds.
+LIGHT_HAND = """<mujoco model="light">
+  <compiler angle="radian" autolimits="true"/>
+  <default><joint axis="0 1 0" damping="1"/><position kp="10"/><geom density="800"/></default>
+  <worldbody>
+    <body name="palm">
+      <geom type="box" size="0.035 0.035 0.008"/>
+      {fingers}
+    </body>
+  </worldbody>
+  <actuator>{actuators}</actuator>
+</mujoco>
+"""
+LIGHT_FINGER = """<body name="f{k}" pos="{x} {y} 0.01" euler="0 0 {yaw}">
+        <joint name="f{k}_a" range="-0.3 1.4"/>
+        <geom type="capsule" size="0.008" fromto="0 0 0 0 0 0.045"/>
+        <body name="f{k}_tip" pos="0 0 0.05">
+          <joint name="f{k}_b" range="0 1.4"/>
+          <geom type="capsule" size="0.008" fromto="0 0 0.005 0 0 0.03"/>
+        </body>
+      </body>"""
+LIGHT_ACTUATORS = """<position joint="f{k}_a" ctrlrange="-0.3 1.4"/><position joint="f{k}_b" ctrlrange="0 1.4"/>"""
+LIGHT_DESCRIPTOR = """schema = "ogcp.hand/1"
+name = "light"
+mjcf = "light.xml"
+palm = "palm"
+{fingers}"""
+
+
+def write_light_hand(folder: Path) -> Path:
+    """The light, stiffly servoed hand and its descriptor in ``folder``; returns the descriptor's path."""
+    folder.mkdir(parents=True, exist_ok=True)
+    spots = ((0.03, 0.0, 3.14159), (-0.02, 0.025, -0.9), (-0.02, -0.025, 0.9))
+    fingers = "\n      ".join(LIGHT_FINGER.format(k=k, x=x, y=y, yaw=yaw) for k, (x, y, yaw) in enumerate(spots))
+    actuators = "".join(LIGHT_ACTUATORS.format(k=k) for k in range(3))
+    (folder / "light.xml").write_text(LIGHT_HAND.format(fingers=fingers, actuators=actuators))
+    entries = "\n".join(FINGER_ENTRY.format(k=k) for k in range(3))
+    path = folder / "light.toml"
+    path.write_text(LIGHT_DESCRIPTOR.format(fingers=entries))
+    return path

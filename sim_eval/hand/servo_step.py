@@ -1,0 +1,69 @@
+"""Servos a time step can integrate: armature for the joints whose position servo would ring.
+
+MuJoCo's implicit integrators take joint damping and a servo's ``kv`` implicitly, but a position
+servo's stiffness ``kp`` explicitly. A joint whose servo is stiff against what it moves (a light
+distal link: the Allegro hand's Menagerie model has 5e-6 kg·m² there and kp 10 N·m/rad) oscillates
+with omega = sqrt(kp / M) [rad/s], and once omega * dt nears 2 each step overshoots the last:
+the closing hand flings the object away. Armature (rotor inertia on the joint) slows that mode
+until omega * dt is :data:`MAX_OMEGA_DT`; it changes how fast the hand moves, never what it
+holds (gravity is off, so mass enters no static balance), and it leaves a hand whose servos the
+step already integrates (the SDH's and the Shadow hand's reach 0.2) as it is.
+"""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+from numpy.typing import NDArray
+
+#: The largest servo frequency times the time step the scene keeps: a quarter of explicit
+#: Euler's limit of 2, so that a servo settles in a few dozen steps without ringing.
+MAX_OMEGA_DT = 0.2
+
+_ON_A_JOINT = (int(mujoco.mjtTrn.mjTRN_JOINT), int(mujoco.mjtTrn.mjTRN_JOINTINPARENT))
+_ONE_DOF = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
+
+
+def steady_servos(model: mujoco.MjModel, qpos: NDArray[np.float64]) -> None:
+    """Give the joints whose servos would ring armature, and the damping that keeps their damping ratio.
+
+    Each such joint's omega * dt becomes :data:`MAX_OMEGA_DT`. Its damping (the joint's own and its
+    servos' ``kv``, both integrated implicitly) grows so that its damping ratio stays what it was, up
+    to critical: a critically damped servo does not ring with the added inertia, and an overdamped
+    one is not made more sluggish.
+
+    Args:
+        model: The compiled scene; its ``dof_armature`` and ``dof_damping`` are changed in place.
+        qpos: A configuration to take the joint-space inertia at (the grasp), shape (nq,).
+    """
+    data = mujoco.MjData(model)
+    data.qpos[:] = qpos
+    mujoco.mj_fwdPosition(model, data)
+    stiffness, damping = np.zeros(model.nv), model.dof_damping.copy()
+    biases = model.actuator_biasprm
+    for a in range(model.nu):
+        joint = int(model.actuator_trnid[a, 0])
+        if int(model.actuator_trntype[a]) not in _ON_A_JOINT or biases[a, 1] >= 0:
+            continue  # a tendon's or a motor's: no stiffness of its own on one joint
+        if int(model.jnt_type[joint]) not in _ONE_DOF:
+            continue
+        gear = float(model.actuator_gear[a, 0])
+        dof = model.jnt_dofadr[joint]
+        stiffness[dof] += -biases[a, 1] * gear * gear  # kp, through the gear both ways
+        damping[dof] += -biases[a, 2] * gear * gear  # kv
+    inertia = np.zeros(model.nv)
+    for dof in np.flatnonzero(stiffness > 0):
+        unit = np.zeros(model.nv)
+        unit[dof] = 1.0
+        column = np.zeros(model.nv)
+        mujoco.mj_mulM(model, data, column, unit)
+        inertia[dof] = column[dof]
+    needed = stiffness * (model.opt.timestep / MAX_OMEGA_DT) ** 2
+    added = np.where(stiffness > 0, np.maximum(needed - inertia, 0.0), 0.0)
+    # The damping ratio each servo had, up to critical: an overdamped joint keeps its damping
+    # (more would only make the closing sluggish), an underdamped or critical one keeps its ratio.
+    critical = 2.0 * np.sqrt(stiffness * np.maximum(inertia, 1e-12))
+    ratio = np.minimum(damping / np.maximum(critical, 1e-12), 1.0)
+    wanted = ratio * 2.0 * np.sqrt(stiffness * (inertia + added))
+    model.dof_armature += added
+    model.dof_damping += np.where(added > 0, np.maximum(wanted - damping, 0.0), 0.0)
