@@ -16,12 +16,11 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
+from ogcp.sim_eval.hand.predict import actuator_moments
+
 #: The largest servo frequency times the time step the scene keeps: a quarter of explicit
 #: Euler's limit of 2, so that a servo settles in a few dozen steps without ringing.
 MAX_OMEGA_DT = 0.2
-
-_ON_A_JOINT = (int(mujoco.mjtTrn.mjTRN_JOINT), int(mujoco.mjtTrn.mjTRN_JOINTINPARENT))
-_ONE_DOF = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
 
 
 def steady_servos(model: mujoco.MjModel, qpos: NDArray[np.float64]) -> None:
@@ -39,18 +38,12 @@ def steady_servos(model: mujoco.MjModel, qpos: NDArray[np.float64]) -> None:
     data = mujoco.MjData(model)
     data.qpos[:] = qpos
     mujoco.mj_fwdPosition(model, data)
-    stiffness, damping = np.zeros(model.nv), model.dof_damping.copy()
-    biases = model.actuator_biasprm
-    for a in range(model.nu):
-        joint = int(model.actuator_trnid[a, 0])
-        if int(model.actuator_trntype[a]) not in _ON_A_JOINT or biases[a, 1] >= 0:
-            continue  # a tendon's or a motor's: no stiffness of its own on one joint
-        if int(model.jnt_type[joint]) not in _ONE_DOF:
-            continue
-        gear = float(model.actuator_gear[a, 0])
-        dof = model.jnt_dofadr[joint]
-        stiffness[dof] += -biases[a, 1] * gear * gear  # kp, through the gear both ways
-        damping[dof] += -biases[a, 2] * gear * gear  # kv
+    # A position servo pushes kp (ctrl - length) - kv d(length)/dt along its moment arms (a joint's
+    # gear, or a tendon's coefficients): its stiffness on dof i is kp * moment_i**2.
+    servo = model.actuator_biasprm[:, 1] < 0
+    squared = actuator_moments(model, data)[servo] ** 2  # (servos, nv)
+    stiffness = -model.actuator_biasprm[servo, 1] @ squared
+    damping = model.dof_damping + -model.actuator_biasprm[servo, 2] @ squared
     inertia = np.zeros(model.nv)
     for dof in np.flatnonzero(stiffness > 0):
         unit = np.zeros(model.nv)

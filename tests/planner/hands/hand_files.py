@@ -128,7 +128,7 @@ LIGHT_HAND = """<mujoco model="light">
       {fingers}
     </body>
   </worldbody>
-  <actuator>{actuators}</actuator>
+  {tendons}<actuator>{actuators}</actuator>
 </mujoco>
 """
 LIGHT_FINGER = """<body name="f{k}" pos="{x} {y} 0.01" euler="0 0 {yaw}">
@@ -140,6 +140,11 @@ LIGHT_FINGER = """<body name="f{k}" pos="{x} {y} 0.01" euler="0 0 {yaw}">
         </body>
       </body>"""
 LIGHT_ACTUATORS = """<position joint="f{k}_a" ctrlrange="-0.3 1.4"/><position joint="f{k}_b" ctrlrange="0 1.4"/>"""
+#: The same hand with each distal joint driven through a fixed tendon (as Menagerie's Shadow hand drives its J0).
+LIGHT_TENDON_ACTUATORS = (
+    """<position joint="f{k}_a" ctrlrange="-0.3 1.4"/><position tendon="t{k}" ctrlrange="0 1.4"/>"""
+)
+LIGHT_TENDON = """<fixed name="t{k}"><joint joint="f{k}_b" coef="1"/></fixed>"""
 LIGHT_DESCRIPTOR = """schema = "ogcp.hand/1"
 name = "light"
 mjcf = "light.xml"
@@ -147,13 +152,19 @@ palm = "palm"
 {fingers}"""
 
 
-def write_light_hand(folder: Path) -> Path:
-    """The light, stiffly servoed hand and its descriptor in ``folder``; returns the descriptor's path."""
+def write_light_hand(folder: Path, tendons: bool = False) -> Path:
+    """The light, stiffly servoed hand and its descriptor in ``folder``; returns the descriptor's path.
+
+    With ``tendons``, each distal joint's servo drives it through a fixed tendon.
+    """
     folder.mkdir(parents=True, exist_ok=True)
     spots = ((0.03, 0.0, 3.14159), (-0.02, 0.025, -0.9), (-0.02, -0.025, 0.9))
     fingers = "\n      ".join(LIGHT_FINGER.format(k=k, x=x, y=y, yaw=yaw) for k, (x, y, yaw) in enumerate(spots))
-    actuators = "".join(LIGHT_ACTUATORS.format(k=k) for k in range(3))
-    (folder / "light.xml").write_text(LIGHT_HAND.format(fingers=fingers, actuators=actuators))
+    servos = LIGHT_TENDON_ACTUATORS if tendons else LIGHT_ACTUATORS
+    actuators = "".join(servos.format(k=k) for k in range(3))
+    coupling = "<tendon>" + "".join(LIGHT_TENDON.format(k=k) for k in range(3)) + "</tendon>" if tendons else ""
+    text = LIGHT_HAND.format(fingers=fingers, actuators=actuators, tendons=coupling)
+    (folder / "light.xml").write_text(text)
     entries = "\n".join(FINGER_ENTRY.format(k=k) for k in range(3))
     path = folder / "light.toml"
     path.write_text(LIGHT_DESCRIPTOR.format(fingers=entries))

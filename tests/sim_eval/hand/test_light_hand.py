@@ -38,6 +38,16 @@ def test_a_light_stiffly_servoed_hand_holds_and_grips_as_fingertips_do(light_pla
     assert forces.max() < 4 * forces.min()
 
 
+def test_a_servo_that_drives_its_joint_through_a_tendon_is_steadied_too(tmp_path, monkeypatch):
+    monkeypatch.setenv("OGCP_CACHE", str(tmp_path / "cache"))
+    descriptor = write_light_hand(tmp_path / "hand", tendons=True)
+    path = tmp_path / "plan.json"
+    argv = ["plan", "box", "-n", "60", "-m", "3", "--diagonal", "0.06", "--hand", str(descriptor), "-o", str(path)]
+    assert main(argv) == 0
+    (grasp,) = evaluate_plan(json.loads(path.read_text()), {"directions": 8}).grasps
+    assert grasp.valid and grasp.gates["tips_in_contact"] == 3, grasp.invalid_reasons
+
+
 def test_without_the_armature_the_same_hand_flings_the_object(light_plan, monkeypatch):
     monkeypatch.setattr(servo_step, "MAX_OMEGA_DT", 1e9)
     (grasp,) = evaluate_plan(light_plan, {"directions": 8}).grasps
