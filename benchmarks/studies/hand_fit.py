@@ -33,6 +33,7 @@ import numpy as np
 
 from ogcp.planner import GraspPlanner, resolve_object, sample_contacts
 from ogcp.planner.hands import HandKinematics, HandReachability
+from ogcp.planner.infra.errors import OgcpError
 from ogcp.sim_eval.decomposition import DecompositionSettings, decompose
 from ogcp.sim_eval.evaluate import GraspEvaluator
 from ogcp.sim_eval.hand.trial import HandSetup
@@ -62,7 +63,11 @@ def run_case(hand: str, name: str, m: int, args: argparse.Namespace) -> dict[str
     rows = []
     for seed in range(args.seeds):
         contacts = sample_contacts(mesh, n=args.contacts, seed=seed)
-        grasp = tuple(GraspPlanner(constraints=[model], time_limit=args.plan_time_limit).plan(contacts, m).grasp)
+        try:
+            grasp = tuple(GraspPlanner(constraints=[model], time_limit=args.plan_time_limit).plan(contacts, m).grasp)
+        except OgcpError as exc:  # no grasp the hand reaches: recorded, and the other seeds go on
+            rows.append({"seed": seed, **_UNPLANNED, "error": str(exc)})
+            continue
         started = time.perf_counter()
         (held,) = with_hand.evaluate(mesh, contacts, [grasp], parts=parts).grasps
         seconds = time.perf_counter() - started
@@ -94,6 +99,24 @@ def run_case(hand: str, name: str, m: int, args: argparse.Namespace) -> dict[str
     return {"hand": hand, "object": name, "m": m, "accepted": accepted, "rows": rows}
 
 
+#: The row of a seed whose plan found no grasp: nothing realised, held or timed.
+_UNPLANNED: dict[str, Any] = {
+    "planned": False,
+    "grasp": None,
+    "q1": None,
+    "realised": False,
+    "worst_residual": None,
+    "hand_valid": False,
+    "hand_fidelity": None,
+    "invalid_because": None,
+    "hand_seconds": None,
+    "tips_valid": False,
+    "tips_fidelity": None,
+    "tips_seconds": None,
+    "hand_phase_seconds": {},
+}
+
+
 def _median(values: list[float], digits: int, scale: float = 1.0) -> str:
     return f"{statistics.median(values) * scale:.{digits}f}" if values else "-"
 
@@ -106,11 +129,13 @@ def table_row(case: dict[str, Any]) -> str:
     reasons = collections.Counter(r["invalid_because"] for r in realised if r["invalid_because"])
     common = ", ".join(f"{gate} {count}" for gate, count in reasons.most_common(2)) or "-"
     tips = [r for r in rows if r["tips_valid"]]
+    unplanned = sum(not r.get("planned", True) for r in rows)
+    planned = f"{len(realised)} of {len(rows)}" + (f" ({unplanned} without a grasp)" if unplanned else "")
     return (
-        f"| {case['hand']}, {case['object']}, {case['m']} | {case['accepted']:.2%} | {len(realised)} of {len(rows)} "
+        f"| {case['hand']}, {case['object']}, {case['m']} | {case['accepted']:.2%} | {planned} "
         f"| {_median([r['worst_residual'] for r in realised], 3, 1e3)} | {len(valid)} of {len(realised)} "
         f"| {_median([r['hand_fidelity'] for r in valid if r['hand_fidelity'] is not None], 2)} | {common} "
-        f"| {_median([r['hand_seconds'] for r in rows], 1)} | {len(tips)} of {len(rows)} "
+        f"| {_median([r['hand_seconds'] for r in rows if r['hand_seconds'] is not None], 1)} | {len(tips)} of {len(rows)} "
         f"| {sum(r['realised'] for r in tips)}, {sum(r['hand_valid'] for r in tips)} "
         f"| {_median([r['tips_fidelity'] for r in tips if r['tips_fidelity'] is not None], 2)} "
         f"| {_median([r['hand_seconds'] / r['tips_seconds'] for r in valid if r['tips_valid']], 1)} |"

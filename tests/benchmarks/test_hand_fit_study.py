@@ -18,3 +18,15 @@ def test_the_study_writes_rows_with_each_phases_seconds(tmp_path, capsys, monkey
     (row,) = json.loads((out / "hand_fit.json").read_text())["cases"][0]["rows"]
     assert row["realised"] and set(row["hand_phase_seconds"]) == {"fit", "close", "protocol"}
     assert (out / "tips_vs_hand.pdf").exists()
+
+
+def test_a_seed_without_a_grasp_the_hand_reaches_is_recorded_and_the_study_goes_on(tmp_path, capsys, monkeypatch):
+    from ogcp.benchmarks.studies import hand_fit
+
+    monkeypatch.setenv("OGCP_CACHE", str(tmp_path / "cache"))
+    out = tmp_path / "out"
+    args = ["--cases", "sdh:box:3", "--contacts", "12", "--seeds", "1", "--diagonal", "2.0", "--out", str(out)]
+    hand_fit.main(args)  # a 2 m box: wider than the SDH opens
+    assert "| sdh, box, 3 | 0.00% | 0 of 1 (1 without a grasp) |" in capsys.readouterr().out
+    (row,) = json.loads((out / "hand_fit.json").read_text())["cases"][0]["rows"]
+    assert row["planned"] is False and "no grasp satisfies the constraints" in row["error"]
