@@ -46,7 +46,11 @@ MODEL_SUFFIXES = (".xml", ".urdf")
 UNIT_TOLERANCE = 1e-3
 #: Largest pad rounding and pad offset accepted [m]: a hand bigger than 2 m is a unit error.
 MAX_LENGTH = 2.0
-_TOP_KEYS = ("schema", "name", "mjcf", "palm", "fingers", "actuation", "fetched")
+_TOP_KEYS = ("schema", "name", "mjcf", "palm", "fingers", "actuation", "fetched", "reachability")
+_REACHABILITY_KEYS = ("samples",)
+#: Joint configurations the reachability model samples by default, and the most a descriptor may ask.
+DEFAULT_REACH_SAMPLES = 10_000
+MAX_REACH_SAMPLES = 2_000_000
 _FINGER_KEYS = ("name", "tip_body", "tip_offset", "pad_normal", "tip_radius", "joints")
 _ACTUATION_KEYS = ("kp", "force_range", "kv")
 #: Defaults of ``[actuation]`` (DexGraspBench's gains for the Shadow hand, a 2 N·m limit).
@@ -114,6 +118,9 @@ class HandDescriptor:
         actuation: Servos for joints without an actuator.
         sha256: Digest of the descriptor file.
         model_sha256: Digest of the model file.
+        reach_samples: Joint configurations the reachability model samples (``[reachability]
+            samples``): a hand with many joints per finger needs more for its model to come near
+            the grasps it can reach.
     """
 
     name: str
@@ -124,6 +131,7 @@ class HandDescriptor:
     actuation: Actuation
     sha256: str
     model_sha256: str
+    reach_samples: int = DEFAULT_REACH_SAMPLES
 
     @property
     def finger_names(self) -> tuple[str, ...]:
@@ -214,6 +222,7 @@ def load_descriptor(path: str | Path) -> HandDescriptor:
     fingers = tuple(_finger(entry, f"{where}: fingers[{k}]") for k, entry in enumerate(fingers_raw))
     _distinct(fingers, where)
     actuation = _actuation(table.get("actuation", {}), f"{where}: [actuation]")
+    reach_samples = _reach_samples(table.get("reachability", {}), f"{where}: [reachability]")
     return HandDescriptor(
         name=name,
         path=path,
@@ -223,6 +232,7 @@ def load_descriptor(path: str | Path) -> HandDescriptor:
         actuation=actuation,
         sha256=hashlib.sha256(raw).hexdigest(),
         model_sha256=hashlib.sha256(model_path.read_bytes()).hexdigest(),
+        reach_samples=reach_samples,
     )
 
 
@@ -317,3 +327,13 @@ def _actuation(table: object, where: str) -> Actuation:
     force = _number(table, "force_range", where, 0.0, 1e6) if "force_range" in table else DEFAULT_FORCE_RANGE
     kv = _number(table, "kv", where, 0.0, 1e6) if "kv" in table else None
     return Actuation(kp, force, kv)
+
+
+def _reach_samples(table: object, where: str) -> int:
+    if not isinstance(table, dict):
+        raise OgcpError(f"{where} must be a table, got {table!r}")
+    _known_keys(table, _REACHABILITY_KEYS, where)
+    value = table.get("samples", DEFAULT_REACH_SAMPLES)
+    if isinstance(value, bool) or not isinstance(value, int) or not 1_000 <= value <= MAX_REACH_SAMPLES:
+        raise OgcpError(f"{where}: samples must be an integer in [1000, {MAX_REACH_SAMPLES}], got {value!r}")
+    return value

@@ -38,6 +38,7 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+from tqdm import tqdm
 
 from ogcp.planner.config.methods import DEFAULT_HAND_THRESHOLD
 from ogcp.planner.grasp.contact_set import ContactSet
@@ -49,6 +50,8 @@ from ogcp.planner.infra.cache import read_entry, write_entry
 from ogcp.planner.infra.errors import OgcpError
 
 MODEL_VERSION = 3
+#: Configurations posed per progress step while sampling.
+_SAMPLE_BATCH = 2_000
 #: The sampled model's file in its cache entry: ``joint_names`` (J,), ``angles`` (N, J),
 #: ``points`` and ``normals`` (N, F, 3) in the palm frame, ``collisions`` (N, F + 1, F + 1).
 MODEL_FILE = "model.npz"
@@ -146,7 +149,8 @@ class HandReachability:
     Args:
         hand: A built-in hand name, a descriptor path, or a loaded descriptor.
         fingers: Names of the fingers that take the contacts, in order; None: the first m.
-        samples: Joint configurations to sample (before collision rejection).
+        samples: Joint configurations to sample (before collision rejection); None: the
+            descriptor's ``[reachability] samples`` (default 10,000).
         seed: Sampling seed.
         threshold: Largest residual (normalised code distance) that counts as reachable.
         cache_dir: Where the sampled model is cached; default ``$OGCP_CACHE`` or ``~/.cache/ogcp``.
@@ -159,16 +163,17 @@ class HandReachability:
         self,
         hand: str | Path | HandDescriptor = "sdh",
         fingers: Sequence[str] | None = None,
-        samples: int = 10_000,
+        samples: int | None = None,
         seed: int = 0,
         threshold: float = DEFAULT_HAND_THRESHOLD,
         cache_dir: str | Path | None = None,
     ) -> None:
-        if isinstance(samples, bool) or not isinstance(samples, int) or samples < 1:
+        if samples is not None and (isinstance(samples, bool) or not isinstance(samples, int) or samples < 1):
             raise OgcpError(f"hand samples must be an integer >= 1, got {samples!r}")
         if not (isinstance(threshold, int | float) and math.isfinite(threshold) and threshold > 0):
             raise OgcpError(f"reachability threshold must be a positive number, got {threshold!r}")
         self.descriptor = hand if isinstance(hand, HandDescriptor) else resolve_hand(hand)
+        samples = self.descriptor.reach_samples if samples is None else samples
         self.name = self.descriptor.name
         self.fingers = tuple(fingers) if fingers is not None else None
         if self.fingers is not None:
@@ -194,8 +199,15 @@ class HandReachability:
 
         kinematics = HandKinematics(self.descriptor)
         angles = kinematics.sample(self.samples, self.seed)
-        points, normals = kinematics.pads_many(angles)
-        sampled = SampledHand(kinematics.joint_names, angles, points, normals, kinematics.collisions(angles))
+        batches: list[tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.bool_]]] = []
+        # A hand of many joints may ask for 10^5 samples: half a minute once, then cached.
+        with tqdm(total=len(angles), desc=f"sampling the {self.name} hand", unit="pose", disable=None) as bar:
+            for start in range(0, len(angles), _SAMPLE_BATCH):
+                batch = angles[start : start + _SAMPLE_BATCH]
+                batches.append((*kinematics.pads_many(batch), kinematics.collisions(batch)))
+                bar.update(len(batch))
+        points, normals, collisions = (np.concatenate(parts) for parts in zip(*batches, strict=True))
+        sampled = SampledHand(kinematics.joint_names, angles, points, normals, collisions)
 
         def save(stage: Path) -> None:
             np.savez(
@@ -387,7 +399,7 @@ class SDHReachability(HandReachability):
 
     def __init__(
         self,
-        samples: int = 10_000,
+        samples: int | None = None,
         seed: int = 0,
         threshold: float = DEFAULT_HAND_THRESHOLD,
         cache_dir: str | Path | None = None,

@@ -78,6 +78,16 @@ def test_a_good_descriptor_reads_with_its_paths_resolved_and_digests(tmp_path):
         (lambda t: t.replace('name = "left"\n', 'name = "left"\njoints = ["a", "a"]\n'), "name a joint twice"),
         (lambda t: t.replace("kp = 100.0", "kp = -1.0"), "[actuation]: kp = -1.0 is outside (0, 1e+06]"),
         (lambda t: t.replace("kp = 100.0", "stiffness = 1.0"), "[actuation]: unknown key 'stiffness'"),
+        (
+            lambda t: t + "[reachability]\nsamples = 50.5\n",
+            "[reachability]: samples must be an integer in [1000, 2000000]",
+        ),
+        (
+            lambda t: t + "[reachability]\nsamples = 999\n",
+            "[reachability]: samples must be an integer in [1000, 2000000]",
+        ),
+        (lambda t: t + "[reachability]\nseed = 1\n", "[reachability]: unknown key 'seed'; valid keys are samples"),
+        (lambda t: "reachability = 3\n" + t, "[reachability] must be a table, got 3"),
         (lambda t: t.split("[[fingers]]")[0], "[[fingers]] must list at least one finger"),
         (lambda t: t + "[[", "not a TOML hand descriptor"),
     ],
@@ -88,6 +98,23 @@ def test_every_fault_is_one_line_naming_the_file_and_the_field(tmp_path, edit, m
         load_descriptor(path)
     text = str(info.value)
     assert message in text and text.startswith(str(path)) and "\n" not in text
+
+
+def test_a_hand_asks_for_its_reachability_samples(tmp_path):
+    import shutil
+
+    from ogcp.planner.hands import HandReachability
+
+    assert load_descriptor(_write(tmp_path, GOOD)).reach_samples == 10_000
+    gripper = resolve_hand("parallel_gripper")
+    shutil.copy(gripper.model_path, tmp_path / gripper.model_path.name)
+    path = tmp_path / "gripper.toml"
+    path.write_text(gripper.path.read_text() + "\n[reachability]\nsamples = 1500\n")
+    hand = load_descriptor(path)
+    assert hand.reach_samples == 1500
+    model = HandReachability(hand, cache_dir=tmp_path / "cache")
+    assert model.samples == 1500 and len(model.sampled.angles) == 1500
+    assert HandReachability(hand, samples=1200, cache_dir=tmp_path / "cache").samples == 1200
 
 
 def test_a_missing_or_binary_descriptor_is_one_line(tmp_path):
