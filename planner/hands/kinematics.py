@@ -256,9 +256,11 @@ class HandKinematics:
         return self.data.xmat[self.palm].reshape(3, 3).copy(), self.data.xpos[self.palm].copy()
 
     def idle_joints(self) -> tuple[str, ...]:
-        """Hinges and slides of the hand below its root that move no finger and no actuator drives.
+        """Hinges and slides of the hand below its root that a scene welds at their reference.
 
-        A scene welds them at their reference (a wrist between the root and the palm, say).
+        Those that move the palm (a wrist, or a floating base's slides and hinges between the root
+        and the palm, driven or not: the simulated wrist holds the palm, rigidly), and those
+        elsewhere that move no finger and no actuator drives.
         """
         model = self.model
         driven = {
@@ -269,9 +271,10 @@ class HandKinematics:
         fingers = set(self.joint_ids.tolist())
         idle = []
         for j in range(model.njnt):
-            if j in fingers or j in driven or int(model.jnt_type[j]) not in _MOVABLE:
+            body = int(model.jnt_bodyid[j])
+            if j in fingers or int(model.jnt_type[j]) not in _MOVABLE or not self._is_below(body, self.root):
                 continue
-            if self._is_below(int(model.jnt_bodyid[j]), self.root):
+            if j not in driven or self._is_below(self.palm, body):
                 idle.append(mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j))
         return tuple(idle)
 

@@ -49,14 +49,24 @@ def attach_hand(spec: mujoco.MjSpec, kinematics: HandKinematics, free: bool = Fa
     frame = mount.add_frame(pos=(-inverse @ position).tolist(), quat=_wxyz(inverse).tolist())
     hand = kinematics.spec.copy()
     root = hand.body(mujoco.mj_id2name(kinematics.model, mujoco.mjtObj.mjOBJ_BODY, kinematics.root))
-    # The mount carries a floating hand model instead of its free joint, and joints that move no
-    # finger and no actuator drives (a wrist between the root and the palm) are welded where they
-    # are: the palm must be as rigidly held as the mount.
+    # The mount carries a floating hand model instead of its free joint, and the joints that move
+    # the palm (a wrist, a floating base), driven or not, are welded where they are, with what
+    # drives or reads them: the palm must be as rigidly held as the mount. So are joints elsewhere
+    # that move no finger and no actuator drives.
     idle = set(kinematics.idle_joints())
     for body in [root, *root.find_all(mujoco.mjtObj.mjOBJ_BODY)]:
         for joint in list(body.joints):
             if joint.type == mujoco.mjtJoint.mjJNT_FREE or joint.name in idle:
                 hand.delete(joint)
+    for actuator in list(hand.actuators):
+        if actuator.trntype == mujoco.mjtTrn.mjTRN_JOINT and actuator.target in idle:
+            hand.delete(actuator)
+    for sensor in list(hand.sensors):
+        if sensor.objtype == mujoco.mjtObj.mjOBJ_JOINT and sensor.objname in idle:
+            hand.delete(sensor)
+    for equality in list(hand.equalities):
+        if equality.type == mujoco.mjtEq.mjEQ_JOINT and {equality.name1, equality.name2} & idle:
+            hand.delete(equality)
     # The scene's options win; a hand tuned for another simulator (the Shadow hand of MJX's tests:
     # one solver iteration, impratio 10) would otherwise make MuJoCo warn on every attach.
     for name in _OPTION_FIELDS:

@@ -52,6 +52,11 @@ SQUEEZE_RADII = 0.5
 APPROACH = (1.0, 0.75, 0.5, 0.25, 0.0)
 #: Duration of each closing stage, pregrasp to grasp and grasp to squeeze [s] (DexGraspBench: 0.4 s).
 STAGE_TIME = 0.4
+#: While the hand closes, the object's motion is damped with this time constant [s]: where no
+#: approach waypoint is clear of the object, the hand starts with a link a fraction of a millimetre
+#: inside it (within the fit's tolerance), and with the palm held rigidly that overlap would kick the
+#: object away instead of pushing it out. Settling and the protocol run on the free object.
+CLOSING_DRAG_TIME = 0.01
 
 
 @dataclass(frozen=True, eq=False)
@@ -250,8 +255,13 @@ def _first_clear(scene: FitScene, fit: HandFit, approach: NDArray[np.float64]) -
     return len(approach) - 1
 
 
-def close_hand(hand_scene: HandScene) -> HandScene:
+def close_hand(hand_scene: HandScene, steady_object: bool = True) -> HandScene:
     """Close the hand: pregrasp to grasp to squeeze.
+
+    Args:
+        hand_scene: The scene in its pregrasp.
+        steady_object: Damp the object's motion while closing (:data:`CLOSING_DRAG_TIME`); False
+            (the DexGraspBench mode) closes on the free object, as they do.
 
     Returns:
         The scene starting from the closed hand (its ``start_qpos``), for the protocol; a closing
@@ -261,6 +271,24 @@ def close_hand(hand_scene: HandScene) -> HandScene:
     data = mujoco.MjData(model)
     data.qpos[:] = scene.start()
     mujoco.mj_forward(model, data)
+    first = int(model.jnt_dofadr[model.body_jntadr[scene.object_body]])
+    dofs = slice(first, first + 6)  # the object's free joint
+    undamped = model.dof_damping[dofs].copy()
+    mass, inertia = model.body_mass[scene.object_body], model.body_inertia[scene.object_body].mean()
+    if steady_object:
+        model.dof_damping[dofs] = np.repeat([mass, inertia], 3) / CLOSING_DRAG_TIME
+    try:
+        _close(hand_scene, data)
+    finally:
+        model.dof_damping[dofs] = undamped  # settling and the protocol run on the free object
+    if not np.all(np.isfinite(data.qpos)):
+        return hand_scene
+    return dataclasses.replace(hand_scene, scene=dataclasses.replace(scene, start_qpos=data.qpos.copy()))
+
+
+def _close(hand_scene: HandScene, data: mujoco.MjData) -> None:
+    """Step the closing sequence of :func:`close_hand` from ``data``'s state."""
+    scene, model = hand_scene.scene, hand_scene.scene.model
     steps = max(1, round(STAGE_TIME / model.opt.timestep))
     approach = [hand_scene.ctrl(angles) for angles in hand_scene.approach]
     legs = [*itertools.pairwise(approach), (approach[-1], scene.preload_ctrl)]
@@ -276,9 +304,6 @@ def close_hand(hand_scene: HandScene) -> HandScene:
                 quat = palms[leg, 3:] + (palms[leg + 1, 3:] - palms[leg, 3:]) * share  # nlerp: stages lie close
                 data.mocap_quat[mocap] = quat / np.linalg.norm(quat)
             mujoco.mj_step(model, data)
-    if not np.all(np.isfinite(data.qpos)):
-        return hand_scene
-    return dataclasses.replace(hand_scene, scene=dataclasses.replace(scene, start_qpos=data.qpos.copy()))
 
 
 def _wxyz(rotation: NDArray[np.float64]) -> NDArray[np.float64]:

@@ -255,7 +255,7 @@ def close_on_grasp(
     # The strongest balanced grip that settles steadily; DexGraspBench closes once, to its squeeze.
     ladder = SQUEEZE_LADDER if opened.grip is not None and not compat else (1.0,)
     for share in ladder:
-        closed = close_hand(squeezed(opened, share))
+        closed = close_hand(squeezed(opened, share), steady_object=not compat)
         settled = settle(closed.scene, settings)
         if settled.gates["valid"]:
             break

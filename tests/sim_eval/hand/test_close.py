@@ -91,6 +91,38 @@ def test_a_wrist_between_root_and_palm_is_welded_at_its_reference(tmp_path):
     assert settled.gates["valid"] and settled.gates["tips_in_contact"] == 2
 
 
+def test_a_driven_wrist_is_welded_too_with_its_actuator(tmp_path):
+    """The Shadow hand's wrist and a floating base's joints carry servos: the palm is still held rigidly."""
+    source = resolve_hand("parallel_gripper")
+    model = (
+        source.model_path.read_text()
+        .replace(
+            '<body name="palm">',
+            '<body name="base"><joint name="lift" type="slide" axis="0 0 1" range="-1 1"/><geom size="0.01"/>'
+            '<body name="arm"><joint name="wrist" axis="1 0 0" range="-1 1"/><geom size="0.01"/><body name="palm">',
+        )
+        .replace("    </body>\n  </worldbody>", "    </body>\n    </body>\n    </body>\n  </worldbody>")
+        .replace(
+            "</worldbody>",
+            '</worldbody><actuator><position name="lift_servo" joint="lift" kp="100"/>'
+            '<position name="wrist_servo" joint="wrist" kp="10"/></actuator>'
+            '<sensor><jointpos name="wrist_angle" joint="wrist"/></sensor>',
+        )
+    )
+    (tmp_path / "g.xml").write_text(model)
+    (tmp_path / "g.toml").write_text(source.path.read_text().replace('"parallel_gripper.xml"', '"g.xml"'))
+    kinematics = HandKinematics(load_descriptor(tmp_path / "g.toml"))
+    assert set(kinematics.idle_joints()) == {"lift", "wrist"}
+    settings = SimSettings()
+    _, closed = _closed(kinematics, settings)
+    scene = closed.scene.model
+    for kind, name in ((mujoco.mjtObj.mjOBJ_JOINT, "hand/wrist"), (mujoco.mjtObj.mjOBJ_ACTUATOR, "hand/wrist_servo")):
+        assert mujoco.mj_name2id(scene, kind, name) == -1
+    assert mujoco.mj_name2id(scene, mujoco.mjtObj.mjOBJ_JOINT, "hand/lift") == -1
+    settled = settle(closed.scene, settings)
+    assert settled.gates["valid"] and settled.gates["tips_in_contact"] == 2
+
+
 @pytest.mark.parametrize("travel", [None, 2e-4, 1e-3, 1.0])
 def test_a_servo_resists_along_its_jaw_what_it_builds_within_the_failure_distance(travel):
     """Pushed along y, the pinch sheds one jaw's force: F when the servos are stiff, kp h within the travel."""
