@@ -142,3 +142,25 @@ def test_a_servo_resists_along_its_jaw_what_it_builds_within_the_failure_distanc
     # Half-width travel / sqrt(3): the largest box of motions inside the failure sphere.
     expected = limit if travel is None else min(limit, kp * travel / np.sqrt(3.0))
     np.testing.assert_allclose(resisted, expected, rtol=0.02)
+
+
+@pytest.mark.parametrize("steady", [True, False])
+def test_the_object_is_damped_while_the_hand_closes_and_free_after(steady, monkeypatch):
+    from ogcp.sim_eval.hand import scene as hand_scene_module
+
+    kinematics = HandKinematics(resolve_hand("parallel_gripper"))
+    opened, _ = _closed(kinematics, SimSettings())
+    model = opened.scene.model
+    first = int(model.jnt_dofadr[model.body_jntadr[opened.scene.object_body]])
+    seen = []
+    real = hand_scene_module._close
+    monkeypatch.setattr(
+        hand_scene_module, "_close", lambda h, d: (seen.append(model.dof_damping[first : first + 6].copy()), real(h, d))
+    )
+    before = model.dof_damping.copy()
+    closed = close_hand(opened, steady_object=steady)
+    (during,) = seen
+    mass = model.body_mass[opened.scene.object_body]
+    assert during[:3] == pytest.approx([mass / hand_scene_module.CLOSING_DRAG_TIME] * 3 if steady else [0.0] * 3)
+    assert np.array_equal(model.dof_damping, before)  # settling and the protocol see the free object
+    assert closed.scene.start_qpos is not None
