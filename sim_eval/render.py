@@ -174,8 +174,10 @@ def render_plan(
         from ogcp.sim_eval.hand.mount import PREFIX
 
         scene = closed.closed.scene
-        framed = palm_and_fingers(scene.model, PREFIX + hand.kinematics.descriptor.palm)
-        return render_grasp(scene, closed.settled, width, height, framed=framed)
+        palm = PREFIX + hand.kinematics.descriptor.palm
+        framed = palm_and_fingers(scene.model, palm)
+        azimuth = side_azimuth(scene, closed.settled, palm)
+        return render_grasp(scene, closed.settled, width, height, azimuth=azimuth, framed=framed)
     placed = place_tips(fit.surface, positions, normals, radius, max_inward=radius)
     scene = build_scene(fit.decomposition.parts, com, inertia, placed.points, placed.normals, settings, mu, radius)
     return render_grasp(scene, settle(scene, settings), width, height)
@@ -189,3 +191,21 @@ def palm_and_fingers(model: mujoco.MjModel, palm_body: str) -> NDArray[np.intp]:
     for body in range(1, model.nbody):  # MuJoCo numbers a parent before its children
         below[body] |= below[model.body_parentid[body]]
     return np.flatnonzero(below[model.geom_bodyid]).astype(np.intp)
+
+
+def side_azimuth(scene: GraspScene, settled: Settled, palm_body: str) -> float:
+    """[deg] A camera azimuth that looks across the line from the palm to the object, not along it.
+
+    Looking along it, the palm hides the grasp or the object hides the fingers; from the side both
+    show. The view direction is the horizontal perpendicular of that line (any azimuth when the
+    line is vertical: the default's 135 degrees).
+    """
+    model = scene.model
+    data = mujoco.MjData(model)
+    mujoco.mj_setState(model, data, settled.state, FULL_STATE)
+    mujoco.mj_kinematics(model, data)
+    palm = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, palm_body)
+    across = np.cross(data.xipos[scene.object_body] - data.xpos[palm], [0.0, 0.0, 1.0])
+    if palm < 0 or np.linalg.norm(across[:2]) < 1e-9:
+        return 135.0
+    return float(np.degrees(np.arctan2(across[1], across[0])))

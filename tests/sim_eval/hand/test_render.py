@@ -47,6 +47,20 @@ def test_a_hand_plan_is_drawn_with_the_hand_as_evaluate_settled_it(sdh_plan, mon
     assert drawn == pytest.approx(grasp.hand["settled_joint_angles"], abs=1e-9)
 
 
+def test_the_camera_looks_across_the_line_from_the_palm_to_the_object(sdh_plan, monkeypatch):
+    calls = _drawn(monkeypatch)
+    render.render_plan(sdh_plan, SimSettings(directions=4), HULL)
+    (call,) = calls
+    scene, model = call["scene"], call["scene"].model
+    data = mujoco.MjData(model)
+    mujoco.mj_setState(model, data, call["settled"].state, FULL_STATE)
+    mujoco.mj_kinematics(model, data)
+    palm = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, PREFIX + resolve_hand("sdh").palm)
+    line = (data.xipos[scene.object_body] - data.xpos[palm])[:2]
+    view = np.array([np.cos(np.radians(call["azimuth"])), np.sin(np.radians(call["azimuth"]))])
+    assert np.linalg.norm(line) > 1e-3 and abs(view @ line) < 1e-9  # the view is perpendicular to the line
+
+
 def test_tips_draw_the_same_plan_with_fingertip_spheres(sdh_plan, monkeypatch):
     calls = _drawn(monkeypatch)
     render.render_plan(sdh_plan, SimSettings(directions=4), HULL, tips=True)
