@@ -17,6 +17,7 @@ order [rad or m]; joints outside the fingers (a wrist above the palm) stay at th
 from __future__ import annotations
 
 import copy
+import warnings
 from dataclasses import dataclass
 
 import mujoco
@@ -29,6 +30,14 @@ from ogcp.planner.infra.errors import OgcpError
 
 #: Range given to a hinge that has none [rad].
 UNLIMITED_HINGE = (-np.pi, np.pi)
+#: [rad] A hand none of whose finger hinges moves more than this (2 degrees) gets a warning.
+STIFF_HINGE = np.radians(2.0)
+
+
+class HandModelWarning(UserWarning):
+    """A hand model that compiles but is most likely not what its author meant."""
+
+
 #: Depth beyond which two hand geoms count as colliding [m].
 SELF_PENETRATION = 5e-4
 _MOVABLE = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
@@ -85,6 +94,7 @@ class HandKinematics:
         self.joint_names = tuple(mujoco.mj_id2name(self.model, mujoco.mjtObj.mjOBJ_JOINT, j) for j in joint_ids)
         self.qpos_index = self.model.jnt_qposadr[self.joint_ids]
         self.limits = np.array([self._range(j) for j in joint_ids])
+        self._warn_if_degrees_meant_radians()
         self.reference_qpos = self._reference_qpos()
         self._couplings = self._joint_couplings()
         self.independent = np.array(
@@ -97,6 +107,22 @@ class HandKinematics:
         self.palm_pose = self._palm_pose()
 
     # ----- checks against the compiled model -------------------------------------------------
+
+    def _warn_if_degrees_meant_radians(self) -> None:
+        """Warn when no finger hinge moves more than :data:`STIFF_HINGE` [rad]: the model's ranges
+        were most likely written in radians where MJCF reads degrees (its default)."""
+        hinges = [k for k, j in enumerate(self.joint_ids) if self.model.jnt_type[j] == mujoco.mjtJoint.mjJNT_HINGE]
+        if not hinges:
+            return
+        widest = float(np.max(self.limits[hinges, 1] - self.limits[hinges, 0]))
+        if widest < STIFF_HINGE:
+            warnings.warn(
+                f"{self.descriptor.path}: no finger hinge of the {self.descriptor.name} hand moves more than "
+                f"{np.degrees(widest):.2g} degrees; MJCF reads angles in degrees unless the model says "
+                '<compiler angle="radian"/>',
+                HandModelWarning,
+                stacklevel=3,
+            )
 
     def _body(self, model: mujoco.MjModel, name: str, field: str) -> int:
         body = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, name)

@@ -201,3 +201,16 @@ def test_a_urdf_mujoco_cannot_compile_is_one_line_naming_the_file(tmp_path):
     urdf.write_text("<robot name='x'><link name='palm'>")  # cut short
     with pytest.raises(OgcpError, match="urdf_gripper.urdf is not a readable URDF"):
         HandKinematics(load_descriptor(path))
+
+
+def test_a_hand_whose_hinges_hardly_move_gets_a_warning_about_degrees(tmp_path, recwarn):
+    from ogcp.planner.hands.kinematics import HandModelWarning
+
+    descriptor = write_mesh_hand(tmp_path / "radians")
+    HandKinematics(load_descriptor(descriptor))
+    assert not [w for w in recwarn if issubclass(w.category, HandModelWarning)]
+    model = tmp_path / "radians" / "claw.xml"
+    # The same ranges read as degrees: the fingers move 1.7 degrees at most.
+    model.write_text(model.read_text().replace('angle="radian" ', ""))
+    with pytest.warns(HandModelWarning, match=r"moves more than 1\.7 degrees; MJCF reads angles in degrees unless"):
+        HandKinematics(load_descriptor(descriptor))
