@@ -103,6 +103,7 @@ def hand_resistance(
     cone_edge_count: int,
     directions: NDArray[np.float64],
     travel: float | None = None,
+    torsion: float = 0.0,
 ) -> NDArray[np.float64]:
     """Largest resisted disturbance along each direction, shape (D,) [N in scaled wrench space].
 
@@ -120,6 +121,7 @@ def hand_resistance(
             position servos' force changes are limited by the joint travel that moves each
             contact at most this far (:class:`ServoTravel`). None: the force ranges alone (a
             perfectly stiff servo).
+        torsion: Torsional friction of soft-finger contacts [m]; 0: hard point contacts.
 
     Returns:
         The resistance per direction; 0 with no contact, NaN where the solver failed.
@@ -127,7 +129,17 @@ def hand_resistance(
     if len(contacts.points) == 0:
         return np.zeros(len(directions))
     statics = hand_statics(
-        model, data, hand, contacts.points, contacts.normals, contacts.bodies, com, torque_scale, mu, cone_edge_count
+        model,
+        data,
+        hand,
+        contacts.points,
+        contacts.normals,
+        contacts.bodies,
+        com,
+        torque_scale,
+        mu,
+        cone_edge_count,
+        torsion=torsion,
     )
     first = len(contacts.points) * statics.edges  # the actuator forces' columns
     size = statics.size + 1
@@ -195,22 +207,35 @@ def hand_statics(
     mu: float,
     edge_count: int,
     stops: bool = True,
+    torsion: float = 0.0,
 ) -> HandStatics:
     """The statics of contacts ``points`` (K, 3) [m] with inward ``normals`` on hand ``bodies``, in a state.
 
     With ``stops``, the joints resting on a limit get its reaction (:func:`limit_reactions`): a
     load that pushes a joint into its limit meets the limit. A grip leaves them out: limits only
     react, and two of them against each other would squeeze the object with no actuator at all.
+    With ``torsion`` [m] > 0 the contacts are soft fingers, as MuJoCo simulates them (condim 4):
+    each contact's primitives (:func:`~ogcp.planner.grasp.wrench.contact_wrenches`) add a twist
+    about its normal of up to ``torsion`` times its normal force, which the hand supplies through
+    its rotational Jacobian.
     """
     count = len(points)
-    edges = cone_edges(normals, mu, edge_count)  # (K, E, 3)
-    wrenches = contact_wrenches(points, normals, com, torque_scale, mu, edge_count).reshape(count * edge_count, 6).T
+    primitives = contact_wrenches(points, normals, com, torque_scale, mu, edge_count, torsion)  # (K, P, 6)
+    per = primitives.shape[1]
+    if torsion > 0:  # soft fingers: each primitive also twists about its normal
+        forces = primitives[:, :, :3]
+        arms = np.asarray(points, dtype=float)[:, None, :] - np.asarray(com, dtype=float)
+        twists = primitives[:, :, 3:] * torque_scale - np.cross(np.broadcast_to(arms, forces.shape), forces)
+    else:
+        forces, twists = cone_edges(normals, mu, edge_count), np.zeros((count, per, 3))  # (K, E, 3)
+    wrenches = primitives.reshape(count * per, 6).T
     dofs = model.jnt_dofadr[hand_joints(model, hand)]
-    contact_torques = np.zeros((len(dofs), count * edge_count))
-    jacobian = np.zeros((3, model.nv))
+    contact_torques = np.zeros((len(dofs), count * per))
+    along, about = np.zeros((3, model.nv)), np.zeros((3, model.nv))
     for k in range(count):
-        mujoco.mj_jac(model, data, jacobian, None, points[k], int(bodies[k]))
-        contact_torques[:, k * edge_count : (k + 1) * edge_count] = jacobian[:, dofs].T @ edges[k].T
+        mujoco.mj_jac(model, data, along, about, points[k], int(bodies[k]))
+        block = along[:, dofs].T @ forces[k].T + about[:, dofs].T @ twists[k].T
+        contact_torques[:, k * per : (k + 1) * per] = block
     moment = actuator_moments(model, data)[:, dofs].T  # (J, nu)
     couplings = equality_rows(model, hand, dofs)  # (n_eq, J)
     limits = limit_reactions(model, data, hand) if stops else np.zeros((len(dofs), 0))  # (J, L)
@@ -219,11 +244,11 @@ def hand_statics(
     return HandStatics(
         np.hstack([wrenches, np.zeros((6, extra))]),
         np.hstack([contact_torques, -moment, -couplings.T, -limits]),
-        [(0.0, None)] * (count * edge_count)
+        [(0.0, None)] * (count * per)
         + list(zip(low, high, strict=True))
         + [(None, None)] * len(couplings)
         + [(0.0, None)] * limits.shape[1],
-        edge_count,
+        per,
     )
 
 

@@ -323,6 +323,7 @@ def simulate_hand_grasp(
         settings.prediction_cone_edges,
         dirs.vectors,
         travel=settings.move_threshold,  # the servos' stiffness bounds what they resist within it
+        torsion=closed.scene.torsion,  # soft fingers twist, as simulated
     )
     pads_ok, extra = pad_gate(closed, realised, outcome.points, model)
     gates = dict(settled.gates)

@@ -144,6 +144,37 @@ def test_a_servo_resists_along_its_jaw_what_it_builds_within_the_failure_distanc
     np.testing.assert_allclose(resisted, expected, rtol=0.02)
 
 
+@pytest.mark.parametrize("torsion", [0.0, 0.01])
+def test_soft_pads_resist_a_twist_about_their_line_as_two_gamma_f(torsion):
+    """Two single-point pads resist a twist about the line between them only by torsional friction: 2 gamma F."""
+    from ogcp.sim_eval.hand.predict import RealisedContacts, hand_resistance, realised_contacts
+    from ogcp.sim_eval.hand.trial import _settled_data
+
+    kinematics = HandKinematics(resolve_hand("parallel_gripper"))
+    limit = kinematics.descriptor.actuation.force_range
+    settings = SimSettings()
+    _, closed = _closed(kinematics, settings)
+    data = _settled_data(closed, settle(closed.scene, settings))
+    model = closed.scene.model
+    patch = realised_contacts(model, data, closed.hand, closed.scene.object_geoms)
+    # One point per jaw, at its patch's centre: round pads, which no patch helps against a twist.
+    pads = [patch.bodies == body for body in np.unique(patch.bodies)]
+    point = RealisedContacts(
+        np.array([patch.points[on].mean(axis=0) for on in pads]),
+        np.array([patch.normals[on][0] for on in pads]),
+        np.array([patch.bodies[on][0] for on in pads]),
+        np.array([patch.geoms[on][0] for on in pads]),
+        np.array([patch.forces[on].sum() for on in pads]),
+    )
+    line = point.points[1] - point.points[0]
+    twist = np.concatenate([np.zeros(3), line / np.linalg.norm(line)])[None, :]
+    rho = 0.05
+    com = point.points.mean(axis=0)
+    resisted = hand_resistance(model, data, closed.hand, point, com, rho, MU, 8, twist, torsion=torsion)
+    # Each jaw presses at most its servo's limit F; each soft contact twists up to gamma F.
+    np.testing.assert_allclose(resisted, 2.0 * torsion * limit / rho, rtol=1e-3, atol=1e-9)
+
+
 @pytest.mark.parametrize("steady", [True, False])
 def test_the_object_is_damped_while_the_hand_closes_and_free_after(steady, monkeypatch):
     from ogcp.sim_eval.hand import scene as hand_scene_module
