@@ -78,6 +78,7 @@ class HandScene:
         palms: The palm's mocap pose (position, (w, x, y, z)) at each approach waypoint and at the
             squeeze, shape (K + 1, 7); None: held where the fit put it (a given grasp's stages
             may move it).
+        spec: The spec the model was compiled from (:mod:`ogcp.sim_eval.hand.lean` recompiles it).
     """
 
     scene: GraspScene
@@ -89,6 +90,7 @@ class HandScene:
     squeeze_forces: NDArray[np.float64]
     grip: Grip | None = None
     palms: NDArray[np.float64] | None = None
+    spec: mujoco.MjSpec | None = None
 
     def ctrl(self, angles: ArrayLike) -> NDArray[np.float64]:
         """Servo targets that hold a configuration (other actuators at their reference), shape (nu,)."""
@@ -231,7 +233,7 @@ def build_hand_scene(
         watched_qpos=np.arange(mount_qpos, mount_qpos + 3, dtype=np.intp),
         start_qpos=start,
     )
-    return HandScene(scene, hand, fit.fingers, pregrasp, waypoints, fit.joint_angles.copy(), forces, grip)
+    return HandScene(scene, hand, fit.fingers, pregrasp, waypoints, fit.joint_angles.copy(), forces, grip, spec=spec)
 
 
 def squeezed(hand_scene: HandScene, share: float) -> HandScene:

@@ -34,6 +34,7 @@ from ogcp.sim_eval.decomposition.ladder import ContactFit
 from ogcp.sim_eval.hand.fit import HandFit, fit_hand, measure_pose
 from ogcp.sim_eval.hand.fit_scene import FitScene
 from ogcp.sim_eval.hand.given import GIVEN_MAX_PENETRATION, GivenPose, given_scene
+from ogcp.sim_eval.hand.lean import failure_reach, lean_scene
 from ogcp.sim_eval.hand.pads import pad_gate
 from ogcp.sim_eval.hand.predict import hand_resistance, realised_contacts
 from ogcp.sim_eval.hand.scene import SQUEEZE_LADDER, HandScene, build_hand_scene, close_hand, squeezed
@@ -332,13 +333,19 @@ def simulate_hand_grasp(
     nan = np.full(len(predicted), math.nan)
     measured, censored, fid = nan.copy(), np.zeros(len(predicted), dtype=bool), nan.copy()
     holds: dict[str, Any] = {}
+    # The loads run on the scene with the palm and the idle fingers welded where they settled.
+    reach = failure_reach(settings.move_threshold, settings.rotation_threshold, body.diagonal)
+    lean = lean_scene(closed, settled, reach) if not compat and not settled.gates["diverged"] else None
+    if lean is not None:
+        hand["protocol_scene"] = lean.summary
     if not settled.gates["diverged"] and settings.weight_test and not settings.gravity:
-        holds["weight"] = weight_test(closed.scene, settings)  # gravity is off: m g along each axis as a load
+        loaded = lean.scene if lean is not None else closed.scene
+        holds["weight"] = weight_test(loaded, settings)  # gravity is off: m g along each axis as a load
     if compat:  # their verdict, on ogcp's gates (the pads' one included); no ramps, as for tips
         holds["dexgraspbench"] = hold_test(closed.scene, dataclasses.replace(settled, gates=gates), settings)
-    elif not settled.gates["diverged"]:
+    elif lean is not None:
         measured, censored = ramp_to_failure(
-            closed.scene, settled, dirs.vectors, predicted, contacts.torque_scale, settings
+            lean.scene, lean.settled, dirs.vectors, predicted, contacts.torque_scale, settings
         )
         fid = fidelity(measured, predicted, FIDELITY_FLOOR * settings.max_normal_force)
         fid[censored] = math.nan
