@@ -26,6 +26,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ogcp.planner.hands.descriptor import HandDescriptor
 from ogcp.planner.hands.loading import compile_spec, hand_spec
+from ogcp.planner.hands.model_checks import closed_chains, underactuated_fingers
 from ogcp.planner.infra.errors import OgcpError
 
 #: Range given to a hinge that has none [rad].
@@ -97,6 +98,7 @@ class HandKinematics:
         self._warn_if_degrees_meant_radians()
         self.reference_qpos = self._reference_qpos()
         self._couplings = self._joint_couplings()
+        self._warn_if_not_an_open_chain()
         self.independent = np.array(
             [k for k, j in enumerate(joint_ids) if j not in {dep for dep, _, _ in self._couplings}], dtype=np.intp
         )
@@ -120,6 +122,28 @@ class HandKinematics:
                 f"{self.descriptor.path}: no finger hinge of the {self.descriptor.name} hand moves more than "
                 f"{np.degrees(widest):.2g} degrees; MJCF reads angles in degrees unless the model says "
                 '<compiler angle="radian"/>',
+                HandModelWarning,
+                stacklevel=3,
+            )
+
+    def _warn_if_not_an_open_chain(self) -> None:
+        """Warn about closed chains and underactuated fingers (:mod:`ogcp.planner.hands.model_checks`)."""
+        where = f"{self.descriptor.path}: the {self.descriptor.name} hand"
+        loops = closed_chains(self.model, set(range(1, self.model.nbody)))
+        if loops:
+            warnings.warn(
+                f"{where} closes kinematic loops with connect or weld equalities ({', '.join(loops)}); ogcp "
+                "samples, fits and closes it as an open chain, so its grasps may not be realised as planned",
+                HandModelWarning,
+                stacklevel=3,
+            )
+        fingers = [(finger.name, finger.joints) for finger in self.fingers]
+        dependent = {joint for joint, _, _ in self._couplings}
+        short = underactuated_fingers(self.model, self.reference_qpos, fingers, dependent)
+        if short:
+            warnings.warn(
+                f"{where} has fingers with fewer servo directions than joints: {'; '.join(short)}; the fit poses "
+                "every joint, and the servos may not hold that pose when the hand closes",
                 HandModelWarning,
                 stacklevel=3,
             )

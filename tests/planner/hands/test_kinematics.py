@@ -2,13 +2,15 @@
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
 from ogcp.planner.hands import HandKinematics, load_descriptor, resolve_hand
 from ogcp.planner.infra import OgcpError
 
-from .hand_files import write_mesh_hand, write_urdf_gripper
+from .hand_files import write_light_hand, write_mesh_hand, write_urdf_gripper
 
 # The SDH's fingertip points and pad normals from the closed-form numpy model ogcp had before
 # MuJoCo became the one kinematic truth (its forward_kinematics), for configurations in its
@@ -214,3 +216,40 @@ def test_a_hand_whose_hinges_hardly_move_gets_a_warning_about_degrees(tmp_path, 
     model.write_text(model.read_text().replace('angle="radian" ', ""))
     with pytest.warns(HandModelWarning, match=r"moves more than 1\.7 degrees; MJCF reads angles in degrees unless"):
         HandKinematics(load_descriptor(descriptor))
+
+
+def test_a_closed_chain_gets_a_one_line_warning(tmp_path):
+    from ogcp.planner.hands.kinematics import HandModelWarning
+
+    source = resolve_hand("parallel_gripper")
+    strut = '<body name="strut" pos="0 0.03 0.01"><joint name="strut" axis="1 0 0"/><geom size="0.003"/></body>'
+    text = source.model_path.read_text().replace('<body name="left"', strut + '<body name="left"')
+    text = text.replace(
+        "</worldbody>", '</worldbody><equality><connect body1="strut" body2="left" anchor="0 0 0"/></equality>'
+    )
+    (tmp_path / "g.xml").write_text(text)
+    (tmp_path / "g.toml").write_text(source.path.read_text().replace('"parallel_gripper.xml"', '"g.xml"'))
+    with pytest.warns(HandModelWarning, match=r"closes kinematic loops with connect or weld equalities \(strut-left\)"):
+        HandKinematics(load_descriptor(tmp_path / "g.toml"))
+
+
+def test_a_finger_whose_joints_share_one_servo_gets_a_one_line_warning(tmp_path, recwarn):
+    from ogcp.planner.hands.kinematics import HandModelWarning
+
+    path = write_light_hand(tmp_path / "light", tendons=True)  # a tendon servo per distal joint: fully actuated
+    HandKinematics(load_descriptor(path))
+    assert not [w for w in recwarn if issubclass(w.category, HandModelWarning)]
+    model = path.parent / "light.xml"
+    shared = "".join(
+        f'<fixed name="t{k}"><joint joint="f{k}_a" coef="1"/><joint joint="f{k}_b" coef="1"/></fixed>' for k in range(3)
+    )
+    servos = "".join(f'<position tendon="t{k}" ctrlrange="-0.3 2.8"/>' for k in range(3))
+    text = re.sub(
+        r"<tendon>.*</actuator>",
+        f"<tendon>{shared}</tendon><actuator>{servos}</actuator>",
+        model.read_text(),
+        flags=re.DOTALL,
+    )
+    model.write_text(text)
+    with pytest.warns(HandModelWarning, match=r"f0 \(2 joints, f0_a, f0_b; 1 servo direction\)"):
+        HandKinematics(load_descriptor(path))
