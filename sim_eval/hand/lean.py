@@ -263,7 +263,7 @@ def _recompile(closed: HandScene, data: mujoco.MjData, welded: set[int]) -> tupl
         element = bodies.get(body)
         if element is None:
             raise _NotLean(f"body {body} is not in the scene's spec")
-        _weld_in_place(spec, element, model, data, body)
+        _weld_in_place(element, model, data, body)
         for joint in list(element.joints):
             spec.delete(joint)
     try:
@@ -283,9 +283,7 @@ def _static(model: mujoco.MjModel) -> set[int]:
     return {0} | {b for b in range(model.nbody) if model.body_mocapid[b] >= 0}
 
 
-def _weld_in_place(
-    spec: mujoco.MjSpec, element: mujoco.MjsBody, model: mujoco.MjModel, data: mujoco.MjData, body: int
-) -> None:
+def _weld_in_place(element: mujoco.MjsBody, model: mujoco.MjModel, data: mujoco.MjData, body: int) -> None:
     """Set a body's frame so that, without its joints, it sits where it settled relative to its parent.
 
     The compiled frame at the joints' reference is F · L (F: any frames around the body in the spec,
@@ -296,7 +294,7 @@ def _weld_in_place(
     motion = _compose(_invert(model.body_pos[body], model.body_quat[body]), settled)
     quat = np.asarray(
         mujoco.MjSpec.resolve_orientation(
-            degree=spec.compiler.degree, sequence=spec.compiler.eulerseq, orientation=element.alt
+            degree=element.compiler.degree, sequence=element.compiler.eulerseq, orientation=element.alt
         )
         if element.alt.type != mujoco.mjtOrientation.mjORIENTATION_QUAT
         else element.quat,

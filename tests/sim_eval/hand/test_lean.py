@@ -38,10 +38,19 @@ tip_radius = 0.004
 """
 
 
-def _three_jaws(folder: Path, coupled: bool = False) -> HandKinematics:
+#: The spare finger inside a frame, turned by Euler angles in the model's radians (a scene compiles in degrees).
+FRAMED_SPARE = (
+    '<frame pos="0.018 0 0.01" euler="0 0 0.5"><body name="spare" euler="0 0 -0.5"><joint name="spare" '
+    'axis="0 1 0" range="-0.5 0.5" damping="0.1"/><geom name="spare" type="box" pos="0.01 0 0" '
+    'size="0.01 0.004 0.004"/></body></frame>'
+)
+
+
+def _three_jaws(folder: Path, coupled: bool = False, framed: bool = False) -> HandKinematics:
     """The parallel gripper with a spare finger that the two-contact grasps leave open."""
     source = resolve_hand("parallel_gripper")
-    text = source.model_path.read_text().replace('<body name="left"', SPARE_BODY + '<body name="left"')
+    spare = FRAMED_SPARE if framed else SPARE_BODY
+    text = source.model_path.read_text().replace('<body name="left"', spare + '<body name="left"')
     if coupled:  # the spare follows the left jaw
         text = text.replace("</worldbody>", '</worldbody><equality><joint joint1="spare" joint2="left"/></equality>')
     (folder / "g.xml").write_text(text)
@@ -73,10 +82,11 @@ def _poses(model: mujoco.MjModel, state: np.ndarray) -> tuple[np.ndarray, np.nda
     return data.xpos.copy(), data.xquat.copy()
 
 
-def test_the_palm_and_an_idle_finger_are_welded_where_they_settled_and_the_pinch_holds_two_mu_f(tmp_path):
+@pytest.mark.parametrize("framed", [False, True])
+def test_the_palm_and_an_idle_finger_are_welded_where_they_settled_and_the_pinch_holds_two_mu_f(framed, tmp_path):
     """Along and across the jaws the lean pinch fails at 2 mu F; the full scene's weld lets the light palm turn."""
     settings = SimSettings()
-    closed, settled = _closed(_three_jaws(tmp_path), settings)
+    closed, settled = _closed(_three_jaws(tmp_path, framed=framed), settings)
     lean = lean_scene(closed, settled, _reach(settings))
     full = closed.scene.model
     assert lean.summary["lean"] is True
