@@ -113,7 +113,9 @@ def test_the_baselines_keep_the_time_limit_too(tmp_path, method):
     record = json.loads(path.read_text())
     _check_certificate(record, 60)
     if method == "hfts":  # its runs may finish in time; the A* optimum beside them cannot
-        assert status in (0, 3) and ("A* optimum: not proven in the time it had" in text or status == 3)
+        # On a loaded machine the runs take the whole second and the optimum gets no time at all.
+        assert status in (0, 3)
+        assert "A* optimum: not proven in the time it had" in text or "A* optimum" not in text
         assert "A* optimum: grasp" not in text
     else:
         assert status == 3 and record["status"] == "stopped" and record["bound"] == record["q_ows"]
