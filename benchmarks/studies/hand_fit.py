@@ -13,7 +13,8 @@ worst pad residual, grasps valid after closing, the median fidelity of the valid
 frequent reason of the invalid ones, seconds per hand grasp, and the tips' side: grasps valid
 with fingertips, how many of those the hand realised and held, the tips' median fidelity, and the
 median ratio of the hand trial (fit, close, protocol) to the fingertip trial of the grasps valid
-with both, timed in the same run; after the table, each case's median seconds per phase.
+with both, timed in the same run; after the table, each case's median seconds per phase, and the
+median share of its valid grasps' ramps that held past their end (censored: left out of the fidelity).
 With ``--out``, every grasp's row goes to ``DIR/hand_fit.json`` and the tips-versus-hand figure
 (:func:`ogcp.benchmarks.plots.tips_hand.fig_tips_vs_hand`) to ``DIR/tips_vs_hand.{pdf,png}``.
 """
@@ -45,6 +46,12 @@ CONVEX = ("box", "sphere")
 def _fidelity(result: Any) -> float | None:
     value = float(result.median_fidelity)
     return value if result.valid and np.isfinite(value) else None
+
+
+def _censored(result: Any) -> float | None:
+    """The share of a valid grasp's ramps that held past their end: left out of its fidelity."""
+    censored = np.asarray(result.censored, dtype=bool)
+    return float(censored.mean()) if result.valid and censored.size else None
 
 
 def run_case(hand: str, name: str, m: int, args: argparse.Namespace) -> dict[str, Any]:
@@ -88,10 +95,12 @@ def run_case(hand: str, name: str, m: int, args: argparse.Namespace) -> dict[str
                 "worst_residual": max(held.hand["fit_residuals"]) if fit.get("realised") else None,
                 "hand_valid": bool(held.valid),
                 "hand_fidelity": _fidelity(held),
+                "hand_censored": _censored(held),
                 "invalid_because": reason,
                 "hand_seconds": seconds,
                 "tips_valid": bool(tips.valid),
                 "tips_fidelity": _fidelity(tips),
+                "tips_censored": _censored(tips),
                 "tips_seconds": tips_seconds,
                 "hand_phase_seconds": held.hand.get("seconds", {}),
             }
@@ -108,10 +117,12 @@ _UNPLANNED: dict[str, Any] = {
     "worst_residual": None,
     "hand_valid": False,
     "hand_fidelity": None,
+    "hand_censored": None,
     "invalid_because": None,
     "hand_seconds": None,
     "tips_valid": False,
     "tips_fidelity": None,
+    "tips_censored": None,
     "tips_seconds": None,
     "hand_phase_seconds": {},
 }
@@ -154,6 +165,23 @@ def phase_line(case: dict[str, Any]) -> str:
     return f"{case['hand']}, {case['object']}: median s of the grasps valid with both: {parts}; tips {_median([r['tips_seconds'] for r in rows], 1)}"
 
 
+def censored_line(case: dict[str, Any]) -> str:
+    """How much of the fidelity's ground its medians stand on: the share of ramps that held past their end.
+
+    A direction that holds past ``ramp_extent`` times its prediction is censored and left out of
+    the grasp's median fidelity, which then flatters a prediction that runs low.
+    """
+    shares = {}
+    for side in ("hand", "tips"):
+        values = [r.get(f"{side}_censored") for r in case["rows"] if r.get(f"{side}_valid")]
+        share = _median([v for v in values if v is not None], 0, 100.0)
+        shares[side] = share if share == "-" else f"{share} %"
+    return (
+        f"{case['hand']}, {case['object']}: censored ramps (held past their end, left out of the fidelity), "
+        f"median share over the valid grasps: hand {shares['hand']}, tips {shares['tips']}"
+    )
+
+
 HEADER = (
     "| hand, object, m | accepted (seed 0) | planned grasps realised | median worst residual [mm] | valid when closed "
     "| median fidelity | invalid because | s per grasp | valid with tips | of those: realised, held "
@@ -184,6 +212,8 @@ def main(argv: list[str] | None = None) -> None:
         print(table_row(cases[-1]), flush=True)
     for case in cases:
         print(phase_line(case))
+    for case in cases:
+        print(censored_line(case))
     if args.out is not None:
         from ogcp.benchmarks.plots.style import save_figure
         from ogcp.benchmarks.plots.tips_hand import fig_tips_vs_hand
