@@ -26,6 +26,7 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
+from ogcp.sim_eval.hand.mount import in_subtree
 from ogcp.sim_eval.hand.scene import HandScene
 from ogcp.sim_eval.protocols.phases import FULL_STATE, Settled
 from ogcp.sim_eval.scene.grasp_scene import GraspScene
@@ -141,7 +142,7 @@ def _welded_bodies(closed: HandScene, data: mujoco.MjData, clearance: float) -> 
             if mujoco.mj_geomDistance(model, data, int(geom), int(part), clearance, None) < clearance:
                 busy.add(int(model.geom_bodyid[geom]))
                 break
-    in_hand = {b for b in range(model.nbody) if _below(model, b, hand.mount)}
+    in_hand = {b for b in range(model.nbody) if in_subtree(model, b, hand.mount)}
     moving = set()
     for body in busy:  # a busy body's joints, and those of every body between it and the palm
         while body != hand.mount and body in in_hand:
@@ -149,14 +150,6 @@ def _welded_bodies(closed: HandScene, data: mujoco.MjData, clearance: float) -> 
             body = int(model.body_parentid[body])
     welded = {b for b in in_hand if model.body_jntnum[b] > 0 and b not in moving}
     return _uncoupled(model, welded)
-
-
-def _below(model: mujoco.MjModel, body: int, root: int) -> bool:
-    while body > 0:
-        if body == root:
-            return True
-        body = int(model.body_parentid[body])
-    return False
 
 
 def _uncoupled(model: mujoco.MjModel, welded: set[int]) -> set[int]:

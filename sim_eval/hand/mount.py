@@ -77,6 +77,13 @@ def attach_hand(spec: mujoco.MjSpec, kinematics: HandKinematics, free: bool = Fa
     return mount
 
 
+def in_subtree(model: mujoco.MjModel, body: int, root: int) -> bool:
+    """Whether ``body`` is ``root`` or below it in the body tree."""
+    while body > 0 and body != root:
+        body = int(model.body_parentid[body])
+    return body == root
+
+
 def _wxyz(rotation: NDArray[np.float64]) -> NDArray[np.float64]:
     x, y, z, w = Rotation.from_matrix(rotation).as_quat()
     return np.array([w, x, y, z])

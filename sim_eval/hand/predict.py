@@ -32,7 +32,7 @@ from numpy.typing import NDArray
 from scipy.optimize import linprog
 
 from ogcp.planner.grasp.wrench import cone_edges, contact_wrenches
-from ogcp.sim_eval.hand.mount import MountedHand
+from ogcp.sim_eval.hand.mount import MountedHand, in_subtree
 
 _MOVABLE = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
 #: A joint this close to a limit rests on it [rad or m] (past it too: MuJoCo's limits are soft).
@@ -254,14 +254,11 @@ def hand_statics(
 
 def hand_joints(model: mujoco.MjModel, hand: MountedHand) -> list[int]:
     """Every hinge and slide joint of the hand (its subtree below the mount), in model order."""
-    joints = []
-    for j in range(model.njnt):
-        body = int(model.jnt_bodyid[j])
-        while body not in (0, hand.mount):
-            body = int(model.body_parentid[body])
-        if body == hand.mount and int(model.jnt_type[j]) in _MOVABLE:
-            joints.append(j)
-    return joints
+    return [
+        j
+        for j in range(model.njnt)
+        if in_subtree(model, int(model.jnt_bodyid[j]), hand.mount) and int(model.jnt_type[j]) in _MOVABLE
+    ]
 
 
 def limit_reactions(model: mujoco.MjModel, data: mujoco.MjData, hand: MountedHand) -> NDArray[np.float64]:
@@ -361,13 +358,6 @@ class ServoTravel:
                     rows.append(row)
                     limits.append(travel / math.sqrt(3.0) + sign * float(moves[axis] @ settled))
         return cls(np.array(rows).reshape(-1, size), np.array(limits))
-
-
-def _below(model: mujoco.MjModel, body: int, ancestor: int) -> bool:
-    """Whether ``body`` is ``ancestor`` or in its subtree."""
-    while body > 0 and body != ancestor:
-        body = int(model.body_parentid[body])
-    return body == ancestor
 
 
 def equality_rows(model: mujoco.MjModel, hand: MountedHand, dofs: NDArray[np.intp]) -> NDArray[np.float64]:
