@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 
 import trimesh
@@ -169,3 +170,20 @@ def write_light_hand(folder: Path, tendons: bool = False) -> Path:
     path = folder / "light.toml"
     path.write_text(LIGHT_DESCRIPTOR.format(fingers=entries))
     return path
+
+
+def write_gripper_variant(
+    folder: Path, edit_model: Callable[[str], str], edit_descriptor: Callable[[str], str] = lambda text: text
+) -> Path:
+    """The built-in parallel gripper with its MJCF (and optionally its descriptor) edited, in ``folder``.
+
+    Returns:
+        The descriptor's path (``g.toml``, beside ``g.xml``).
+    """
+    from ogcp.planner.hands import resolve_hand
+
+    source = resolve_hand("parallel_gripper")
+    (folder / "g.xml").write_text(edit_model(source.model_path.read_text()))
+    descriptor = source.path.read_text().replace('"parallel_gripper.xml"', '"g.xml"')
+    (folder / "g.toml").write_text(edit_descriptor(descriptor))
+    return folder / "g.toml"

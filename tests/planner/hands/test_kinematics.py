@@ -10,7 +10,7 @@ import pytest
 from ogcp.planner.hands import HandKinematics, load_descriptor, resolve_hand
 from ogcp.planner.infra import OgcpError
 
-from .hand_files import write_light_hand, write_mesh_hand, write_urdf_gripper
+from .hand_files import write_gripper_variant, write_light_hand, write_mesh_hand, write_urdf_gripper
 
 # The SDH's fingertip points and pad normals from the closed-form numpy model ogcp had before
 # MuJoCo became the one kinematic truth (its forward_kinematics), for configurations in its
@@ -221,16 +221,14 @@ def test_a_hand_whose_hinges_hardly_move_gets_a_warning_about_degrees(tmp_path, 
 def test_a_closed_chain_gets_a_one_line_warning(tmp_path):
     from ogcp.planner.hands.kinematics import HandModelWarning
 
-    source = resolve_hand("parallel_gripper")
     strut = '<body name="strut" pos="0 0.03 0.01"><joint name="strut" axis="1 0 0"/><geom size="0.003"/></body>'
-    text = source.model_path.read_text().replace('<body name="left"', strut + '<body name="left"')
-    text = text.replace(
-        "</worldbody>", '</worldbody><equality><connect body1="strut" body2="left" anchor="0 0 0"/></equality>'
+    loop = '</worldbody><equality><connect body1="strut" body2="left" anchor="0 0 0"/></equality>'
+    descriptor = write_gripper_variant(
+        tmp_path,
+        lambda text: text.replace('<body name="left"', strut + '<body name="left"').replace("</worldbody>", loop),
     )
-    (tmp_path / "g.xml").write_text(text)
-    (tmp_path / "g.toml").write_text(source.path.read_text().replace('"parallel_gripper.xml"', '"g.xml"'))
     with pytest.warns(HandModelWarning, match=r"closes kinematic loops with connect or weld equalities \(strut-left\)"):
-        HandKinematics(load_descriptor(tmp_path / "g.toml"))
+        HandKinematics(load_descriptor(descriptor))
 
 
 def test_a_finger_whose_joints_share_one_servo_gets_a_one_line_warning(tmp_path, recwarn):

@@ -14,7 +14,7 @@ from ogcp.sim_eval.hand.scene import PREGRASP_RADII, build_hand_scene, close_han
 from ogcp.sim_eval.protocols.phases import ramp_trials, settle
 from ogcp.sim_eval.scene.body import object_inertia
 from ogcp.sim_eval.settings import SimSettings
-from tests.planner.hands.hand_files import write_urdf_gripper
+from tests.planner.hands.hand_files import write_gripper_variant, write_urdf_gripper
 
 MU = 0.5
 BOX = trimesh.creation.box(extents=(0.04, 0.03, 0.04))
@@ -71,18 +71,14 @@ def test_the_hand_starts_in_the_pregrasp_touching_nothing_with_pads_backed_off()
 
 
 def test_a_wrist_between_root_and_palm_is_welded_at_its_reference(tmp_path):
-    source = resolve_hand("parallel_gripper")
-    model = (
-        source.model_path.read_text()
-        .replace(
+    descriptor = write_gripper_variant(
+        tmp_path,
+        lambda text: text.replace(
             '<body name="palm">',
             '<body name="arm"><joint name="wrist" axis="1 0 0"/><geom size="0.01"/><body name="palm">',
-        )
-        .replace("    </body>\n  </worldbody>", "    </body>\n    </body>\n  </worldbody>")
+        ).replace("    </body>\n  </worldbody>", "    </body>\n    </body>\n  </worldbody>"),
     )
-    (tmp_path / "g.xml").write_text(model)
-    (tmp_path / "g.toml").write_text(source.path.read_text().replace('"parallel_gripper.xml"', '"g.xml"'))
-    kinematics = HandKinematics(load_descriptor(tmp_path / "g.toml"))
+    kinematics = HandKinematics(load_descriptor(descriptor))
     assert kinematics.idle_joints() == ("wrist",)
     settings = SimSettings()
     _, closed = _closed(kinematics, settings)
@@ -93,25 +89,24 @@ def test_a_wrist_between_root_and_palm_is_welded_at_its_reference(tmp_path):
 
 def test_a_driven_wrist_is_welded_too_with_its_actuator(tmp_path):
     """The Shadow hand's wrist and a floating base's joints carry servos: the palm is still held rigidly."""
-    source = resolve_hand("parallel_gripper")
-    model = (
-        source.model_path.read_text()
-        .replace(
-            '<body name="palm">',
-            '<body name="base"><joint name="lift" type="slide" axis="0 0 1" range="-1 1"/><geom size="0.01"/>'
-            '<body name="arm"><joint name="wrist" axis="1 0 0" range="-1 1"/><geom size="0.01"/><body name="palm">',
-        )
-        .replace("    </body>\n  </worldbody>", "    </body>\n    </body>\n    </body>\n  </worldbody>")
-        .replace(
-            "</worldbody>",
-            '</worldbody><actuator><position name="lift_servo" joint="lift" kp="100"/>'
-            '<position name="wrist_servo" joint="wrist" kp="10"/></actuator>'
-            '<sensor><jointpos name="wrist_angle" joint="wrist"/></sensor>',
-        )
+    descriptor = write_gripper_variant(
+        tmp_path,
+        lambda text: (
+            text.replace(
+                '<body name="palm">',
+                '<body name="base"><joint name="lift" type="slide" axis="0 0 1" range="-1 1"/><geom size="0.01"/>'
+                '<body name="arm"><joint name="wrist" axis="1 0 0" range="-1 1"/><geom size="0.01"/><body name="palm">',
+            )
+            .replace("    </body>\n  </worldbody>", "    </body>\n    </body>\n    </body>\n  </worldbody>")
+            .replace(
+                "</worldbody>",
+                '</worldbody><actuator><position name="lift_servo" joint="lift" kp="100"/>'
+                '<position name="wrist_servo" joint="wrist" kp="10"/></actuator>'
+                '<sensor><jointpos name="wrist_angle" joint="wrist"/></sensor>',
+            )
+        ),
     )
-    (tmp_path / "g.xml").write_text(model)
-    (tmp_path / "g.toml").write_text(source.path.read_text().replace('"parallel_gripper.xml"', '"g.xml"'))
-    kinematics = HandKinematics(load_descriptor(tmp_path / "g.toml"))
+    kinematics = HandKinematics(load_descriptor(descriptor))
     assert set(kinematics.idle_joints()) == {"lift", "wrist"}
     settings = SimSettings()
     _, closed = _closed(kinematics, settings)

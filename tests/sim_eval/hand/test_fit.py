@@ -11,7 +11,7 @@ from ogcp.planner.hands import HandKinematics, load_descriptor, resolve_hand
 from ogcp.planner.infra import OgcpError
 from ogcp.sim_eval.hand.fit import LINK_TOLERANCE, RESIDUAL_TOLERANCE, fit_hand, rigid_fit
 from ogcp.sim_eval.hand.fit_scene import FitScene
-from tests.planner.hands.hand_files import write_mesh_hand
+from tests.planner.hands.hand_files import write_gripper_variant, write_mesh_hand
 
 
 @pytest.fixture(scope="module")
@@ -98,15 +98,9 @@ def test_bad_inputs_are_refused(sdh):
 
 
 def test_a_floating_hand_model_is_mounted_without_its_free_joint(tmp_path):
-    model = (
-        resolve_hand("parallel_gripper")
-        .model_path.read_text()
-        .replace('<body name="palm">', '<body name="palm" pos="0.1 0.2 0.3"><freejoint name="float"/>')
-    )
-    (tmp_path / "g.xml").write_text(model)
-    text = resolve_hand("parallel_gripper").path.read_text().replace('"parallel_gripper.xml"', '"g.xml"')
-    (tmp_path / "g.toml").write_text(text)
-    gripper = HandKinematics(load_descriptor(tmp_path / "g.toml"))
+    floating = '<body name="palm" pos="0.1 0.2 0.3"><freejoint name="float"/>'
+    descriptor = write_gripper_variant(tmp_path, lambda text: text.replace('<body name="palm">', floating))
+    gripper = HandKinematics(load_descriptor(descriptor))
     points = np.array([[0.0, 0.015, 0.0], [0.0, -0.015, 0.0]])
     normals = np.array([[0.0, -1.0, 0.0], [0.0, 1.0, 0.0]])
     fit = fit_hand(FitScene(gripper), [0, 1], points, normals)

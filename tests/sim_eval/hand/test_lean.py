@@ -18,6 +18,7 @@ from ogcp.sim_eval.hand.scene import HandScene, build_hand_scene, close_hand
 from ogcp.sim_eval.protocols.phases import FULL_STATE, Settled, ramp_trials, settle
 from ogcp.sim_eval.scene.body import object_inertia
 from ogcp.sim_eval.settings import SimSettings
+from tests.planner.hands.hand_files import write_gripper_variant
 
 MU = 0.5
 BOX = trimesh.creation.box(extents=(0.04, 0.03, 0.04))
@@ -48,15 +49,20 @@ FRAMED_SPARE = (
 
 def _three_jaws(folder: Path, coupled: bool = False, framed: bool = False) -> HandKinematics:
     """The parallel gripper with a spare finger that the two-contact grasps leave open."""
-    source = resolve_hand("parallel_gripper")
     spare = FRAMED_SPARE if framed else SPARE_BODY
-    text = source.model_path.read_text().replace('<body name="left"', spare + '<body name="left"')
-    if coupled:  # the spare follows the left jaw
-        text = text.replace("</worldbody>", '</worldbody><equality><joint joint1="spare" joint2="left"/></equality>')
-    (folder / "g.xml").write_text(text)
-    descriptor = source.path.read_text().replace('"parallel_gripper.xml"', '"g.xml"')
-    (folder / "g.toml").write_text(descriptor.replace("[actuation]", SPARE_FINGER + "\n[actuation]"))
-    return HandKinematics(load_descriptor(folder / "g.toml"))
+
+    def edit(text: str) -> str:
+        text = text.replace('<body name="left"', spare + '<body name="left"')
+        if coupled:  # the spare follows the left jaw
+            text = text.replace(
+                "</worldbody>", '</worldbody><equality><joint joint1="spare" joint2="left"/></equality>'
+            )
+        return text
+
+    descriptor = write_gripper_variant(
+        folder, edit, lambda text: text.replace("[actuation]", SPARE_FINGER + "\n[actuation]")
+    )
+    return HandKinematics(load_descriptor(descriptor))
 
 
 def _closed(kinematics: HandKinematics, settings: SimSettings) -> tuple[HandScene, Settled]:
