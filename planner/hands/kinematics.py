@@ -17,6 +17,7 @@ order [rad or m]; joints outside the fingers (a wrist above the palm) stay at th
 from __future__ import annotations
 
 import copy
+import dataclasses
 import warnings
 from dataclasses import dataclass
 
@@ -26,7 +27,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from ogcp.planner.hands.descriptor import HandDescriptor
 from ogcp.planner.hands.loading import compile_spec, hand_spec
-from ogcp.planner.hands.model_checks import closed_chains, underactuated_fingers
+from ogcp.planner.hands.loops import CLOSED_GAP, CLOSING_STEPS, Loop, find_loops, loop_system
+from ogcp.planner.hands.model_checks import underactuated_fingers
 from ogcp.planner.infra.errors import OgcpError
 
 #: Range given to a hinge that has none [rad].
@@ -51,7 +53,7 @@ class Finger:
     Attributes:
         name: The descriptor's name.
         body: Id of the tip body.
-        joints: Ids of the joints that move it (model order).
+        joints: Ids of the joints that move it, and of the loops it closes (model order).
         offset: Pad contact point in the tip body's frame, shape (3,) [m].
         normal: Unit pad normal in the tip body's frame, shape (3,).
         radius: Pad rounding [m].
@@ -63,6 +65,31 @@ class Finger:
     offset: NDArray[np.float64]
     normal: NDArray[np.float64]
     radius: float
+
+
+def _attached(model: mujoco.MjModel, palm: int) -> list[int]:
+    """The bodies of the subtree below the world that holds the palm."""
+    root = palm
+    while model.body_parentid[root] != 0:
+        root = int(model.body_parentid[root])
+    below = [root]
+    for body in range(root + 1, model.nbody):  # MuJoCo numbers a subtree's bodies after its root
+        if int(model.body_parentid[body]) in below:
+            below.append(body)
+    return below
+
+
+def _with_loops(finger: Finger, loops: tuple[Loop, ...]) -> Finger:
+    """The finger with the joints of every loop that its joints belong to (and of loops those close)."""
+    joints = set(finger.joints)
+    grown = True
+    while grown:
+        grown = False
+        for loop in loops:
+            if joints & set(loop.joints) and not set(loop.joints) <= joints:
+                joints |= set(loop.joints)
+                grown = True
+    return dataclasses.replace(finger, joints=tuple(sorted(joints)))
 
 
 class HandKinematics:
@@ -85,7 +112,8 @@ class HandKinematics:
                 geom.name = f"ogcp_geom{k}"
         plain = compile_spec(descriptor, spec)
         self.palm = self._body(plain, descriptor.palm, "palm")
-        self.fingers = tuple(self._finger(plain, k) for k in range(len(descriptor.fingers)))
+        self.loops = find_loops(plain, _attached(plain, self.palm))  # a scene holds the palm's root subtree
+        self.fingers = tuple(_with_loops(self._finger(plain, k), self.loops) for k in range(len(descriptor.fingers)))
         joint_ids = sorted({j for finger in self.fingers for j in finger.joints})
         self.servos = self._add_servos(spec, plain, joint_ids)
         self.model = compile_spec(descriptor, spec)
@@ -98,7 +126,7 @@ class HandKinematics:
         self._warn_if_degrees_meant_radians()
         self.reference_qpos = self._reference_qpos()
         self._couplings = self._joint_couplings()
-        self._warn_if_not_an_open_chain()
+        self._warn_if_underactuated()
         self.independent = np.array(
             [k for k, j in enumerate(joint_ids) if j not in {dep for dep, _, _ in self._couplings}], dtype=np.intp
         )
@@ -126,24 +154,15 @@ class HandKinematics:
                 stacklevel=3,
             )
 
-    def _warn_if_not_an_open_chain(self) -> None:
-        """Warn about closed chains and underactuated fingers (:mod:`ogcp.planner.hands.model_checks`)."""
-        where = f"{self.descriptor.path}: the {self.descriptor.name} hand"
-        loops = closed_chains(self.model, set(range(1, self.model.nbody)))
-        if loops:
-            warnings.warn(
-                f"{where} closes kinematic loops with connect or weld equalities ({', '.join(loops)}); ogcp "
-                "samples, fits and closes it as an open chain, so its grasps may not be realised as planned",
-                HandModelWarning,
-                stacklevel=3,
-            )
+    def _warn_if_underactuated(self) -> None:
+        """Warn about fingers whose servos cannot hold every fitted pose (:mod:`ogcp.planner.hands.model_checks`)."""
         fingers = [(finger.name, finger.joints) for finger in self.fingers]
-        dependent = {joint for joint, _, _ in self._couplings}
-        short = underactuated_fingers(self.model, self.reference_qpos, fingers, dependent)
+        short = underactuated_fingers(self.model, self.reference_qpos, fingers)
         if short:
             warnings.warn(
-                f"{where} has fingers with fewer servo directions than joints: {'; '.join(short)}; the fit poses "
-                "every joint, and the servos may not hold that pose when the hand closes",
+                f"{self.descriptor.path}: the {self.descriptor.name} hand has fingers with fewer servo directions "
+                f"than directions of motion: {'; '.join(short)}; the fit poses every joint, and the servos may not "
+                "hold that pose when the hand closes",
                 HandModelWarning,
                 stacklevel=3,
             )
@@ -218,10 +237,12 @@ class HandKinematics:
                 for w in range(start, start + count):
                     if model.wrap_type[w] == mujoco.mjtWrap.mjWRAP_JOINT:
                         driven.add(int(model.wrap_objid[w]))
+        # A loop passes its driven joint's drive on to its other joints: a servo there would fight it.
+        passive = {j for loop in self.loops if set(loop.joints) & driven for j in loop.joints} - driven
         actuation = self.descriptor.actuation
         added = []
         for j in joints:
-            if j in driven or self._follows(model, j, driven | set(joints)):
+            if j in driven or j in passive or self._follows(model, j, driven | set(joints)):
                 continue
             name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j)
             inertia = float(model.dof_M0[model.jnt_dofadr[j]])
@@ -404,7 +425,33 @@ class HandKinematics:
         q = np.tile(self.reference(), (count, 1))
         low, high = self.limits[self.independent, 0], self.limits[self.independent, 1]
         q[:, self.independent] = rng.uniform(low, high, size=(count, len(self.independent)))
-        return self.complete(q)
+        return self.close_loops(self.complete(q))
+
+    def close_loops(self, angles: ArrayLike) -> NDArray[np.float64]:
+        """Configurations (n, J) moved, loop joints only, to where every closed loop is closed (Gauss-Newton).
+
+        Each step is the least-norm change of the loops' joints that closes their gaps to first order,
+        within the limits. A configuration whose loops cannot close within the limits keeps its
+        smallest gap; a hand without loops is returned as given.
+        """
+        q = np.array(angles, dtype=float, ndmin=2)
+        if not self.loops:
+            return q
+        looped = {j for loop in self.loops for j in loop.joints}
+        columns = np.array([k for k, j in enumerate(self.joint_ids) if int(j) in looped], dtype=np.intp)
+        dofs = self.model.jnt_dofadr[self.joint_ids[columns]]
+        low, high = self.limits[columns, 0], self.limits[columns, 1]
+        for row in q:
+            for _ in range(CLOSING_STEPS):
+                self._pose(self.model, self.data, row)
+                mujoco.mj_comPos(self.model, self.data)
+                gaps, jacobian = loop_system(self.model, self.data, self.loops)
+                if np.abs(gaps).max(initial=0.0) < CLOSED_GAP:
+                    break
+                step = np.linalg.lstsq(jacobian[:, dofs], -gaps, rcond=None)[0]
+                row[columns] = np.clip(row[columns] + step, low, high)
+                row[:] = self.complete(row)
+        return q
 
     def qpos(self, angles: ArrayLike) -> NDArray[np.float64]:
         """The full qpos of a configuration (other joints at their reference), shape (nq,)."""

@@ -1,17 +1,11 @@
-"""Hand models that compile but that ogcp's hand kinematics do not describe faithfully.
+"""Hand models that compile but whose servos cannot hold every pose ogcp fits.
 
-ogcp samples, fits and closes a hand as an open chain of joints, each finger posed joint by joint,
-each joint held by the servo that drives it or by a joint equality that ties it to a driver. Two
-kinds of hands break that picture, and each gets a one-line
-:class:`~ogcp.planner.hands.kinematics.HandModelWarning` rather than results that silently mean
-something else:
-
-- **closed chains**: MJCF ``connect`` or ``weld`` equalities between the hand's own bodies (a
-  four-bar linkage, as in Menagerie's Robotiq 2F-85). The sampled and fitted poses ignore the loop,
-  which MuJoCo enforces when the hand closes.
-- **underactuated fingers**: fewer independent servo directions on a finger's joints than the
-  joints an equality does not already tie (one tendon servo over two joints, as Menagerie's Shadow
-  hand drives J1 and J2). The fit poses every joint; one servo cannot hold that pose.
+ogcp fits every joint of a finger (and of the loops it closes) and holds the fit with the hand's
+servos. A finger whose servos span fewer directions than the finger can move in, once its joint
+equalities and closed loops are respected, is *underactuated* (one tendon servo over two joints,
+as Menagerie's Shadow hand drives J1 and J2): the fit poses every joint, and one servo cannot hold
+that pose. It gets a one-line :class:`~ogcp.planner.hands.kinematics.HandModelWarning` rather than
+results that silently mean something else.
 """
 
 from __future__ import annotations
@@ -22,61 +16,72 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-#: Singular values of a finger's servo moment arms below this fraction of the largest count as none.
+#: Singular values below this fraction of the largest count as none (servo arms, equality rows).
 RANK_TOLERANCE = 1e-6
 
 
-def closed_chains(model: mujoco.MjModel, hand_bodies: set[int]) -> list[str]:
-    """The active ``connect`` and ``weld`` equalities between two bodies of the hand, as "a-b" names.
+def equality_jacobian(model: mujoco.MjModel, data: mujoco.MjData) -> NDArray[np.float64]:
+    """The active equalities' constraint rows at a state (``mj_fwdPosition`` done), shape (n_eq, nv).
 
-    Args:
-        model: The hand's compiled model.
-        hand_bodies: Ids of the hand's bodies (the palm's tree).
+    MuJoCo's own rows: a joint equality, a tendon equality, and a ``connect`` or ``weld`` that closes a
+    loop.
     """
-    loops = []
-    for e in range(model.neq):
-        kind = int(model.eq_type[e])
-        if kind not in (int(mujoco.mjtEq.mjEQ_CONNECT), int(mujoco.mjtEq.mjEQ_WELD)) or not model.eq_active0[e]:
-            continue
-        first, second = int(model.eq_obj1id[e]), int(model.eq_obj2id[e])
-        if int(model.eq_objtype[e]) == int(mujoco.mjtObj.mjOBJ_SITE):
-            first, second = int(model.site_bodyid[first]), int(model.site_bodyid[max(second, 0)])
-        if first in hand_bodies and max(second, 0) in hand_bodies:
-            names = [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, b) or f"body {b}" for b in (first, second)]
-            loops.append("-".join(names))
-    return loops
+    rows = np.flatnonzero(data.efc_type[: data.nefc] == mujoco.mjtConstraint.mjCNSTR_EQUALITY)
+    if not len(rows):
+        return np.zeros((0, model.nv))
+    if mujoco.mj_isSparse(model):
+        dense = np.zeros((data.nefc, model.nv))
+        mujoco.mju_sparse2dense(dense, data.efc_J, data.efc_J_rownnz, data.efc_J_rowadr, data.efc_J_colind)
+    else:
+        dense = np.asarray(data.efc_J[: data.nefc * model.nv]).reshape(data.nefc, model.nv)
+    return np.asarray(dense[rows], dtype=float)
+
+
+def _rank(matrix: NDArray[np.float64]) -> int:
+    if not matrix.size:
+        return 0
+    values = np.linalg.svd(matrix, compute_uv=False)
+    return int(np.sum(values > RANK_TOLERANCE * values.max())) if values.max() > 0 else 0
 
 
 def underactuated_fingers(
     model: mujoco.MjModel,
     qpos: NDArray[np.float64],
     fingers: Sequence[tuple[str, Sequence[int]]],
-    dependent: set[int],
 ) -> list[str]:
-    """The fingers with fewer independent servo directions than free joints, described in words.
+    """The fingers with fewer independent servo directions than directions of motion, in words.
+
+    A finger moves in the directions its joints' equalities leave free (the null space of their
+    rows over its joints); its servos must span their moment arms over those directions.
 
     Args:
         model: The hand's compiled model, servos added.
-        qpos: A configuration to take the moment arms at (the reference), shape (nq,).
+        qpos: A configuration to take the moment arms and equality rows at (the reference), shape (nq,).
         fingers: Each finger's name and joint ids.
-        dependent: Joints an active joint equality ties to a driver (they need no servo).
     """
     data = mujoco.MjData(model)
     data.qpos[:] = qpos
     mujoco.mj_fwdPosition(model, data)
     moments = np.zeros((model.nu, model.nv))
     mujoco.mju_sparse2dense(moments, data.actuator_moment, data.moment_rownnz, data.moment_rowadr, data.moment_colind)
+    equalities = equality_jacobian(model, data)
     found = []
     for name, joints in fingers:
-        free = [j for j in joints if j not in dependent]
-        if not free:
+        dofs = model.jnt_dofadr[list(joints)]
+        tied = equalities[:, dofs]
+        tied = tied[np.abs(tied).max(axis=1) > 0] if len(tied) else tied
+        _, values, basis = np.linalg.svd(tied) if len(tied) else (None, np.zeros(0), np.eye(len(dofs)))
+        kept = int(np.sum(values > RANK_TOLERANCE * values.max())) if values.size and values.max() > 0 else 0
+        free = basis[kept:].T  # (J, directions): the motions the equalities allow
+        if not free.shape[1]:
             continue
-        arms = moments[:, model.jnt_dofadr[free]]
-        values = np.linalg.svd(arms, compute_uv=False) if arms.size else np.zeros(0)
-        rank = int(np.sum(values > RANK_TOLERANCE * values.max())) if values.size and values.max() > 0 else 0
-        if rank < len(free):
+        rank = _rank(moments[:, dofs] @ free)
+        if rank < free.shape[1]:
             joint_names = ", ".join(
-                mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j) or f"joint {j}" for j in free
+                mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j) or f"joint {j}" for j in joints
             )
-            found.append(f"{name} ({len(free)} joints, {joint_names}; {rank} servo direction{'s' * (rank != 1)})")
+            found.append(
+                f"{name} ({len(joints)} joints, {joint_names}; {free.shape[1]} direction{'s' * (free.shape[1] != 1)} "
+                f"of motion, {rank} servo direction{'s' * (rank != 1)})"
+            )
     return found

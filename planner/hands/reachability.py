@@ -49,7 +49,7 @@ from ogcp.planner.infra.cache import cache_dir as default_cache_dir
 from ogcp.planner.infra.cache import read_entry, write_entry
 from ogcp.planner.infra.errors import OgcpError
 
-MODEL_VERSION = 3
+MODEL_VERSION = 4
 #: Configurations posed per progress step while sampling.
 _SAMPLE_BATCH = 2_000
 #: The sampled model's file in its cache entry: ``joint_names`` (J,), ``angles`` (N, J),

@@ -32,13 +32,17 @@ from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
 from ogcp.planner.infra.errors import OgcpError
-from ogcp.sim_eval.hand.fit_jacobian import PoseJacobian
+from ogcp.sim_eval.hand.fit_jacobian import PoseJacobian, loop_gaps, loop_rows
 from ogcp.sim_eval.hand.fit_scene import FitScene
 
 #: Largest pad residual of a realised fit [m].
 RESIDUAL_TOLERANCE = 1e-3
 #: Deepest a link may be inside the object or another link [m].
 LINK_TOLERANCE = 1e-3
+#: Widest a closed loop (a four-bar's connect) may stay open in a realised fit [m].
+LOOP_TOLERANCE = 1e-4
+#: Weight of a loop's gap, relative to a pad residual: the linkage closes before the pads reach.
+LOOP_WEIGHT = 10.0
 #: Weight of the pad-normal term, as a multiple of the pad's rounding radius [m per unit difference].
 NORMAL_WEIGHT_RADII = 0.5
 #: Weight of keeping the other fingers where they started [m per rad].
@@ -70,6 +74,7 @@ class HandFit:
         self_penetration: Deepest any link is inside another [m], the hand's designed overlaps apart.
         worst_link: The link (geom name) of the deepest penetration, or None.
         finger_names: The chosen fingers' names.
+        loop_gap: Widest gap of the hand's closed loops [m] (0 for an open-chain hand).
     """
 
     joint_angles: NDArray[np.float64]
@@ -82,12 +87,14 @@ class HandFit:
     self_penetration: float
     worst_link: str | None
     finger_names: tuple[str, ...]
+    loop_gap: float = 0.0
 
     @property
     def realised(self) -> bool:
-        """Every pad within :data:`RESIDUAL_TOLERANCE` and no link beyond :data:`LINK_TOLERANCE`."""
+        """Every pad within :data:`RESIDUAL_TOLERANCE`, no link beyond :data:`LINK_TOLERANCE`, every loop closed."""
         deepest = max(self.penetration, self.self_penetration)
-        return bool(self.residuals.max() <= RESIDUAL_TOLERANCE and deepest <= LINK_TOLERANCE)
+        closed = self.loop_gap <= LOOP_TOLERANCE
+        return bool(self.residuals.max() <= RESIDUAL_TOLERANCE and deepest <= LINK_TOLERANCE and closed)
 
     @property
     def reason(self) -> str | None:
@@ -102,6 +109,8 @@ class HandFit:
             return f"link {self.worst_link} is {self.penetration * 1e3:.2f} mm inside the object"
         if self.self_penetration > LINK_TOLERANCE:
             return f"link {self.worst_link} is {self.self_penetration * 1e3:.2f} mm inside another link"
+        if self.loop_gap > LOOP_TOLERANCE:
+            return f"a closed loop of the hand stays {self.loop_gap * 1e3:.2f} mm open (tolerance {LOOP_TOLERANCE * 1e3:g} mm)"
         return None
 
     def to_dict(self, joint_names: Sequence[str]) -> dict[str, Any]:
@@ -119,6 +128,7 @@ class HandFit:
             "penetration": self.penetration,
             "self_penetration": self.self_penetration,
             "worst_link": self.worst_link,
+            "loop_gap": self.loop_gap,
         }
 
 
@@ -165,6 +175,7 @@ class _Targets:
         deepest = np.maximum(into_object, into_hand)
         worst = scene.hand.geom_names[int(np.argmax(deepest))] if deepest.max() > 0 else None
         cosine = np.clip(np.einsum("ij,ij->i", pad, self.normals), -1.0, 1.0)
+        gaps = loop_gaps(scene).reshape(-1, 3)
         return HandFit(
             joint_angles=pose[0],
             rotation=pose[1],
@@ -176,6 +187,7 @@ class _Targets:
             self_penetration=float(into_hand.max()),
             worst_link=worst,
             finger_names=tuple(scene.kinematics.fingers[f].name for f in self.fingers),
+            loop_gap=float(np.linalg.norm(gaps, axis=1).max(initial=0.0)),
         )
 
 
@@ -241,7 +253,9 @@ def fit_hand(
     pose_variables = 6 if palm is None else 0
     # The fingers that touch nothing move only to clear a collision: without the collision terms
     # they are not variables (a five-finger hand fitted by three fingers has half the columns).
-    moving = np.array([k for k in free if int(kin.joint_ids[k]) in chosen_joints], dtype=np.intp)
+    # A closed loop's joints move too, wherever it is: its gap must close.
+    looped = {j for loop in kin.loops for j in loop.joints}
+    moving = np.array([k for k in free if int(kin.joint_ids[k]) in chosen_joints | looped], dtype=np.intp)
 
     def unpack(x: NDArray[np.float64], variables: NDArray[np.intp]) -> Pose:
         angles = q0.copy()
@@ -258,6 +272,7 @@ def fit_hand(
             (centre - aim.targets).ravel(),
             weight * (pad - inward).ravel(),
             REST_WEIGHT * (pose[0][resting] - q0[resting]),
+            LOOP_WEIGHT * loop_gaps(scene),
         ]
         if collide:
             into_object, into_hand = scene.depths()
@@ -277,7 +292,7 @@ def fit_hand(
             normal_rows.append(weight * turned)
         rest = np.zeros((len(resting), jac.columns))
         rest[:, : len(variables)] = REST_WEIGHT * kin.complete_derivative(pose[0])[np.ix_(resting, variables)]
-        rows = [*centre_rows, *normal_rows, rest]
+        rows = [*centre_rows, *normal_rows, rest, LOOP_WEIGHT * loop_rows(scene, jac)]
         if collide:
             rows.append(COLLISION_WEIGHT * _depth_rows(scene, jac))
         return np.vstack(rows)

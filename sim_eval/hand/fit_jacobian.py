@@ -14,6 +14,7 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
+from ogcp.planner.hands.loops import LOOP_LEVER, loop_gap
 from ogcp.sim_eval.hand.fit_scene import FitScene
 
 
@@ -85,3 +86,30 @@ class PoseJacobian:
         moved = np.hstack([moved, -skew(point - translation) @ left, np.eye(3)])
         turn = np.hstack([turn, -skew(direction) @ left, np.zeros((3, 3))])
         return moved, turn
+
+    def turn(self, body: int) -> NDArray[np.float64]:
+        """d (rotation of a hand body) / d unknowns, as a rotation vector in the world, shape (3, columns)."""
+        _, turned = self._joint_parts(self.scene.data.xpos[body], body)
+        if self._palm is None:
+            return turned
+        return np.hstack([turned, self._palm[0], np.zeros((3, 3))])
+
+
+def loop_gaps(scene: FitScene) -> NDArray[np.float64]:
+    """Every closed loop's gap in the posed scene, turns as :data:`LOOP_LEVER` lengths, shape (R,) [m]."""
+    parts = [np.zeros(0)]
+    for loop in scene.hand.loops:
+        gap, _, _ = loop_gap(scene.model, scene.data, loop)
+        parts.append(np.concatenate([gap[:3], LOOP_LEVER * gap[3:]]))
+    return np.concatenate(parts)
+
+
+def loop_rows(scene: FitScene, jac: PoseJacobian) -> NDArray[np.float64]:
+    """d :func:`loop_gaps` / d unknowns, shape (R, columns)."""
+    rows = [np.zeros((0, jac.columns))]
+    for loop in scene.hand.loops:
+        _, first, second = loop_gap(scene.model, scene.data, loop)
+        rows.append(jac.point(first, loop.bodies[0]) - jac.point(second, loop.bodies[1]))
+        if loop.rows == 6:  # the turning gap moves with the difference of the bodies' turns
+            rows.append(LOOP_LEVER * (jac.turn(loop.bodies[0]) - jac.turn(loop.bodies[1])))
+    return np.vstack(rows)

@@ -11,6 +11,7 @@ palm at a pose is then placing the mount: a body pose in a fit, a mocap weld in 
 from __future__ import annotations
 
 import copy
+import dataclasses
 from dataclasses import dataclass
 
 import mujoco
@@ -19,6 +20,7 @@ from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
 from ogcp.planner.hands.kinematics import HandKinematics
+from ogcp.planner.hands.loops import Loop
 
 PREFIX = "hand/"
 MOUNT = "ogcp_mount"
@@ -101,6 +103,7 @@ class MountedHand:
         geoms: Scene geom id of each of the hand's solid geoms, shape (G,).
         geom_names: Their names in the hand's model.
         finger_of_geom: Finger index of each solid geom, or F for the palm and shared bodies, shape (G,).
+        loops: The hand's closed loops, their bodies as scene ids.
     """
 
     kinematics: HandKinematics
@@ -110,6 +113,7 @@ class MountedHand:
     geoms: NDArray[np.intp]
     geom_names: tuple[str, ...]
     finger_of_geom: NDArray[np.intp]
+    loops: tuple[Loop, ...] = ()
 
     @classmethod
     def find(cls, model: mujoco.MjModel, kinematics: HandKinematics) -> MountedHand:
@@ -130,6 +134,13 @@ class MountedHand:
         solid = kinematics.solid_geoms
         names = tuple(kinematics.geom_name(int(g)) for g in solid)
         groups = kinematics.body_groups[hand.geom_bodyid[solid]]
+
+        def body(b: int) -> int:
+            return scene_id(mujoco.mjtObj.mjOBJ_BODY, mujoco.mj_id2name(hand, mujoco.mjtObj.mjOBJ_BODY, b))
+
+        loops = tuple(
+            dataclasses.replace(loop, bodies=(body(loop.bodies[0]), body(loop.bodies[1]))) for loop in kinematics.loops
+        )
         return cls(
             kinematics,
             int(mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, MOUNT)),
@@ -138,6 +149,7 @@ class MountedHand:
             np.array([scene_id(mujoco.mjtObj.mjOBJ_GEOM, n) for n in names], dtype=np.intp),
             names,
             np.asarray(groups, dtype=np.intp),
+            loops,
         )
 
     def pads_world(self, data: mujoco.MjData) -> tuple[NDArray[np.float64], NDArray[np.float64]]:

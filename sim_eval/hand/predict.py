@@ -11,8 +11,9 @@ planner's scaled wrench space ``[force, torque / rho]``) is resisted when
     lambda >= 0,  u_lo <= u <= u_hi
 
 where ``J_k`` is the translational Jacobian of p_k on b_k over the hand's joints, ``M`` the
-actuators' moment arms with their force ranges ``u``, and ``E`` the rows of the hand's joint
-equalities (a coupled joint is held by its driver), with free multipliers ``eta``. The palm is
+actuators' moment arms with their force ranges ``u``, and ``E`` the rows of the hand's
+equalities, MuJoCo's own constraint rows (a coupled joint is held by its driver, a closed loop's
+passive joints by the loop), with free multipliers ``eta``. The palm is
 held by the weld and takes whatever it must. A position servo is also a spring: within the
 trial's failure distance it changes its force only so much (:class:`ServoTravel` adds those rows
 around the settled forces), so a soft servo's hand is predicted to resist what it builds before
@@ -37,6 +38,8 @@ from ogcp.sim_eval.hand.mount import MountedHand, in_subtree
 _MOVABLE = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
 #: A joint this close to a limit rests on it [rad or m] (past it too: MuJoCo's limits are soft).
 AT_LIMIT = 1e-3
+#: An equality row whose largest entry over the hand's joints is below this (relative) touches none.
+EQUALITY_FLOOR = 1e-9
 
 
 @dataclass(frozen=True, eq=False)
@@ -237,7 +240,7 @@ def hand_statics(
         block = along[:, dofs].T @ forces[k].T + about[:, dofs].T @ twists[k].T
         contact_torques[:, k * per : (k + 1) * per] = block
     moment = actuator_moments(model, data)[:, dofs].T  # (J, nu)
-    couplings = equality_rows(model, hand, dofs)  # (n_eq, J)
+    couplings = equality_rows(model, data, dofs)  # (n_eq, J)
     limits = limit_reactions(model, data, hand) if stops else np.zeros((len(dofs), 0))  # (J, L)
     low, high = force_ranges(model)
     extra = model.nu + len(couplings) + limits.shape[1]
@@ -360,19 +363,22 @@ class ServoTravel:
         return cls(np.array(rows).reshape(-1, size), np.array(limits))
 
 
-def equality_rows(model: mujoco.MjModel, hand: MountedHand, dofs: NDArray[np.intp]) -> NDArray[np.float64]:
-    """Linearised active joint equalities among the hand's joints, shape (n_eq, J)."""
-    index = {int(d): i for i, d in enumerate(dofs)}
-    rows = []
-    for e in range(model.neq):
-        if model.eq_type[e] != mujoco.mjtEq.mjEQ_JOINT or not model.eq_active0[e]:
-            continue
-        dependent, driver = int(model.eq_obj1id[e]), int(model.eq_obj2id[e])
-        row = np.zeros(len(dofs))
-        if int(model.jnt_dofadr[dependent]) not in index:
-            continue
-        row[index[int(model.jnt_dofadr[dependent])]] = 1.0
-        if driver >= 0 and int(model.jnt_dofadr[driver]) in index:
-            row[index[int(model.jnt_dofadr[driver])]] = -float(model.eq_data[e, 1])  # the slope at the reference
-        rows.append(row)
-    return np.array(rows).reshape(-1, len(dofs))
+def equality_rows(model: mujoco.MjModel, data: mujoco.MjData, dofs: NDArray[np.intp]) -> NDArray[np.float64]:
+    """The active equalities' constraint Jacobian over the hand's ``dofs``, shape (n_eq, J).
+
+    MuJoCo's own rows at the state (``mj_fwdPosition`` done): a joint equality ties a coupled joint
+    to its driver at its slope there, and a ``connect`` or ``weld`` between two of the hand's
+    bodies closes a loop (a four-bar linkage), so the loop's passive joints are held by the loop's
+    force. Rows that touch none of the hand's joints (the palm's mocap weld) are left out.
+    """
+    rows = np.flatnonzero(data.efc_type[: data.nefc] == mujoco.mjtConstraint.mjCNSTR_EQUALITY)
+    if not len(rows):
+        return np.zeros((0, len(dofs)))
+    if mujoco.mj_isSparse(model):
+        jacobian = np.zeros((data.nefc, model.nv))
+        mujoco.mju_sparse2dense(jacobian, data.efc_J, data.efc_J_rownnz, data.efc_J_rowadr, data.efc_J_colind)
+    else:
+        jacobian = data.efc_J[: data.nefc * model.nv].reshape(data.nefc, model.nv)
+    block = jacobian[np.ix_(rows, np.asarray(dofs, dtype=np.intp))]
+    scale = np.abs(block).max(axis=1) if block.size else np.zeros(len(rows))
+    return np.asarray(block[scale > EQUALITY_FLOOR * max(1.0, float(scale.max(initial=0.0)))], dtype=float)

@@ -35,7 +35,7 @@ from ogcp.sim_eval.hand.fit import HandFit, fit_hand, measure_pose
 from ogcp.sim_eval.hand.fit_scene import FitScene
 from ogcp.sim_eval.hand.given import GIVEN_MAX_PENETRATION, GivenPose, given_scene
 from ogcp.sim_eval.hand.lean import failure_reach, lean_scene
-from ogcp.sim_eval.hand.pads import pad_gate
+from ogcp.sim_eval.hand.pads import pad_gate, pad_off_contact
 from ogcp.sim_eval.hand.predict import hand_resistance, realised_contacts
 from ogcp.sim_eval.hand.scene import SQUEEZE_LADDER, HandScene, build_hand_scene, close_hand, squeezed
 from ogcp.sim_eval.hand.squeeze import balanced_grip
@@ -326,7 +326,8 @@ def simulate_hand_grasp(
         travel=settings.move_threshold,  # the servos' stiffness bounds what they resist within it
         torsion=closed.scene.torsion,  # soft fingers twist, as simulated
     )
-    pads_ok, extra = pad_gate(closed, realised, outcome.points, model)
+    pads = pad_gate(closed, realised, outcome.points, data)
+    pads_ok, extra = pads.on, pads.extra
     gates = dict(settled.gates)
     gates["pads_on_contacts"] = pads_ok.tolist()
     gates["valid"] = bool(gates["valid"] and pads_ok.all())
@@ -362,6 +363,12 @@ def simulate_hand_grasp(
         }
     )
     reasons = list(gate_failures(settled.gates, settled.normal_forces, settings))
+    lost = {r.finger for r in reasons if r.gate == "contact"}  # a finger that presses nothing is said once
+    reasons += [
+        pad_off_contact(int(k), float(pads.off[k]), float(pads.reach[k]))
+        for k in np.flatnonzero(~pads_ok)
+        if int(k) not in lost
+    ]
     if reasons and not achieved.force_closure:  # the first thing to change, as for fingertips
         reasons.insert(0, not_in_force_closure(achieved.q1))
     return GraspSimResult(

@@ -25,7 +25,7 @@ class GateFailure:
     """One failed validity gate of a settled grasp.
 
     Attributes:
-        gate: ``penetration``, ``contact``, ``creep`` or ``diverged``; ``force_closure`` explains
+        gate: ``penetration``, ``contact``, ``creep``, ``diverged`` or (a hand's) ``pad``; ``force_closure`` explains
             the others when the grasp the tips realize is not in force closure.
         finger: Position of the finger in the grasp, None for a gate of the whole grasp.
         value: What was measured (unit in ``unit``).
@@ -51,6 +51,9 @@ class GateFailure:
             what = f"{who} does not press on the object after settling ({self.value:.2g} N, needs > {self.limit:.2g} N)"
         elif self.gate == "creep":
             what = f"the object drifts {_um(self.value)} at the end of settling (limit {_um(self.limit)})"
+        elif self.gate == "pad":
+            where = "presses nothing" if not np.isfinite(self.value) else f"settled {_mm(self.value)} from its contact"
+            what = f"{who}'s pad {where} (limit {_mm(self.limit)})"
         elif self.gate == "force_closure":
             what = f"the realized contacts are not in force closure (Q1 {self.value:.2g})"
         else:

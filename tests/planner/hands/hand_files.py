@@ -187,3 +187,75 @@ def write_gripper_variant(
     descriptor = source.path.read_text().replace('"parallel_gripper.xml"', '"g.xml"')
     (folder / "g.toml").write_text(edit_descriptor(descriptor))
     return folder / "g.toml"
+
+
+#: A parallelogram gripper: each jaw hangs from a driven link and a passive follower link whose
+#: tip a ``connect`` pins to the jaw, so the jaw stays upright (a four-bar loop, as the Robotiq
+#: 2F-85 closes its own). Only the drivers have servos; the loops are made stiff, as a real
+#: model's must be for light links under a squeeze.
+FOURBAR = """<mujoco model="fourbar">
+  <compiler angle="radian" autolimits="true"/>
+  <worldbody>
+    <body name="palm">
+      <geom name="palm" type="box" size="0.015 0.06 0.008" pos="0 0 -0.008"/>
+      {jaws}
+    </body>
+  </worldbody>
+  <contact>
+    <exclude body1="l_pad" body2="l_follower"/>
+    <exclude body1="r_pad" body2="r_follower"/>
+  </contact>
+  <equality>
+    <connect body1="l_follower" body2="l_pad" anchor="0 0 0.05" solref="0.004 1" solimp="0.9999 0.9999 0.001"/>
+    <connect body1="r_follower" body2="r_pad" anchor="0 0 0.05" solref="0.004 1" solimp="0.9999 0.9999 0.001"/>
+  </equality>
+  <actuator>
+    <position name="l" joint="l_driver" kp="5" forcerange="-1 1"/>
+    <position name="r" joint="r_driver" kp="5" forcerange="-1 1"/>
+  </actuator>
+</mujoco>
+"""
+JAW = """<body name="{s}_driver" pos="0 {y} 0">
+        <joint name="{s}_driver" axis="{ax} 0 0" range="-0.3 0.9" damping="0.05"/>
+        <geom type="capsule" fromto="0 0 0 0 0 0.05" size="0.004"/>
+        <body name="{s}_pad" pos="0 0 0.05">
+          <joint name="{s}_pad" axis="{ax} 0 0" range="-1 1" damping="0.01"/>
+          <geom name="{s}_pad" type="box" pos="0 {inward} 0.02" size="0.01 0.004 0.025"/>
+        </body>
+      </body>
+      <body name="{s}_follower" pos="0 {y2} 0">
+        <joint name="{s}_follower" axis="{ax} 0 0" range="-0.3 0.9" damping="0.01"/>
+        <geom type="capsule" fromto="0 0 0 0 0 0.05" size="0.003"/>
+      </body>"""
+FOURBAR_DESCRIPTOR = """schema = "ogcp.hand/1"
+name = "fourbar"
+mjcf = "fourbar.xml"
+palm = "palm"
+
+[[fingers]]
+name = "left"
+tip_body = "l_pad"
+tip_offset = [0.0, -0.010, 0.03]
+pad_normal = [0.0, -1.0, 0.0]
+tip_radius = 0.004
+
+[[fingers]]
+name = "right"
+tip_body = "r_pad"
+tip_offset = [0.0, 0.010, 0.03]
+pad_normal = [0.0, 1.0, 0.0]
+tip_radius = 0.004
+"""
+
+
+def write_fourbar_gripper(folder: Path) -> Path:
+    """The parallelogram (four-bar) gripper and its descriptor in ``folder``; returns the descriptor's path."""
+    folder.mkdir(parents=True, exist_ok=True)
+    jaws = "\n      ".join(
+        JAW.format(s=s, y=sign * 0.03, y2=sign * 0.045, ax=sign, inward=-sign * 0.006)
+        for s, sign in (("l", 1), ("r", -1))
+    )
+    (folder / "fourbar.xml").write_text(FOURBAR.format(jaws=jaws))
+    path = folder / "fourbar.toml"
+    path.write_text(FOURBAR_DESCRIPTOR)
+    return path

@@ -10,7 +10,13 @@ import pytest
 from ogcp.planner.hands import HandKinematics, load_descriptor, resolve_hand
 from ogcp.planner.infra import OgcpError
 
-from .hand_files import write_gripper_variant, write_light_hand, write_mesh_hand, write_urdf_gripper
+from .hand_files import (
+    write_fourbar_gripper,
+    write_gripper_variant,
+    write_light_hand,
+    write_mesh_hand,
+    write_urdf_gripper,
+)
 
 # The SDH's fingertip points and pad normals from the closed-form numpy model ogcp had before
 # MuJoCo became the one kinematic truth (its forward_kinematics), for configurations in its
@@ -218,17 +224,37 @@ def test_a_hand_whose_hinges_hardly_move_gets_a_warning_about_degrees(tmp_path, 
         HandKinematics(load_descriptor(descriptor))
 
 
-def test_a_closed_chain_gets_a_one_line_warning(tmp_path):
+def test_a_four_bar_loop_joins_its_finger_and_its_passive_joints_get_no_servo(tmp_path, recwarn):
     from ogcp.planner.hands.kinematics import HandModelWarning
 
+    kinematics = HandKinematics(load_descriptor(write_fourbar_gripper(tmp_path)))
+    assert [loop.name for loop in kinematics.loops] == ["l_follower-l_pad", "r_follower-r_pad"]
+    names = [
+        [kinematics.joint_names[list(kinematics.joint_ids).index(j)] for j in f.joints] for f in kinematics.fingers
+    ]
+    assert names == [["l_driver", "l_pad", "l_follower"], ["r_driver", "r_pad", "r_follower"]]
+    # The drivers' servos move the jaws through the loops: none is added, none is idle, no warning.
+    assert kinematics.servos == () and kinematics.idle_joints() == ()
+    assert not [w for w in recwarn if issubclass(w.category, HandModelWarning)]
+    # Sampled configurations have their loops closed: a parallelogram, the follower turned with the
+    # driver and the jaw back by as much, so the sampled jaws stay upright.
+    angles = dict(zip(kinematics.joint_names, kinematics.sample(300, seed=2).T, strict=True))
+    for side in "lr":
+        np.testing.assert_allclose(angles[f"{side}_follower"], angles[f"{side}_driver"], atol=1e-5)
+        np.testing.assert_allclose(angles[f"{side}_pad"], -angles[f"{side}_driver"], atol=1e-5)
+    assert np.ptp(angles["l_driver"]) > 1.0  # and spread over the driver's range
+
+
+def test_a_loop_no_actuator_drives_gets_the_descriptors_servos(tmp_path):
     strut = '<body name="strut" pos="0 0.03 0.01"><joint name="strut" axis="1 0 0"/><geom size="0.003"/></body>'
     loop = '</worldbody><equality><connect body1="strut" body2="left" anchor="0 0 0"/></equality>'
     descriptor = write_gripper_variant(
         tmp_path,
         lambda text: text.replace('<body name="left"', strut + '<body name="left"').replace("</worldbody>", loop),
     )
-    with pytest.warns(HandModelWarning, match=r"closes kinematic loops with connect or weld equalities \(strut-left\)"):
-        HandKinematics(load_descriptor(descriptor))
+    kinematics = HandKinematics(load_descriptor(descriptor))
+    assert [loop.name for loop in kinematics.loops] == ["strut-left"]
+    assert "strut" in kinematics.joint_names and set(kinematics.servos) == {"left", "right", "strut"}
 
 
 def test_a_finger_whose_joints_share_one_servo_gets_a_one_line_warning(tmp_path, recwarn):
@@ -249,5 +275,7 @@ def test_a_finger_whose_joints_share_one_servo_gets_a_one_line_warning(tmp_path,
         flags=re.DOTALL,
     )
     model.write_text(text)
-    with pytest.warns(HandModelWarning, match=r"f0 \(2 joints, f0_a, f0_b; 1 servo direction\)"):
+    with pytest.warns(
+        HandModelWarning, match=r"f0 \(2 joints, f0_a, f0_b; 2 directions of motion, 1 servo direction\)"
+    ):
         HandKinematics(load_descriptor(path))
