@@ -27,7 +27,14 @@ from numpy.typing import ArrayLike, NDArray
 
 from ogcp.planner.hands.descriptor import HandDescriptor
 from ogcp.planner.hands.loading import compile_spec, hand_spec
-from ogcp.planner.hands.loops import CLOSED_GAP, CLOSING_STEPS, Loop, find_loops, loop_system
+from ogcp.planner.hands.loops import (
+    CLOSED_GAP,
+    CLOSING_STEPS,
+    attached_bodies,
+    find_loops,
+    joints_with_loops,
+    loop_system,
+)
 from ogcp.planner.hands.model_checks import underactuated_fingers
 from ogcp.planner.infra.errors import OgcpError
 
@@ -67,31 +74,6 @@ class Finger:
     radius: float
 
 
-def _attached(model: mujoco.MjModel, palm: int) -> list[int]:
-    """The bodies of the subtree below the world that holds the palm."""
-    root = palm
-    while model.body_parentid[root] != 0:
-        root = int(model.body_parentid[root])
-    below = [root]
-    for body in range(root + 1, model.nbody):  # MuJoCo numbers a subtree's bodies after its root
-        if int(model.body_parentid[body]) in below:
-            below.append(body)
-    return below
-
-
-def _with_loops(finger: Finger, loops: tuple[Loop, ...]) -> Finger:
-    """The finger with the joints of every loop that its joints belong to (and of loops those close)."""
-    joints = set(finger.joints)
-    grown = True
-    while grown:
-        grown = False
-        for loop in loops:
-            if joints & set(loop.joints) and not set(loop.joints) <= joints:
-                joints |= set(loop.joints)
-                grown = True
-    return dataclasses.replace(finger, joints=tuple(sorted(joints)))
-
-
 class HandKinematics:
     """A hand's compiled model and its fingertip kinematics in the palm frame.
 
@@ -112,8 +94,9 @@ class HandKinematics:
                 geom.name = f"ogcp_geom{k}"
         plain = compile_spec(descriptor, spec)
         self.palm = self._body(plain, descriptor.palm, "palm")
-        self.loops = find_loops(plain, _attached(plain, self.palm))  # a scene holds the palm's root subtree
-        self.fingers = tuple(_with_loops(self._finger(plain, k), self.loops) for k in range(len(descriptor.fingers)))
+        self.loops = find_loops(plain, attached_bodies(plain, self.palm))  # a scene holds the palm's root subtree
+        fingers = [self._finger(plain, k) for k in range(len(descriptor.fingers))]
+        self.fingers = tuple(dataclasses.replace(f, joints=joints_with_loops(f.joints, self.loops)) for f in fingers)
         joint_ids = sorted({j for finger in self.fingers for j in finger.joints})
         self.servos = self._add_servos(spec, plain, joint_ids)
         self.model = compile_spec(descriptor, spec)

@@ -54,6 +54,31 @@ class Loop:
         return 3 if self.kind == int(mujoco.mjtEq.mjEQ_CONNECT) else 6
 
 
+def attached_bodies(model: mujoco.MjModel, palm: int) -> list[int]:
+    """The bodies of the subtree below the world that holds the palm (what a scene attaches)."""
+    root = palm
+    while model.body_parentid[root] != 0:
+        root = int(model.body_parentid[root])
+    below = [root]
+    for body in range(root + 1, model.nbody):  # MuJoCo numbers a subtree's bodies after its root
+        if int(model.body_parentid[body]) in below:
+            below.append(body)
+    return below
+
+
+def joints_with_loops(joints: Iterable[int], loops: Iterable[Loop]) -> tuple[int, ...]:
+    """``joints`` with those of every loop they belong to (and of the loops those close), sorted."""
+    grown, loops = set(joints), tuple(loops)
+    changed = True
+    while changed:
+        changed = False
+        for loop in loops:
+            if grown & set(loop.joints) and not set(loop.joints) <= grown:
+                grown |= set(loop.joints)
+                changed = True
+    return tuple(sorted(grown))
+
+
 def find_loops(model: mujoco.MjModel, hand_bodies: Iterable[int]) -> tuple[Loop, ...]:
     """The active ``connect`` and ``weld`` equalities between two of ``hand_bodies`` (compiled model).
 
@@ -146,14 +171,42 @@ def loop_gap(
     gap = points[0] - points[1]
     if loop.kind == int(mujoco.mjtEq.mjEQ_CONNECT):
         return gap, points[0], points[1]
-    wanted = data.xmat[loop.bodies[0]].reshape(3, 3) @ loop.turn
-    actual = data.xmat[loop.bodies[1]].reshape(3, 3)
-    error = wanted @ actual.T  # the turn that would bring body 2 where the loop wants it
+    error = _turn_error(data, loop)
     quat = np.empty(4)
     mujoco.mju_mat2Quat(quat, error.ravel())
     turn = np.empty(3)
     mujoco.mju_quat2Vel(turn, quat, 1.0)
     return np.concatenate([gap, turn]), points[0], points[1]
+
+
+def _turn_error(data: mujoco.MjData, loop: Loop) -> NDArray[np.float64]:
+    """The turn (3, 3) that would bring a weld's body 2 where the loop wants it, in the world."""
+    wanted = data.xmat[loop.bodies[0]].reshape(3, 3) @ loop.turn
+    return np.asarray(wanted @ data.xmat[loop.bodies[1]].reshape(3, 3).T, dtype=float)
+
+
+def turn_rates(data: mujoco.MjData, loop: Loop) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """``(A1, A2)`` with d(turning gap) = A1 w1 - A2 w2 for the bodies' world angular velocities w, each (3, 3).
+
+    The gap is the rotation vector of ``E = R1 T R2^T``, which turns at ``w1 - E w2`` in the
+    world; its rotation vector changes by the inverse left Jacobian of SO(3) of that.
+    """
+    error = _turn_error(data, loop)
+    quat = np.empty(4)
+    mujoco.mju_mat2Quat(quat, error.ravel())
+    turn = np.empty(3)
+    mujoco.mju_quat2Vel(turn, quat, 1.0)
+    inverse = _so3_left_jacobian_inverse(turn)
+    return inverse, inverse @ error
+
+
+def _so3_left_jacobian_inverse(vector: NDArray[np.float64]) -> NDArray[np.float64]:
+    angle = float(np.linalg.norm(vector))
+    cross = np.array([[0.0, -vector[2], vector[1]], [vector[2], 0.0, -vector[0]], [-vector[1], vector[0], 0.0]])
+    if angle < 1e-8:
+        return np.eye(3) - 0.5 * cross
+    factor = 1.0 / angle**2 - (1.0 + np.cos(angle)) / (2.0 * angle * np.sin(angle))
+    return np.asarray(np.eye(3) - 0.5 * cross + factor * (cross @ cross), dtype=float)
 
 
 def loop_system(
@@ -176,6 +229,7 @@ def loop_system(
         gaps.append(gap[:3])
         rows.append(first - second)
         if loop.rows == 6:
+            one_rate, two_rate = turn_rates(data, loop)
             gaps.append(LOOP_LEVER * gap[3:])
-            rows.append(LOOP_LEVER * (turn_first - turn_second))
+            rows.append(LOOP_LEVER * (one_rate @ turn_first - two_rate @ turn_second))
     return np.concatenate(gaps), np.vstack(rows)

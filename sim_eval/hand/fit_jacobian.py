@@ -14,7 +14,7 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from ogcp.planner.hands.loops import LOOP_LEVER, loop_gap
+from ogcp.planner.hands.loops import LOOP_LEVER, loop_gap, turn_rates
 from ogcp.sim_eval.hand.fit_scene import FitScene
 
 
@@ -110,6 +110,7 @@ def loop_rows(scene: FitScene, jac: PoseJacobian) -> NDArray[np.float64]:
     for loop in scene.hand.loops:
         _, first, second = loop_gap(scene.model, scene.data, loop)
         rows.append(jac.point(first, loop.bodies[0]) - jac.point(second, loop.bodies[1]))
-        if loop.rows == 6:  # the turning gap moves with the difference of the bodies' turns
-            rows.append(LOOP_LEVER * (jac.turn(loop.bodies[0]) - jac.turn(loop.bodies[1])))
+        if loop.rows == 6:  # the turning gap moves with the bodies' turns
+            one_rate, two_rate = turn_rates(scene.data, loop)
+            rows.append(LOOP_LEVER * (one_rate @ jac.turn(loop.bodies[0]) - two_rate @ jac.turn(loop.bodies[1])))
     return np.vstack(rows)

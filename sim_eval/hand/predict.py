@@ -14,10 +14,12 @@ where ``J_k`` is the translational Jacobian of p_k on b_k over the hand's joints
 actuators' moment arms with their force ranges ``u``, and ``E`` the rows of the hand's
 equalities, MuJoCo's own constraint rows (a coupled joint is held by its driver, a closed loop's
 passive joints by the loop), with free multipliers ``eta``. The palm is
-held by the weld and takes whatever it must. A position servo is also a spring: within the
-trial's failure distance it changes its force only so much (:class:`ServoTravel` adds those rows
-around the settled forces), so a soft servo's hand is predicted to resist what it builds before
-the object has moved that far. The prediction is the largest ``s``: a linear program per
+held by the weld and takes whatever it must. A position servo is also a spring, and so is a
+MuJoCo joint limit: within the trial's failure distance a servo changes its force only so much
+(:class:`~ogcp.sim_eval.hand.travel.ServoTravel` adds those rows around the settled forces) and a
+resting stop pushes only so hard (:func:`~ogcp.sim_eval.hand.travel.stop_reach` bounds its
+reaction), so a soft hand is predicted to resist what it builds before the object has moved that
+far. The prediction is the largest ``s``: a linear program per
 direction, the same meaning of "fidelity" as for fingertips.
 """
 
@@ -34,6 +36,7 @@ from scipy.optimize import linprog
 
 from ogcp.planner.grasp.wrench import cone_edges, contact_wrenches
 from ogcp.sim_eval.hand.mount import MountedHand, in_subtree
+from ogcp.sim_eval.hand.travel import ServoTravel, stop_reach
 
 _MOVABLE = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
 #: A joint this close to a limit rests on it [rad or m] (past it too: MuJoCo's limits are soft).
@@ -122,8 +125,9 @@ def hand_resistance(
         directions: Unit disturbance directions, shape (D, 6).
         travel: How far the object may move before the trial counts a failure [m]: the
             position servos' force changes are limited by the joint travel that moves each
-            contact at most this far (:class:`ServoTravel`). None: the force ranges alone (a
-            perfectly stiff servo).
+            contact at most this far (:class:`~ogcp.sim_eval.hand.travel.ServoTravel`), and the
+            resting stops' reactions by their softness (:func:`~ogcp.sim_eval.hand.travel.stop_reach`).
+            None: the force ranges alone and rigid stops.
         torsion: Torsional friction of soft-finger contacts [m]; 0: hard point contacts.
 
     Returns:
@@ -146,10 +150,16 @@ def hand_resistance(
     )
     first = len(contacts.points) * statics.edges  # the actuator forces' columns
     size = statics.size + 1
-    limits = ServoTravel.of(model, data, contacts, travel, first, size) if travel is not None else None
+    points, bodies = contacts.points, contacts.bodies
+    limits = ServoTravel.of(model, data, points, bodies, travel, first, size) if travel is not None else None
     cost = np.zeros(size)
     cost[-1] = -1.0
     bounds = [*statics.bounds, (0.0, None)]
+    if travel is not None:  # a resting stop pushes only as far as its softness lets it within the travel
+        stops = resting_limits(model, data, hand)
+        for k, (joint, _) in enumerate(stops):  # the stops' reactions are the statics' last variables
+            reach = stop_reach(model, data, points, bodies, travel, joint)
+            bounds[statics.size - len(stops) + k] = (0.0, None if math.isinf(reach) else reach)
     bottom = np.hstack([statics.hand_balance, np.zeros((len(statics.hand_balance), 1))])
     resistance = np.full(len(directions), math.nan)
     for i, d in enumerate(directions):
@@ -264,22 +274,32 @@ def hand_joints(model: mujoco.MjModel, hand: MountedHand) -> list[int]:
     ]
 
 
-def limit_reactions(model: mujoco.MjModel, data: mujoco.MjData, hand: MountedHand) -> NDArray[np.float64]:
-    """Torques the joint limits can supply at a pose: one column per joint resting on a limit, shape (J, L).
+def resting_limits(model: mujoco.MjModel, data: mujoco.MjData, hand: MountedHand) -> list[tuple[int, float]]:
+    """The hand's joints resting on a limit at a state, as (joint id, side): +1 on its lower limit, -1 on its upper.
 
-    A joint within :data:`AT_LIMIT` [rad or m] of a limit is held there by it: the limit pushes back
-    with any torque >= 0 along its column (away from the limit), and the servo's target is clamped there.
+    A joint within :data:`AT_LIMIT` [rad or m] of a limit (or past it: MuJoCo's limits are soft) rests on it.
     """
-    joints = hand_joints(model, hand)
-    columns = []
-    for row, joint in enumerate(joints):
+    resting = []
+    for joint in hand_joints(model, hand):
         if not model.jnt_limited[joint]:
             continue
         value = data.qpos[model.jnt_qposadr[joint]]
         low, high = model.jnt_range[joint]
         for side, near in ((1.0, value - low <= AT_LIMIT), (-1.0, high - value <= AT_LIMIT)):
             if near:
-                columns.append(side * np.eye(len(joints))[row])
+                resting.append((joint, side))
+    return resting
+
+
+def limit_reactions(model: mujoco.MjModel, data: mujoco.MjData, hand: MountedHand) -> NDArray[np.float64]:
+    """Torques the joint limits can supply at a pose: one column per resting limit (:func:`resting_limits`), shape (J, L).
+
+    The limit pushes back with any torque >= 0 along its column (away from the limit); within the
+    trial's failure distance only as much as its softness lets it (:func:`~ogcp.sim_eval.hand.travel.stop_reach`).
+    """
+    joints = hand_joints(model, hand)
+    row = {joint: k for k, joint in enumerate(joints)}
+    columns = [side * np.eye(len(joints))[row[joint]] for joint, side in resting_limits(model, data, hand)]
     return np.array(columns).T if columns else np.zeros((len(joints), 0))
 
 
@@ -301,66 +321,6 @@ def force_ranges(model: mujoco.MjModel) -> tuple[list[float | None], list[float 
             low.append(None)
             high.append(None)
     return low, high
-
-
-@dataclass(frozen=True, eq=False)
-class ServoTravel:
-    """Linear rows that keep the servos' force changes within what the failure distance allows.
-
-    A position servo on joint j (force ``kp (ctrl - gear q)``) changes its force by
-    ``du_j = kp_j |gear_j| dq_j`` when its joint turns by dq_j. A hand body b that carries contacts
-    then moves its contact point p_b by ``J_b dq`` (J_b its translational Jacobian over those
-    joints), and the trial counts a failure once the object, which the contacts hold, moved
-    ``travel``. So to first order the force changes satisfy, per body and axis,
-
-        -h  <=  sum_j J_b[:, j] (u_j - u0_j) / (kp_j |gear_j|)  <=  h,     h = travel / sqrt(3)
-
-    around the settled forces u0: the box of half-width h is the largest inside the sphere of
-    radius ``travel``, so every motion it allows stays short of the failure distance. The program
-    then finds the resistance the servos build before the object has moved that far, not the
-    force range they would reach after a larger motion. Actuators on tendons or sites keep their
-    force ranges alone.
-
-    Attributes:
-        rows: ``A_ub`` over the program's variables, shape (R, n).
-        bounds: ``b_ub``, shape (R,).
-    """
-
-    rows: NDArray[np.float64]
-    bounds: NDArray[np.float64]
-
-    @classmethod
-    def of(
-        cls,
-        model: mujoco.MjModel,
-        data: mujoco.MjData,
-        contacts: RealisedContacts,
-        travel: float,
-        first_force: int,
-        size: int,
-    ) -> ServoTravel:
-        """The rows for a state; the actuator forces are columns ``first_force + a`` of ``size`` variables."""
-        servos = []  # (actuator, dof, stiffness kp |gear| [N·m/rad or N/m])
-        for a in range(model.nu):
-            stiffness = -float(model.actuator_biasprm[a, 1]) * abs(float(model.actuator_gear[a, 0]))
-            if model.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_JOINT and stiffness > 0:
-                servos.append((a, int(model.jnt_dofadr[model.actuator_trnid[a, 0]]), stiffness))
-        rows, limits = [], []
-        jacobian = np.zeros((3, model.nv))
-        settled = np.array([float(data.actuator_force[a]) for a, _, _ in servos])
-        for body in sorted({int(b) for b in contacts.bodies}):
-            point = contacts.points[contacts.bodies == body].mean(axis=0)
-            mujoco.mj_jac(model, data, jacobian, None, point, body)
-            moves = np.array([jacobian[:, dof] / stiffness for _, dof, stiffness in servos]).T.reshape(3, -1)
-            for axis in range(3):
-                if not moves[axis].any():
-                    continue
-                for sign in (1.0, -1.0):
-                    row = np.zeros(size)
-                    row[[first_force + a for a, _, _ in servos]] = sign * moves[axis]
-                    rows.append(row)
-                    limits.append(travel / math.sqrt(3.0) + sign * float(moves[axis] @ settled))
-        return cls(np.array(rows).reshape(-1, size), np.array(limits))
 
 
 def equality_rows(model: mujoco.MjModel, data: mujoco.MjData, dofs: NDArray[np.intp]) -> NDArray[np.float64]:

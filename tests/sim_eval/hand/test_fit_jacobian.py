@@ -1,4 +1,4 @@
-"""The fit's analytic Jacobian equals central differences of its residuals: the pads' rows to 1e-6, the depths' to 1e-4."""
+"""The fit's analytic Jacobian equals central differences of its residuals: the pads' and loops' rows to 1e-6, the depths' to 1e-4."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ import ogcp.sim_eval.hand.fit as fit_module
 from ogcp.planner.hands import HandKinematics, load_descriptor, resolve_hand
 from ogcp.sim_eval.hand.fit_jacobian import so3_left_jacobian
 from ogcp.sim_eval.hand.fit_scene import FitScene
-from tests.planner.hands.hand_files import write_mesh_hand
+from tests.planner.hands.hand_files import write_fourbar_gripper, write_mesh_hand
 
 
 def _central(fun, x, args, step=1e-7):
@@ -42,9 +42,21 @@ class _Recorder:
         return self.real(fun, x0, jac=jac, bounds=bounds, args=args, **options)
 
 
-@pytest.mark.parametrize("hand", ["sdh", "claw", "parallel_gripper"])
+def _hand(hand, folder):
+    if hand == "claw":
+        return load_descriptor(write_mesh_hand(folder))
+    if hand.startswith("fourbar"):
+        path = write_fourbar_gripper(folder)
+        if hand == "fourbar_weld":  # a weld closes the loops instead: their turning gaps' rows too
+            model = folder / "fourbar.xml"
+            model.write_text(model.read_text().replace("<connect ", "<weld "))
+        return load_descriptor(path)
+    return resolve_hand(hand)
+
+
+@pytest.mark.parametrize("hand", ["sdh", "claw", "parallel_gripper", "fourbar", "fourbar_weld"])
 def test_the_pads_rows_match_central_differences(hand, tmp_path, monkeypatch):
-    kinematics = HandKinematics(load_descriptor(write_mesh_hand(tmp_path)) if hand == "claw" else resolve_hand(hand))
+    kinematics = HandKinematics(_hand(hand, tmp_path))
     scene = FitScene(kinematics)
     recorder = _Recorder()
     monkeypatch.setattr(fit_module, "least_squares", recorder)
@@ -53,7 +65,7 @@ def test_the_pads_rows_match_central_differences(hand, tmp_path, monkeypatch):
     points, normals = kinematics.pads(truth)
     turn = Rotation.from_rotvec([0.4, -1.1, 0.7]).as_matrix()
     fit_module.fit_hand(scene, fingers, points[fingers] @ turn.T + 0.1, normals[fingers] @ turn.T)
-    assert recorder.errors and max(recorder.errors) < 1e-6  # coupled joints (the SDH's) included
+    assert recorder.errors and max(recorder.errors) < 1e-6  # coupled joints (the SDH's) and loops included
 
 
 def test_the_left_jacobian_of_so3_is_first_order_exact():

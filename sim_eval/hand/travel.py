@@ -1,0 +1,143 @@
+"""What a hand's servos and joint stops resist before the object has moved the trial's failure distance.
+
+A position servo is a spring, and so is a MuJoCo joint limit: a soft constraint whose stiffness
+follows its ``solref``, ``solimp`` and the joint's inertia. Within the few millimetres the
+resistance trial allows, neither reaches the force the hand's statics alone would let it
+(a servo's force range, a stop's unbounded reaction): :class:`ServoTravel` bounds the servos'
+changes by the motion of the contacts they allow, :func:`stop_reach` each resting stop's push.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+from numpy.typing import NDArray
+
+from ogcp.planner.hands.model_checks import equality_jacobian
+
+
+def stop_stiffness(model: mujoco.MjModel, joint: int) -> float:
+    """[N·m/rad or N/m] How hard a joint's limit pushes back per unit it is passed, steadily, at full impedance.
+
+    MuJoCo's reference acceleration ``-k d r`` (``k`` from ``solref``, ``d`` the impedance) and its
+    regularisation ``R = (1 - d) / d A`` (``A`` the joint's inverse inertia, ``dof_invweight0``) hold a
+    steady load ``tau`` with the limit passed by ``r = tau (1 - d) A / (k d^2)``. The impedance is its
+    largest, ``solimp``'s dmax (past the width), which gives the stiffest stop.
+    """
+    timeconst, ratio = (float(v) for v in model.jnt_solref[joint, :2])
+    dmax = float(model.jnt_solimp[joint, 1])
+    if timeconst > 0:  # MuJoCo keeps the time constant at two steps or more (unless told not to)
+        if not model.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_REFSAFE:
+            timeconst = max(timeconst, 2.0 * float(model.opt.timestep))
+        k = 1.0 / (dmax**2 * timeconst**2 * ratio**2)
+    else:  # the direct form: (-stiffness, -damping)
+        k = -timeconst / dmax**2
+    inverse_inertia = float(model.dof_invweight0[model.jnt_dofadr[joint]])
+    return k * dmax**2 / ((1.0 - dmax) * max(inverse_inertia, 1e-12))
+
+
+@dataclass(frozen=True, eq=False)
+class ServoTravel:
+    """Linear rows that keep the servos' force changes within what the failure distance allows.
+
+    A position servo on joint j (force ``kp (ctrl - gear q)``) changes its force by
+    ``du_j = kp_j |gear_j| dq_j`` when its joint turns by dq_j. A hand body b that carries contacts
+    then moves its contact point p_b by ``J_b dq`` (J_b its translational Jacobian over those
+    joints), and the trial counts a failure once the object, which the contacts hold, moved
+    ``travel``. So to first order the force changes satisfy, per body and axis,
+
+        -h  <=  sum_j J_b[:, j] (u_j - u0_j) / (kp_j |gear_j|)  <=  h,     h = travel / sqrt(3)
+
+    around the settled forces u0: the box of half-width h is the largest inside the sphere of
+    radius ``travel``, so every motion it allows stays short of the failure distance. The program
+    then finds the resistance the servos build before the object has moved that far, not the
+    force range they would reach after a larger motion. Actuators on tendons or sites keep their
+    force ranges alone.
+
+    Attributes:
+        rows: ``A_ub`` over the program's variables, shape (R, n).
+        bounds: ``b_ub``, shape (R,).
+    """
+
+    rows: NDArray[np.float64]
+    bounds: NDArray[np.float64]
+
+    @classmethod
+    def of(
+        cls,
+        model: mujoco.MjModel,
+        data: mujoco.MjData,
+        points: NDArray[np.float64],
+        bodies: NDArray[np.intp],
+        travel: float,
+        first_force: int,
+        size: int,
+    ) -> ServoTravel:
+        """The rows for a state: contacts ``points`` (K, 3) [m] on hand ``bodies`` (K,); actuator a's
+        force is column ``first_force + a`` of ``size`` variables."""
+        servos = []  # (actuator, dof, stiffness kp |gear| [N·m/rad or N/m])
+        for a in range(model.nu):
+            stiffness = -float(model.actuator_biasprm[a, 1]) * abs(float(model.actuator_gear[a, 0]))
+            if model.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_JOINT and stiffness > 0:
+                servos.append((a, int(model.jnt_dofadr[model.actuator_trnid[a, 0]]), stiffness))
+        rows, limits = [], []
+        jacobian = np.zeros((3, model.nv))
+        settled = np.array([float(data.actuator_force[a]) for a, _, _ in servos])
+        for body in sorted({int(b) for b in bodies}):
+            point = points[bodies == body].mean(axis=0)
+            mujoco.mj_jac(model, data, jacobian, None, point, body)
+            moves = np.array([jacobian[:, dof] / stiffness for _, dof, stiffness in servos]).T.reshape(3, -1)
+            for axis in range(3):
+                if not moves[axis].any():
+                    continue
+                for sign in (1.0, -1.0):
+                    row = np.zeros(size)
+                    row[[first_force + a for a, _, _ in servos]] = sign * moves[axis]
+                    rows.append(row)
+                    limits.append(travel / math.sqrt(3.0) + sign * float(moves[axis] @ settled))
+        return cls(np.array(rows).reshape(-1, size), np.array(limits))
+
+
+def stop_reach(
+    model: mujoco.MjModel,
+    data: mujoco.MjData,
+    points: NDArray[np.float64],
+    bodies: NDArray[np.intp],
+    travel: float,
+    joint: int,
+) -> float:
+    """[N·m or N] The most a resting joint's limit pushes with before the object moves ``travel``.
+
+    The joint may press into its limit only as far as moves no contact more than ``travel /
+    sqrt(3)`` along an axis (as :class:`ServoTravel` bounds the servos). It moves the contacts
+    with the least motion of the other joints that its equalities ask for (a loop's follower
+    moves its jaw through the loop; state after ``mj_forward``). The limit then pushes with its
+    force in the state plus :func:`stop_stiffness` times that. A joint that moves no contact keeps
+    an unbounded stop (inf).
+    """
+    dof = int(model.jnt_dofadr[joint])
+    tied = equality_jacobian(model, data)
+    unit = np.zeros((1, model.nv))
+    unit[0, dof] = 1.0
+    wanted = np.zeros(len(tied) + 1)
+    wanted[-1] = 1.0
+    motion = np.linalg.lstsq(np.vstack([tied, unit]), wanted, rcond=None)[0]  # (nv,) per unit of this joint
+    jacobian = np.zeros((3, model.nv))
+    lever = 0.0
+    for body in sorted({int(b) for b in bodies}):
+        mujoco.mj_jac(model, data, jacobian, None, points[bodies == body].mean(axis=0), body)
+        lever = max(lever, float(np.abs(jacobian @ motion).max()))
+    if lever <= 1e-12:
+        return math.inf
+    return _limit_force(data, joint) + stop_stiffness(model, joint) * travel / math.sqrt(3.0) / lever
+
+
+def _limit_force(data: mujoco.MjData, joint: int) -> float:
+    """[N·m or N] The force a joint's limit presses with in a state (``mj_forward`` done); 0 when not pressed."""
+    rows = (data.efc_type[: data.nefc] == mujoco.mjtConstraint.mjCNSTR_LIMIT_JOINT) & (
+        data.efc_id[: data.nefc] == joint
+    )
+    return float(data.efc_force[: data.nefc][rows].sum())
