@@ -6,7 +6,8 @@ on the chain), and answers in the palm frame:
 
 - the pads' contact points and normals of a configuration or a batch (``mj_kinematics``);
 - random configurations within the joint limits, with MuJoCo's joint equalities (a joint that
-  mirrors another, as the SDH's two base joints) kept;
+  mirrors another, as the SDH's two base joints) kept and closed loops (:mod:`~ogcp.planner.hands.loops`)
+  closed;
 - which fingers (and the palm) collide with each other in a configuration (``mj_collision`` with
   every hand geom made collidable; pairs that already touch in the reference pose are by design).
 
@@ -414,8 +415,9 @@ class HandKinematics:
         """Configurations (n, J) moved, loop joints only, to where every closed loop is closed (Gauss-Newton).
 
         Each step is the least-norm change of the loops' joints that closes their gaps to first order,
-        within the limits. A configuration whose loops cannot close within the limits keeps its
-        smallest gap; a hand without loops is returned as given.
+        within the limits, for at most :data:`~ogcp.planner.hands.loops.CLOSING_STEPS` steps. A
+        configuration whose loops cannot close within the limits stays where the last step left it
+        (the fit then reports the gap); a hand without loops is returned as given.
         """
         q = np.array(angles, dtype=float, ndmin=2)
         if not self.loops:
