@@ -35,6 +35,7 @@ from numpy.typing import NDArray
 from scipy.optimize import linprog
 
 from ogcp.planner.grasp.wrench import cone_edges, contact_wrenches
+from ogcp.planner.hands.model_checks import equality_jacobian
 from ogcp.sim_eval.hand.mount import MountedHand, in_subtree
 from ogcp.sim_eval.hand.travel import ServoTravel, stop_reach
 
@@ -331,14 +332,6 @@ def equality_rows(model: mujoco.MjModel, data: mujoco.MjData, dofs: NDArray[np.i
     bodies closes a loop (a four-bar linkage), so the loop's passive joints are held by the loop's
     force. Rows that touch none of the hand's joints (the palm's mocap weld) are left out.
     """
-    rows = np.flatnonzero(data.efc_type[: data.nefc] == mujoco.mjtConstraint.mjCNSTR_EQUALITY)
-    if not len(rows):
-        return np.zeros((0, len(dofs)))
-    if mujoco.mj_isSparse(model):
-        jacobian = np.zeros((data.nefc, model.nv))
-        mujoco.mju_sparse2dense(jacobian, data.efc_J, data.efc_J_rownnz, data.efc_J_rowadr, data.efc_J_colind)
-    else:
-        jacobian = data.efc_J[: data.nefc * model.nv].reshape(data.nefc, model.nv)
-    block = jacobian[np.ix_(rows, np.asarray(dofs, dtype=np.intp))]
-    scale = np.abs(block).max(axis=1) if block.size else np.zeros(len(rows))
+    block = equality_jacobian(model, data)[:, np.asarray(dofs, dtype=np.intp)]
+    scale = np.abs(block).max(axis=1) if block.size else np.zeros(len(block))
     return np.asarray(block[scale > EQUALITY_FLOOR * max(1.0, float(scale.max(initial=0.0)))], dtype=float)

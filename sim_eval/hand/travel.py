@@ -84,11 +84,8 @@ class ServoTravel:
             if model.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_JOINT and stiffness > 0:
                 servos.append((a, int(model.jnt_dofadr[model.actuator_trnid[a, 0]]), stiffness))
         rows, limits = [], []
-        jacobian = np.zeros((3, model.nv))
         settled = np.array([float(data.actuator_force[a]) for a, _, _ in servos])
-        for body in sorted({int(b) for b in bodies}):
-            point = points[bodies == body].mean(axis=0)
-            mujoco.mj_jac(model, data, jacobian, None, point, body)
+        for jacobian in _carrying_jacobians(model, data, points, bodies):
             moves = np.array([jacobian[:, dof] / stiffness for _, dof, stiffness in servos]).T.reshape(3, -1)
             for axis in range(3):
                 if not moves[axis].any():
@@ -125,11 +122,8 @@ def stop_reach(
     wanted = np.zeros(len(tied) + 1)
     wanted[-1] = 1.0
     motion = np.linalg.lstsq(np.vstack([tied, unit]), wanted, rcond=None)[0]  # (nv,) per unit of this joint
-    jacobian = np.zeros((3, model.nv))
-    lever = 0.0
-    for body in sorted({int(b) for b in bodies}):
-        mujoco.mj_jac(model, data, jacobian, None, points[bodies == body].mean(axis=0), body)
-        lever = max(lever, float(np.abs(jacobian @ motion).max()))
+    jacobians = _carrying_jacobians(model, data, points, bodies)
+    lever = max((float(np.abs(jacobian @ motion).max()) for jacobian in jacobians), default=0.0)
     if lever <= 1e-12:
         return math.inf
     return _limit_force(data, joint) + stop_stiffness(model, joint) * travel / math.sqrt(3.0) / lever
@@ -141,3 +135,15 @@ def _limit_force(data: mujoco.MjData, joint: int) -> float:
         data.efc_id[: data.nefc] == joint
     )
     return float(data.efc_force[: data.nefc][rows].sum())
+
+
+def _carrying_jacobians(
+    model: mujoco.MjModel, data: mujoco.MjData, points: NDArray[np.float64], bodies: NDArray[np.intp]
+) -> list[NDArray[np.float64]]:
+    """The translational Jacobian (3, nv) of each contact-carrying body at the mean of its contacts."""
+    found = []
+    for body in sorted({int(b) for b in bodies}):
+        jacobian = np.zeros((3, model.nv))
+        mujoco.mj_jac(model, data, jacobian, None, points[bodies == body].mean(axis=0), body)
+        found.append(jacobian)
+    return found
