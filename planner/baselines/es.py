@@ -34,7 +34,7 @@ from ogcp.planner.grasp.contact_set import ContactSet
 from ogcp.planner.grasp.kernel import FALLBACK, OK, default_directions, support_table
 from ogcp.planner.grasp.kernel.geometry import CUT_MARGIN
 from ogcp.planner.grasp.quality import exact_q1_batch, q1_certificate
-from ogcp.planner.infra.errors import OgcpError, SearchTimeout
+from ogcp.planner.infra.errors import NoGraspError, OgcpError, SearchTimeout
 from ogcp.planner.infra.heartbeat import Heartbeat
 from ogcp.planner.infra.parallel import DEFAULT_BACKEND, DEFAULT_JOBS, run_tasks, validate_backend
 from ogcp.planner.infra.provenance import provenance
@@ -404,7 +404,7 @@ class ExhaustiveSearch:
         if best_g is None and not finished:
             raise SearchTimeout(config["method"], self.time_limit, 0, None, space.q_ows)
         if best_g is None:
-            raise OgcpError("no grasp satisfies the constraints")
+            raise NoGraspError("no grasp satisfies the constraints")
         idx = np.array(best_g, dtype=np.intp)
         counts = np.sum([r.counts for r in every], axis=0).astype(np.int64)
         return ESResult(

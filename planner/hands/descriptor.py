@@ -7,6 +7,7 @@ A descriptor is a TOML file beside the hand's model::
     mjcf = "gripper.xml"          # relative to this file; .xml (MJCF) or .urdf
     palm = "palm"                 # body the simulated wrist holds
     # fetched = "shadow_hand"     # optional: mjcf is inside this hand's `ogcp assets fetch` folder
+    # ignore_collisions = [["a", "b"]]  # optional: body pairs whose contacts are not collisions
     [[fingers]]
     name = "left"
     tip_body = "left_tip"
@@ -46,10 +47,9 @@ MODEL_SUFFIXES = (".xml", ".urdf")
 UNIT_TOLERANCE = 1e-3
 #: Largest pad rounding and pad offset accepted [m]: a hand bigger than 2 m is a unit error.
 MAX_LENGTH = 2.0
-_TOP_KEYS = ("schema", "name", "mjcf", "palm", "fingers", "actuation", "fetched", "reachability")
+_TOP_KEYS = ("schema", "name", "mjcf", "palm", "fingers", "actuation", "fetched", "reachability", "ignore_collisions")
 _REACHABILITY_KEYS = ("samples",)
-#: Joint configurations the reachability model samples by default, and the most a descriptor may ask.
-DEFAULT_REACH_SAMPLES = 10_000
+#: The most joint configurations a descriptor may ask the reachability model to sample.
 MAX_REACH_SAMPLES = 2_000_000
 _FINGER_KEYS = ("name", "tip_body", "tip_offset", "pad_normal", "tip_radius", "joints")
 _ACTUATION_KEYS = ("kp", "force_range", "kv")
@@ -119,8 +119,10 @@ class HandDescriptor:
         sha256: Digest of the descriptor file.
         model_sha256: Digest of the model file.
         reach_samples: Joint configurations the reachability model samples (``[reachability]
-            samples``): a hand with many joints per finger needs more for its model to come near
-            the grasps it can reach.
+            samples``); None: as many as the model needs to recall the hand's own configurations
+            (:class:`ogcp.planner.hands.reachability.HandReachability`).
+        ignore_collisions: Body pairs whose geoms never count as colliding with each other (the
+            model's geometry overlaps where the hand's does not), by body name.
     """
 
     name: str
@@ -131,7 +133,8 @@ class HandDescriptor:
     actuation: Actuation
     sha256: str
     model_sha256: str
-    reach_samples: int = DEFAULT_REACH_SAMPLES
+    reach_samples: int | None = None
+    ignore_collisions: tuple[tuple[str, str], ...] = ()
 
     @property
     def finger_names(self) -> tuple[str, ...]:
@@ -223,6 +226,7 @@ def load_descriptor(path: str | Path) -> HandDescriptor:
     _distinct(fingers, where)
     actuation = _actuation(table.get("actuation", {}), f"{where}: [actuation]")
     reach_samples = _reach_samples(table.get("reachability", {}), f"{where}: [reachability]")
+    ignored = _body_pairs(table.get("ignore_collisions", []), f"{where}: ignore_collisions")
     return HandDescriptor(
         name=name,
         path=path,
@@ -233,6 +237,7 @@ def load_descriptor(path: str | Path) -> HandDescriptor:
         sha256=hashlib.sha256(raw).hexdigest(),
         model_sha256=hashlib.sha256(model_path.read_bytes()).hexdigest(),
         reach_samples=reach_samples,
+        ignore_collisions=ignored,
     )
 
 
@@ -329,11 +334,25 @@ def _actuation(table: object, where: str) -> Actuation:
     return Actuation(kp, force, kv)
 
 
-def _reach_samples(table: object, where: str) -> int:
+def _reach_samples(table: object, where: str) -> int | None:
     if not isinstance(table, dict):
         raise OgcpError(f"{where} must be a table, got {table!r}")
     _known_keys(table, _REACHABILITY_KEYS, where)
-    value = table.get("samples", DEFAULT_REACH_SAMPLES)
+    if "samples" not in table:
+        return None
+    value = table["samples"]
     if isinstance(value, bool) or not isinstance(value, int) or not 1_000 <= value <= MAX_REACH_SAMPLES:
         raise OgcpError(f"{where}: samples must be an integer in [1000, {MAX_REACH_SAMPLES}], got {value!r}")
     return value
+
+
+def _body_pairs(value: object, where: str) -> tuple[tuple[str, str], ...]:
+    pairs = value if isinstance(value, list) else None
+    if pairs is None or not all(
+        isinstance(p, list) and len(p) == 2 and all(isinstance(b, str) and b for b in p) for p in pairs
+    ):
+        raise OgcpError(f"{where} must be a list of [body, body] name pairs, got {value!r}")
+    for a, b in pairs:
+        if a == b:
+            raise OgcpError(f"{where}: [{a!r}, {b!r}] pairs a body with itself")
+    return tuple((a, b) for a, b in pairs)

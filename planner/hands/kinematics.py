@@ -9,7 +9,8 @@ on the chain), and answers in the palm frame:
   mirrors another, as the SDH's two base joints) kept and closed loops (:mod:`~ogcp.planner.hands.loops`)
   closed;
 - which fingers (and the palm) collide with each other in a configuration (``mj_collision`` with
-  every hand geom made collidable; pairs that already touch in the reference pose are by design).
+  every hand geom made collidable; the overlaps the model was built with, such as a convex hull
+  that swallows the next link, are not collisions: :mod:`~ogcp.planner.hands.self_collision`).
 
 A *configuration* is the vector of the hand's finger joints, :attr:`HandKinematics.joint_names`
 order [rad or m]; joints outside the fingers (a wrist above the palm) stay at their reference.
@@ -17,7 +18,6 @@ order [rad or m]; joints outside the fingers (a wrist above the palm) stay at th
 
 from __future__ import annotations
 
-import copy
 import dataclasses
 import warnings
 from dataclasses import dataclass
@@ -37,6 +37,13 @@ from ogcp.planner.hands.loops import (
     loop_system,
 )
 from ogcp.planner.hands.model_checks import underactuated_fingers
+from ogcp.planner.hands.self_collision import (
+    OVERLAP_SAMPLES,
+    OVERLAP_SEED,
+    collision_model,
+    designed_overlaps,
+    penetrating_pairs,
+)
 from ogcp.planner.infra.errors import OgcpError
 
 #: Range given to a hinge that has none [rad].
@@ -49,8 +56,6 @@ class HandModelWarning(UserWarning):
     """A hand model that compiles but is most likely not what its author meant."""
 
 
-#: Depth beyond which two hand geoms count as colliding [m].
-SELF_PENETRATION = 5e-4
 _MOVABLE = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
 
 
@@ -115,8 +120,14 @@ class HandKinematics:
             [k for k, j in enumerate(joint_ids) if j not in {dep for dep, _, _ in self._couplings}], dtype=np.intp
         )
         self.body_groups = self._body_groups()
-        self._collider = self._collision_model()
-        self._designed = self._touching(self._collider, self.reference())
+        self._collider = collision_model(self.model)
+        listed = [
+            (self._body(self.model, a, "ignore_collisions"), self._body(self.model, b, "ignore_collisions"))
+            for a, b in descriptor.ignore_collisions
+        ]
+        samples = self.sample(OVERLAP_SAMPLES, OVERLAP_SEED)
+        self.overlaps = designed_overlaps(self._collider, self._pose, self.reference(), samples, listed)
+        self._warn_if_chain_overlaps()
         self.root = self._root()
         self.palm_pose = self._palm_pose()
 
@@ -150,6 +161,23 @@ class HandKinematics:
                 HandModelWarning,
                 stacklevel=3,
             )
+
+    def _warn_if_chain_overlaps(self) -> None:
+        """Say which links of one chain overlap through most of their range: ignored as collisions."""
+        if not self.overlaps.on_chain:
+            return
+        found: dict[tuple[str, str], float] = {}
+        for (g, h), share in self.overlaps.on_chain.items():
+            a, b = sorted(self.model.body(int(self.model.geom_bodyid[k])).name for k in (g, h))
+            found[a, b] = max(share, found.get((a, b), 0.0))
+        listed = ", ".join(f"{a} and {b} ({share:.0%})" for (a, b), share in sorted(found.items()))
+        warnings.warn(
+            f"{self.descriptor.path}: links of one chain of the {self.descriptor.name} hand overlap in most sampled "
+            f"poses, so their collision geometry is coarser than the hand (a convex hull of a non-convex mesh?): "
+            f"{listed}; their contacts are ignored (list more pairs under ignore_collisions)",
+            HandModelWarning,
+            stacklevel=3,
+        )
 
     def _body(self, model: mujoco.MjModel, name: str, field: str) -> int:
         body = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, name)
@@ -287,17 +315,6 @@ class HandKinematics:
             body = int(self.model.body_parentid[body])
         return True
 
-    def _collision_model(self) -> mujoco.MjModel:
-        """A copy in which every hand geom that collides with anything collides with every other."""
-        collider = copy.copy(self.model)
-        solid = (collider.geom_contype != 0) | (collider.geom_conaffinity != 0)
-        collider.geom_contype[solid] = 1
-        collider.geom_conaffinity[solid] = 1
-        # The broadphase filters bodies first, by flags the compiler ORed from their geoms.
-        collider.body_contype[:] = 1
-        collider.body_conaffinity[:] = 1
-        return collider
-
     def _root(self) -> int:
         """The body below the world whose subtree holds the palm (what a scene attaches)."""
         body = self.palm
@@ -346,8 +363,8 @@ class HandKinematics:
         return mujoco.mj_id2name(self.model, mujoco.mjtObj.mjOBJ_GEOM, geom) or f"geom {geom}"
 
     def designed_pairs(self) -> set[tuple[str, str]]:
-        """Geom pairs (by name) that already penetrate in the reference pose: the model's design."""
-        return {tuple(sorted((self.geom_name(a), self.geom_name(b)))) for a, b in self._designed}  # type: ignore[misc]
+        """Geom pairs (by name) that overlap by design (:mod:`~ogcp.planner.hands.self_collision`): never collisions."""
+        return {tuple(sorted((self.geom_name(a), self.geom_name(b)))) for a, b in self.overlaps.pairs}  # type: ignore[misc]
 
     # ----- configurations ----------------------------------------------------------------------
 
@@ -403,8 +420,11 @@ class HandKinematics:
             )
         return q.copy()
 
-    def sample(self, count: int, seed: int) -> NDArray[np.float64]:
-        """Configurations with independent joints uniform within their limits, shape (count, J)."""
+    def sample(self, count: int, seed: int | np.random.SeedSequence) -> NDArray[np.float64]:
+        """Configurations with independent joints uniform within their limits, shape (count, J).
+
+        ``seed``: an integer, or a seed sequence for a stream of its own.
+        """
         rng = np.random.default_rng(seed)
         q = np.tile(self.reference(), (count, 1))
         low, high = self.limits[self.independent, 0], self.limits[self.independent, 1]
@@ -475,21 +495,11 @@ class HandKinematics:
             points[n], normals[n] = self.pads(row)
         return points, normals
 
-    def _touching(self, model: mujoco.MjModel, angles: ArrayLike) -> set[tuple[int, int]]:
-        data = mujoco.MjData(model)
-        self._pose(model, data, angles)
-        mujoco.mj_collision(model, data)
-        pairs = set()
-        for c in data.contact[: data.ncon]:
-            if c.dist < -SELF_PENETRATION:
-                pairs.add((min(c.geom1, c.geom2), max(c.geom1, c.geom2)))
-        return pairs
-
     def collisions(self, angles: ArrayLike) -> NDArray[np.bool_]:
         """Which groups collide in each configuration, shape (N, G, G) with G = fingers + 1.
 
-        Group ``F`` (the last) is the palm and every body no single finger owns. Geom pairs that
-        already penetrate in the reference configuration are the model's design, not collisions.
+        Group ``F`` (the last) is the palm and every body no single finger owns. Designed overlaps
+        (:mod:`~ogcp.planner.hands.self_collision`) are not collisions.
         """
         q = np.atleast_2d(np.asarray(angles, dtype=float))
         size = len(self.fingers) + 1
@@ -498,12 +508,9 @@ class HandKinematics:
         body = self._collider.geom_bodyid
         for n, row in enumerate(q):
             self._pose(self._collider, data, row)
-            mujoco.mj_collision(self._collider, data)
-            for c in data.contact[: data.ncon]:
-                pair = (min(c.geom1, c.geom2), max(c.geom1, c.geom2))
-                if c.dist < -SELF_PENETRATION and pair not in self._designed:
-                    a, b = self.body_groups[body[c.geom1]], self.body_groups[body[c.geom2]]
-                    hits[n, a, b] = hits[n, b, a] = True
+            for g, h in penetrating_pairs(self._collider, data) - self.overlaps.pairs:
+                a, b = self.body_groups[body[g]], self.body_groups[body[h]]
+                hits[n, a, b] = hits[n, b, a] = True
         return hits
 
     def describe(self) -> dict[str, object]:
@@ -514,4 +521,5 @@ class HandKinematics:
             "limits": self.limits.tolist(),
             "fingers": [f.name for f in self.fingers],
             "servos_added": list(self.servos),
+            "ignored_collisions": sorted(self.designed_pairs()),
         }

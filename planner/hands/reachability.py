@@ -27,14 +27,11 @@ sampling parameters, and rebuilt when damaged.
 from __future__ import annotations
 
 import hashlib
-import itertools
 import math
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass
-from functools import lru_cache
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -42,47 +39,37 @@ from tqdm import tqdm
 
 from ogcp.planner.config.methods import DEFAULT_HAND_THRESHOLD
 from ogcp.planner.grasp.contact_set import ContactSet
-from ogcp.planner.hands.box_index import BoxIndex, boxes_within, pair_bounds
+from ogcp.planner.hands.box_index import boxes_within, pair_bounds
 from ogcp.planner.hands.descriptor import HandDescriptor
 from ogcp.planner.hands.registry import resolve_hand
+from ogcp.planner.hands.sampled_model import (
+    AUTO_RECALL,
+    FIRST_SAMPLES,
+    MAX_AUTO_SAMPLES,
+    FingerModel,
+    SampledHand,
+    assignments,
+    finger_model,
+    grow_samples,
+    pair_code,
+    pose_samples,
+    residuals,
+)
 from ogcp.planner.infra.cache import cache_dir as default_cache_dir
 from ogcp.planner.infra.cache import read_entry, write_entry
 from ogcp.planner.infra.errors import OgcpError
 
-MODEL_VERSION = 4
-#: Configurations posed per progress step while sampling.
-_SAMPLE_BATCH = 2_000
+__all__ = ["HandReachability", "Reach", "SDHReachability", "pair_code"]
+
+MODEL_VERSION = 5
 #: The sampled model's file in its cache entry: ``joint_names`` (J,), ``angles`` (N, J),
-#: ``points`` and ``normals`` (N, F, 3) in the palm frame, ``collisions`` (N, F + 1, F + 1).
+#: ``points`` and ``normals`` (N, F, 3) in the palm frame, ``collisions`` (N, F + 1, F + 1), and
+#: for a grown model its ``recall`` ().
 MODEL_FILE = "model.npz"
 #: Most contacts a grasp may have: the residual is a minimum over m! finger assignments.
 MAX_FINGERS = 6
-#: Smallest spread a code dimension is normalised by, for distances [m] and for normal differences
-#: and cosines:
-#: a gripper whose pads always face each other has no spread in normal difference, and its
-#: tolerance (threshold x spread) must still admit slightly curved surfaces.
-DISTANCE_SCALE_FLOOR = 1e-3
-NORMAL_SCALE_FLOOR = 0.02
-
-
-def pair_code(positions: NDArray[np.float64], normals: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Pairwise rigid invariants of pad tuples, shape (..., 4 C(m, 2)).
-
-    For each pair i < j: the distance ``|p_j - p_i|``, the normal difference ``|n_i - n_j|``, and
-    both normals' cosines with the direction ``u = (p_j - p_i) / |p_j - p_i|`` (a parallel gripper
-    pinches only points whose line runs along its pads' normals).
-    """
-    m = positions.shape[-2]
-    columns = []
-    for i, j in itertools.combinations(range(m), 2):
-        line = positions[..., j, :] - positions[..., i, :]
-        length = np.linalg.norm(line, axis=-1)
-        u = line / np.maximum(length, 1e-12)[..., None]
-        columns.append(length)
-        columns.append(np.linalg.norm(normals[..., i, :] - normals[..., j, :], axis=-1))
-        columns.append(np.einsum("...k,...k->...", normals[..., i, :], u))
-        columns.append(np.einsum("...k,...k->...", normals[..., j, :], u))
-    return np.stack(columns, axis=-1)
+#: Fingers whose configurations a growing model must recall, when none are named: a default grasp's.
+RECALLED_FINGERS = 3
 
 
 @dataclass(frozen=True)
@@ -102,45 +89,14 @@ class Reach:
     finger_names: tuple[str, ...] = ()
 
 
-@dataclass(frozen=True, eq=False)
-class SampledHand:
-    """A hand's sampled configurations: pads in the palm frame and collisions."""
-
-    joint_names: tuple[str, ...]
-    angles: NDArray[np.float64]
-    points: NDArray[np.float64]
-    normals: NDArray[np.float64]
-    collisions: NDArray[np.bool_]
-
-
-@dataclass(frozen=True, eq=False)
-class _FingerModel:
-    """The k-d tree of one choice of fingers."""
-
-    rows: NDArray[np.intp]
-    scale: NDArray[np.float64]
-    codes: NDArray[np.float64]
-    tree: Any
-    boxes: BoxIndex
-
-
-@lru_cache(maxsize=MAX_FINGERS)
-def _assignments(m: int) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
-    """Every assignment of m super-contacts to the fingers, shape (m!, m), and the finger pairs
-    i < j in :func:`pair_code`'s order, shape (C(m, 2), 2)."""
-    assignments = np.array(list(itertools.permutations(range(m))), dtype=np.int64)
-    pairs = np.array(list(itertools.combinations(range(m), 2)), dtype=np.int64).reshape(-1, 2)
-    return assignments, pairs
-
-
 def _assignment_codes(
-    grasp: Sequence[int], contacts: ContactSet, model: _FingerModel
+    grasp: Sequence[int], contacts: ContactSet, model: FingerModel
 ) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
     """Every assignment of a grasp's contacts to the fingers, shape (m!, m), and its scaled codes,
     shape (m!, 4 C(m, 2)): one code computation for all of them."""
-    assignments = _assignments(len(grasp))[0]
-    ordered = np.asarray(grasp, dtype=np.intp)[assignments]
-    return assignments, pair_code(contacts.positions[ordered], contacts.normals[ordered]) / model.scale
+    orders = assignments(len(grasp))[0]
+    ordered = np.asarray(grasp, dtype=np.intp)[orders]
+    return orders, pair_code(contacts.positions[ordered], contacts.normals[ordered]) / model.scale
 
 
 class HandReachability:
@@ -150,7 +106,8 @@ class HandReachability:
         hand: A built-in hand name, a descriptor path, or a loaded descriptor.
         fingers: Names of the fingers that take the contacts, in order; None: the first m.
         samples: Joint configurations to sample (before collision rejection); None: the
-            descriptor's ``[reachability] samples`` (default 10,000).
+            descriptor's ``[reachability] samples``, or where it gives none as many as the model
+            needs to recall the hand's own configurations (:mod:`~ogcp.planner.hands.sampled_model`).
         seed: Sampling seed.
         threshold: Largest residual (normalised code distance) that counts as reachable.
         cache_dir: Where the sampled model is cached; default ``$OGCP_CACHE`` or ``~/.cache/ogcp``.
@@ -178,15 +135,26 @@ class HandReachability:
         self.fingers = tuple(fingers) if fingers is not None else None
         if self.fingers is not None:
             self.descriptor.choose_fingers(len(self.fingers), self.fingers)
-        self.samples, self.seed, self.threshold = samples, seed, float(threshold)
+        self.seed, self.threshold = seed, float(threshold)
+        #: The fixed size asked for; None: grown until it recalls the hand (then the size reached).
+        self.samples: int | None = samples
         self.cache_dir = Path(cache_dir) if cache_dir else default_cache_dir()
         self.sampled = self._load_or_sample()
-        self._models: dict[tuple[int, ...], _FingerModel] = {}
+        self.samples = len(self.sampled.angles)
+        self._models: dict[tuple[int, ...], FingerModel] = {}
 
     # ----- the sampled model -------------------------------------------------------------------
 
+    def _recalled(self) -> tuple[int, ...]:
+        """The fingers whose configurations a growing model must recall: the named ones, else a default grasp's."""
+        count = len(self.descriptor.fingers)
+        if self.fingers is not None:
+            return self.descriptor.choose_fingers(len(self.fingers), self.fingers)
+        return tuple(range(min(RECALLED_FINGERS, count)))
+
     def _key(self) -> str:
-        parts = (MODEL_VERSION, self.descriptor.sha256, self.descriptor.model_sha256, self.samples, self.seed)
+        size = self.samples if self.samples is not None else ("grown", AUTO_RECALL, MAX_AUTO_SAMPLES, self._recalled())
+        parts = (MODEL_VERSION, self.descriptor.sha256, self.descriptor.model_sha256, size, self.seed)
         return hashlib.sha256(repr(parts).encode()).hexdigest()[:16]
 
     def _load_or_sample(self) -> SampledHand:
@@ -198,26 +166,24 @@ class HandReachability:
         from ogcp.planner.hands.kinematics import HandKinematics  # MuJoCo only when sampling
 
         kinematics = HandKinematics(self.descriptor)
-        angles = kinematics.sample(self.samples, self.seed)
-        batches: list[tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.bool_]]] = []
-        # A hand of many joints may ask for 10^5 samples: half a minute once, then cached.
-        with tqdm(total=len(angles), desc=f"sampling the {self.name} hand", unit="pose", disable=None) as bar:
-            for start in range(0, len(angles), _SAMPLE_BATCH):
-                batch = angles[start : start + _SAMPLE_BATCH]
-                batches.append((*kinematics.pads_many(batch), kinematics.collisions(batch)))
-                bar.update(len(batch))
-        points, normals, collisions = (np.concatenate(parts) for parts in zip(*batches, strict=True))
-        sampled = SampledHand(kinematics.joint_names, angles, points, normals, collisions)
+        desc = f"sampling the {self.name} hand"
+        if self.samples is None:
+            sampled = grow_samples(kinematics, self._recalled(), self.seed, desc)
+        else:
+            with tqdm(total=self.samples, desc=desc, unit="pose", disable=None) as bar:
+                sampled = pose_samples(kinematics, kinematics.sample(self.samples, self.seed), bar)
 
         def save(stage: Path) -> None:
-            np.savez(
-                stage / MODEL_FILE,
-                joint_names=np.array(sampled.joint_names),
-                angles=angles,
-                points=points,
-                normals=normals,
-                collisions=sampled.collisions,
-            )
+            arrays: dict[str, NDArray] = {
+                "joint_names": np.array(sampled.joint_names),
+                "angles": sampled.angles,
+                "points": sampled.points,
+                "normals": sampled.normals,
+                "collisions": sampled.collisions,
+            }
+            if sampled.recall is not None:
+                arrays["recall"] = np.array(sampled.recall)
+            np.savez(stage / MODEL_FILE, **arrays)  # type: ignore[arg-type]
 
         try:
             write_entry(folder, save)
@@ -234,7 +200,11 @@ class HandReachability:
         keys = ("joint_names", "angles", "points", "normals", "collisions")
         with np.load(folder / MODEL_FILE, allow_pickle=False) as data:
             names, angles, points, normals, collisions = (data[k] for k in keys)
-        count, fingers = self.samples, len(self.descriptor.fingers)
+            recall = float(data["recall"]) if "recall" in data.files else None
+        fingers = len(self.descriptor.fingers)
+        count = self.samples if self.samples is not None else len(angles)
+        if self.samples is None and not (FIRST_SAMPLES <= count <= MAX_AUTO_SAMPLES and recall is not None):
+            raise ValueError(f"a grown model of {count} configurations and recall {recall}")
         if names.ndim != 1 or names.dtype.kind != "U" or angles.shape != (count, len(names)):
             raise ValueError(
                 f"{len(names)} joint names and configurations of shape {angles.shape}, expected {count} rows"
@@ -245,7 +215,7 @@ class HandReachability:
             raise ValueError(f"collisions of shape {collisions.shape} and type {collisions.dtype}")
         if not all(np.isfinite(a).all() for a in (angles, points, normals)):
             raise ValueError("non-finite values")
-        return SampledHand(tuple(str(n) for n in names), angles, points, normals, collisions)
+        return SampledHand(tuple(str(n) for n in names), angles, points, normals, collisions, recall)
 
     def chosen(self, m: int) -> tuple[int, ...]:
         """Indices of the fingers that take an m-contact grasp.
@@ -260,25 +230,17 @@ class HandReachability:
             raise OgcpError(f"a hand grasp needs at least 2 contacts; got m = {m}")
         return self.descriptor.choose_fingers(m, self.fingers)
 
-    def _model(self, m: int) -> _FingerModel:
+    def _model(self, m: int) -> FingerModel:
         chosen = self.chosen(m)
         if chosen not in self._models:
-            groups = [*chosen, len(self.descriptor.fingers)]
-            hits = self.sampled.collisions[:, groups][:, :, groups]
-            rows = np.flatnonzero(~hits.any(axis=(1, 2)))
-            if len(rows) == 0:
+            model = finger_model(self.sampled, chosen)
+            if model is None:
                 names = ", ".join(self.descriptor.finger_names[f] for f in chosen)
                 raise OgcpError(
                     f"no collision-free configuration of the {self.name} hand's fingers {names} was sampled "
                     f"in {self.samples}; raise the number of samples or check the model's geoms"
                 )
-            codes = pair_code(self.sampled.points[rows][:, chosen], self.sampled.normals[rows][:, chosen])
-            floor = np.tile([DISTANCE_SCALE_FLOOR, *[NORMAL_SCALE_FLOOR] * 3], codes.shape[1] // 4)
-            scale = np.maximum(codes.std(axis=0), floor)
-            from scipy.spatial import cKDTree  # here, not at the top: every plan imports this module
-
-            scaled = codes / scale
-            self._models[chosen] = _FingerModel(rows, scale, scaled, cKDTree(scaled), BoxIndex(scaled))
+            self._models[chosen] = model
         return self._models[chosen]
 
     @property
@@ -300,23 +262,18 @@ class HandReachability:
             positions: Target points, shape (B, m, 3) [m].
             normals: Inward normals at the targets (the pad normals needed), shape (B, m, 3).
         """
-        m = positions.shape[1]
-        model = self._model(m)
-        assignments = _assignments(m)[0]
-        codes = pair_code(positions[:, assignments], normals[:, assignments])  # (B, m!, codes)
-        distance, _ = model.tree.query(codes.reshape(-1, codes.shape[-1]) / model.scale, k=1)
-        return distance.reshape(len(positions), len(assignments)).min(axis=1)
+        return residuals(self._model(positions.shape[1]), positions, normals)
 
     def reach(self, grasp: Sequence[int], contacts: ContactSet) -> Reach:
         """Residual of a grasp over all finger assignments, with the nearest sample."""
         m = len(grasp)
         model = self._model(m)
-        assignments, codes = _assignment_codes(grasp, contacts, model)
+        orders, codes = _assignment_codes(grasp, contacts, model)
         distance, nearest = model.tree.query(codes, k=1)
         best = int(np.argmin(distance))
         angles = self.sampled.angles[model.rows[nearest[best]]]
         names = tuple(self.descriptor.finger_names[f] for f in self.chosen(m))
-        order = tuple(int(f) for f in assignments[best])
+        order = tuple(int(f) for f in orders[best])
         return Reach(float(distance[best]), tuple(float(v) for v in angles), order, names)
 
     def starts(self, grasp: Sequence[int], contacts: ContactSet, count: int) -> list[Reach]:
@@ -329,10 +286,10 @@ class HandReachability:
         """
         m = len(grasp)
         model = self._model(m)
-        assignments, codes = _assignment_codes(grasp, contacts, model)
+        orders, codes = _assignment_codes(grasp, contacts, model)
         k = min(count, len(model.rows))
         distance, nearest = model.tree.query(codes, k=k)
-        distance, nearest = distance.reshape(len(assignments), k), nearest.reshape(len(assignments), k)
+        distance, nearest = distance.reshape(len(orders), k), nearest.reshape(len(orders), k)
         ranked = np.argsort(distance[:, 0], kind="stable")
         order = [int(a) * k + j for j in range(k) for a in ranked][:count]
         names = tuple(self.descriptor.finger_names[f] for f in self.chosen(m))
@@ -340,7 +297,7 @@ class HandReachability:
         for flat in order:
             a, j = divmod(int(flat), k)
             angles = self.sampled.angles[model.rows[nearest[a, j]]]
-            fingers = tuple(int(f) for f in assignments[a])
+            fingers = tuple(int(f) for f in orders[a])
             found.append(Reach(float(distance[a, j]), tuple(float(v) for v in angles), fingers, names))
         return found
 
@@ -372,13 +329,20 @@ class HandReachability:
         model = self._model(m)
         # bounds[x, y]: the interval of every code dimension of contact x (finger i) and y (finger j).
         bounds = pair_bounds(contacts.positions, contacts.normals, members, offsets)
-        assignments, pairs = _assignments(m)
+        orders, pairs = assignments(m)
         boxes = model.boxes
         radius2 = self.threshold * self.threshold
         return bool(
-            boxes_within(
-                bounds, assignments, pairs, model.scale, radius2, boxes.low, boxes.high, boxes.points, boxes.starts
-            )
+            boxes_within(bounds, orders, pairs, model.scale, radius2, boxes.low, boxes.high, boxes.points, boxes.starts)
+        )
+
+    def why_none(self) -> str:
+        """What may change a search's finding that no grasp satisfies this constraint (one line)."""
+        recall = "" if self.sampled.recall is None else f", recalling {self.sampled.recall:.0%} of its poses"
+        return (
+            f"the {self.name} hand's reachability model ({self.samples:,} sampled configurations{recall}) accepts "
+            f"none of these contacts' grasps; more [reachability] samples in its descriptor, a larger "
+            f"--hand-threshold (now {self.threshold:g}) or other --hand-fingers may find one"
         )
 
     def describe(self) -> dict[str, object]:
@@ -389,6 +353,7 @@ class HandReachability:
             "model_sha256": self.descriptor.model_sha256,
             "fingers": list(self.fingers) if self.fingers is not None else None,
             "samples": self.samples,
+            "recall": self.sampled.recall,
             "seed": self.seed,
             "threshold": self.threshold,
         }

@@ -13,6 +13,10 @@ class OgcpError(ValueError):
     """
 
 
+class NoGraspError(OgcpError):
+    """A search that ran to its end found no grasp that satisfies the constraints."""
+
+
 class SearchTimeout(OgcpError):
     """A search stopped (time limit, memory limit or stop request) before it had a grasp to return.
 

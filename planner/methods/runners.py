@@ -10,7 +10,7 @@ from __future__ import annotations
 import contextlib
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, fields
 from functools import lru_cache
 from pathlib import Path
@@ -30,7 +30,7 @@ from ogcp.planner.config.options import MEMORY_LIMIT, MethodConfig, options_of
 from ogcp.planner.grasp.constraints import Constraint, MaxFingerSpread
 from ogcp.planner.grasp.contact_set import ContactSet
 from ogcp.planner.hands.reachability import HandReachability
-from ogcp.planner.infra.errors import SearchTimeout
+from ogcp.planner.infra.errors import NoGraspError, SearchTimeout
 from ogcp.planner.infra.parallel import DEFAULT_BACKEND, DEFAULT_JOBS
 from ogcp.planner.records.plan import add_hand, add_optimum, contact_set_record
 from ogcp.planner.search.grasp_planner import GraspPlanner
@@ -114,6 +114,17 @@ def constraints_of(config: HandOptions, m: int) -> tuple[list[Constraint], HandR
     return [*constraints, hand], hand
 
 
+@contextlib.contextmanager
+def _explained(hand: HandReachability | None) -> Iterator[None]:
+    """A search that finds no grasp under a hand says what about the hand's model may change that."""
+    try:
+        yield
+    except NoGraspError as exc:
+        if hand is None:
+            raise
+        raise NoGraspError(f"{exc}: {hand.why_none()}") from None
+
+
 def engine_arguments(config: MethodConfig) -> dict[str, Any]:
     """The configuration's own parameters, named as the engine's constructor names them (constraints apart)."""
     constraint_fields = {f.name for f in fields(ConstraintOptions)}
@@ -138,7 +149,8 @@ def run_search(config: AStarConfig, contacts: ContactSet, m: int, options: RunOp
         memory_limit=options.memory_limit,
         **engine_arguments(config),
     )
-    result = planner.plan(contacts, m, progress=options.progress, stop=options.stop, lines=options.lines)
+    with _explained(hand):
+        result = planner.plan(contacts, m, progress=options.progress, stop=options.stop, lines=options.lines)
     return MethodRun(result, add_hand(result.to_dict(contact_set_record(contacts)), hand, contacts))
 
 
@@ -162,7 +174,8 @@ def run_exhaustive(config: ESConfig | ESPrunedConfig, contacts: ContactSet, m: i
         lines=options.lines,
         **engine_arguments(config),
     )
-    result = search.run(contacts, m)
+    with _explained(hand):
+        result = search.run(contacts, m)
     record = result.to_dict(contact_set_record(contacts))
     if options.contact_seed is not None:
         record["config"]["seed"] = options.contact_seed

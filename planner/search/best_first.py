@@ -42,7 +42,7 @@ import numpy as np
 
 from ogcp.planner.grasp.constraints import Constraint
 from ogcp.planner.grasp.contact_set import ContactSet
-from ogcp.planner.infra.errors import OgcpError, SearchTimeout
+from ogcp.planner.infra.errors import NoGraspError, SearchTimeout
 from ogcp.planner.search.deal import Board, Part, PartDone
 from ogcp.planner.search.expansion import Expansion
 from ogcp.planner.search.open_list import OpenList
@@ -298,7 +298,7 @@ class Search(Expansion):
             return self.stopped(open_list, "memory")  # forgotten states may hold every grasp left
         if part is not None:
             raise PartDone(0.0)  # no valid grasp in this part
-        raise OgcpError("no grasp satisfies the constraints")
+        raise NoGraspError("no grasp satisfies the constraints")
 
     def report_progress(self, open_list: OpenList) -> None:
         """Call :attr:`on_progress` with the best Q1 and the certified bound (of all parts) [-]."""

@@ -28,7 +28,7 @@ from typing import Any
 
 from ogcp.planner.grasp.constraints import Constraint
 from ogcp.planner.grasp.contact_set import ContactSet
-from ogcp.planner.infra.errors import OgcpError, SearchTimeout
+from ogcp.planner.infra.errors import NoGraspError, OgcpError, SearchTimeout
 from ogcp.planner.infra.lifetime import owned_tempdir
 from ogcp.planner.search.best_first import Search
 from ogcp.planner.search.deal import Board, Part, PartDone
@@ -250,7 +250,7 @@ def merge(
             visited = sum(o.stats.visited for o in outcomes)
             seconds = time_limit if why == "stopped" else None
             raise SearchTimeout(config["method"], seconds, visited, None, min(q0, bound), why == "memory")
-        raise OgcpError("no grasp satisfies the constraints")
+        raise NoGraspError("no grasp satisfies the constraints")
     winner = max(found, key=lambda r: r.q1)  # the first of equals: the lowest part
     bound = min(q0, max(winner.q1, bound))
     if bound > winner.q1 and stopped:

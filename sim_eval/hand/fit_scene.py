@@ -2,7 +2,7 @@
 
 :class:`FitScene` poses the hand (palm pose and finger joints) and measures, per solid hand geom,
 how deep it is inside the object and inside other links (``mj_collision`` with zero margins). The
-hand's designed overlaps (pairs that touch in its reference pose) are not counted.
+hand's designed overlaps (:mod:`ogcp.planner.hands.self_collision`) are not counted.
 """
 
 from __future__ import annotations

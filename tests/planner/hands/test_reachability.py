@@ -167,6 +167,19 @@ def test_cli_reports_the_hand_configuration(capsys, tmp_path, monkeypatch):
     assert "the sdh hand has 3 fingers; a grasp of m = 4 contacts cannot use them" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize("method", ["astar", "es"])
+def test_a_search_that_finds_nothing_the_hand_reaches_says_what_to_change(capsys, tmp_path, monkeypatch, method):
+    monkeypatch.setenv("OGCP_CACHE", str(tmp_path))
+    args = ["plan", "box", "-n", "12", "-m", "3", "--diagonal", "2.0", "--hand", "sdh", "--method", method]
+    assert main(args) == 2  # a 2 m box: wider than the SDH opens
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("ogcp: error: no grasp satisfies the constraints: the sdh hand's reachability model (10,000")
+    assert err.endswith(
+        "more [reachability] samples in its descriptor, a larger --hand-threshold (now 1) or other --hand-fingers may find one"
+    )
+    assert "\n" not in err
+
+
 def test_fewer_contacts_than_fingers_use_the_named_fingers(capsys, tmp_path, monkeypatch):
     monkeypatch.setenv("OGCP_CACHE", str(tmp_path))
     args = ["plan", "donut", "-n", "30", "-m", "2", "--hand", "sdh", "--hand-fingers", "thumb,finger_2", "--json"]

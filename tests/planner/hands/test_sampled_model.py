@@ -1,0 +1,66 @@
+"""A reachability model with no fixed size grows until it recalls the hand's own configurations."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from ogcp.planner.hands import HandKinematics, HandReachability, reachability, resolve_hand, sampled_model
+from ogcp.planner.infra.cache import CacheEntryWarning, write_entry
+
+
+@pytest.fixture
+def small(monkeypatch):
+    """Growth in small steps: 1,000 samples first, at most 4,000, recall measured on 300 probes."""
+    for module in (sampled_model, reachability):
+        monkeypatch.setattr(module, "FIRST_SAMPLES", 1_000)
+        monkeypatch.setattr(module, "MAX_AUTO_SAMPLES", 4_000)
+    monkeypatch.setattr(sampled_model, "RECALL_PROBES", 300)
+    return monkeypatch
+
+
+def test_a_model_that_recalls_enough_keeps_its_first_samples(tmp_path, small):
+    model = HandReachability("parallel_gripper", cache_dir=tmp_path)  # two slides: every pose recalled
+    assert model.samples == 1_000 and model.sampled.recall == 1.0
+    assert model.describe()["recall"] == 1.0
+
+
+def test_a_model_that_recalls_too_little_doubles_until_the_cap(tmp_path, small):
+    small.setattr(sampled_model, "AUTO_RECALL", 0.999)  # the SDH's 1,000 samples recall far less
+    grown = HandReachability("sdh", cache_dir=tmp_path / "grown")
+    assert grown.samples == 4_000 and 0.0 < grown.sampled.recall < 0.999
+    # Its first samples are a fixed-size model's with the same seed; the doublings add other ones.
+    fixed = HandReachability("sdh", samples=1_000, cache_dir=tmp_path / "fixed")
+    np.testing.assert_array_equal(grown.q[:1_000], fixed.q)
+    assert len(np.unique(grown.q.round(12), axis=0)) == 4_000
+    # Pads and collisions of an added sample are the hand's.
+    kinematics = HandKinematics(grown.descriptor)
+    points, _ = kinematics.pads_many(grown.q[[3_999]])
+    np.testing.assert_allclose(grown.sampled.points[[3_999]], points, atol=1e-12)
+    # Read back from the cache as it was written, recall included.
+    again = HandReachability("sdh", cache_dir=tmp_path / "grown")
+    np.testing.assert_array_equal(again.q, grown.q)
+    assert again.sampled.recall == grown.sampled.recall
+
+
+def test_recall_rises_with_the_samples(tmp_path, small):
+    small.setattr(sampled_model, "AUTO_RECALL", 0.999)
+    kinematics = HandKinematics(resolve_hand("sdh"))
+    recalls = []
+    probes = sampled_model.pose_samples(kinematics, kinematics.sample(300, 99), sampled_model.tqdm(disable=True))
+    for count in (500, 4_000):
+        sampled = sampled_model.pose_samples(kinematics, kinematics.sample(count, 0), sampled_model.tqdm(disable=True))
+        recalls.append(sampled_model._recall(sampled, probes, (0, 1, 2)))
+    assert recalls[0] < recalls[1]
+
+
+def test_a_grown_model_without_its_recall_is_rebuilt(tmp_path, small):
+    model = HandReachability("parallel_gripper", cache_dir=tmp_path)
+    (entry,) = tmp_path.glob("hand_reach_parallel_gripper_*")
+    with np.load(entry / reachability.MODEL_FILE) as data:
+        arrays = {k: data[k] for k in data.files if k != "recall"}
+    # A sealed entry (its manifest matches) that lacks the recall: the model's own check finds it.
+    write_entry(entry, lambda stage: np.savez(stage / reachability.MODEL_FILE, **arrays), replace=True)
+    with pytest.warns(CacheEntryWarning, match="grown model of 1000 configurations and recall None"):
+        rebuilt = HandReachability("parallel_gripper", cache_dir=tmp_path)
+    assert rebuilt.sampled.recall == model.sampled.recall
