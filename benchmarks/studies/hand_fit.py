@@ -1,7 +1,8 @@
 """Grasps planned with a hand: how many the fit realises, how many hold when the hand closes, and the same grasps with fingertips.
 
 Run: ``python -m ogcp.benchmarks.studies.hand_fit [--cases sdh:box:3,sdh:donut:3,parallel_gripper:box:2]
-[--contacts 100] [--seeds 6] [--diagonal 0.2] [--directions 16] [--plan-time-limit S] [--out DIR]``.
+[--contacts 100] [--seeds 6] [--diagonal 0.2] [--directions 16] [--plan-time-limit S]
+[--torsional-friction METRES] [--out DIR]``.
 
 Per case (hand, object, m) and contact seed: sample the contacts, plan the A* optimum under the hand
 (``--hand``; with ``--plan-time-limit``, the best grasp A* finds within it), fit the hand to it against the object's convex parts (the CoACD decomposition,
@@ -64,12 +65,13 @@ def run_case(hand: str, name: str, m: int, args: argparse.Namespace) -> dict[str
     settings = SimSettings(directions=args.directions)
     with_hand = GraspEvaluator(settings, DecompositionSettings(method=method), hand=setup)
     with_tips = GraspEvaluator(settings, DecompositionSettings(method=method))
-    first = sample_contacts(mesh, n=args.contacts, seed=0)
+    soft = args.torsional_friction  # a two-jaw grasp of hard contacts resists no twist about its line: Q1 = 0
+    first = sample_contacts(mesh, n=args.contacts, seed=0, torsional_friction=soft)
     grasps = np.array(list(itertools.combinations(range(args.contacts), m)))
     accepted = float(model.accepts_many(grasps, first).mean()) if len(grasps) <= 2_000_000 else float("nan")
     rows = []
     for seed in range(args.seeds):
-        contacts = sample_contacts(mesh, n=args.contacts, seed=seed)
+        contacts = sample_contacts(mesh, n=args.contacts, seed=seed, torsional_friction=soft)
         try:
             grasp = tuple(GraspPlanner(constraints=[model], time_limit=args.plan_time_limit).plan(contacts, m).grasp)
         except OgcpError as exc:  # no grasp the hand reaches: recorded, and the other seeds go on
@@ -201,6 +203,13 @@ def main(argv: list[str] | None = None) -> None:
         type=float,
         default=None,
         help="plan each grasp within this many seconds (its best grasp then); default: the A* optimum",
+    )
+    parser.add_argument(
+        "--torsional-friction",
+        type=float,
+        default=0.0,
+        metavar="METRES",
+        help="soft-finger contacts with this torsional friction [m] (0: hard point contacts)",
     )
     parser.add_argument("--out", type=Path, default=None, help="write hand_fit.json and the tips-versus-hand figure")
     args = parser.parse_args(argv)

@@ -51,8 +51,9 @@ def underactuated_fingers(
 ) -> list[str]:
     """The fingers with fewer independent servo directions than directions of motion, in words.
 
-    A finger moves in the directions its joints' equalities leave free (the null space of their
-    rows over its joints); its servos must span their moment arms over those directions.
+    A finger moves in the directions its joints' equalities leave free: the null space of their
+    rows over its joints and the joints they tie it to (another finger's driver, as a gripper's two
+    jaws share one servo); its servos must span their moment arms over those directions.
 
     Args:
         model: The hand's compiled model, servos added.
@@ -67,7 +68,7 @@ def underactuated_fingers(
     equalities = equality_jacobian(model, data)
     found = []
     for name, joints in fingers:
-        dofs = model.jnt_dofadr[list(joints)]
+        dofs = _tied_dofs(equalities, model.jnt_dofadr[list(joints)])
         tied = equalities[:, dofs]
         tied = tied[np.abs(tied).max(axis=1) > 0] if len(tied) else tied
         _, values, basis = np.linalg.svd(tied) if len(tied) else (None, np.zeros(0), np.eye(len(dofs)))
@@ -85,3 +86,18 @@ def underactuated_fingers(
                 f"of motion, {rank} servo direction{'s' * (rank != 1)})"
             )
     return found
+
+
+def _tied_dofs(equalities: NDArray[np.float64], dofs: NDArray[np.intp]) -> NDArray[np.intp]:
+    """``dofs`` and every dof an equality row ties to them, directly or through others, in model order."""
+    found = {int(d) for d in dofs}
+    active = np.abs(equalities) > 0
+    grown = True
+    while grown:
+        grown = False
+        for row in active:
+            touched = set(np.flatnonzero(row).tolist())
+            if touched & found and not touched <= found:
+                found |= touched
+                grown = True
+    return np.array(sorted(found), dtype=np.intp)

@@ -49,6 +49,11 @@ NORMAL_WEIGHT_RADII = 0.5
 REST_WEIGHT = 1e-3
 #: Weight of a link's depth beyond the tolerance, relative to a pad residual.
 COLLISION_WEIGHT = 3.0
+#: Weight of a sprung joint's distance from where its spring pushes it (its spring reference within
+#: its range) [m per full range]: where the pads leave it free, an underactuated finger's passive
+#: joint settles where its spring holds it (the Robotiq 2F-85's spring link keeps its coupler on
+#: its stop), as the closed hand will.
+SPRING_WEIGHT = 1e-3
 #: How far inside each joint's range a start is moved, as a fraction of the range.
 START_INSET = 1e-3
 #: How far along the pad normals the rigid start also matches the pads [in pad radii]: it turns the
@@ -256,6 +261,10 @@ def fit_hand(
     # A closed loop's joints move too, wherever it is: its gap must close.
     looped = {j for loop in kin.loops for j in loop.joints}
     moving = np.array([k for k in free if int(kin.joint_ids[k]) in chosen_joints | looped], dtype=np.intp)
+    stiffness = kin.model.jnt_stiffness[kin.joint_ids]
+    sprung = np.flatnonzero(stiffness > 0)
+    span = kin.limits[sprung, 1] - kin.limits[sprung, 0]
+    spring_aim = np.clip(kin.model.qpos_spring[kin.qpos_index[sprung]], kin.limits[sprung, 0], kin.limits[sprung, 1])
 
     def unpack(x: NDArray[np.float64], variables: NDArray[np.intp]) -> Pose:
         angles = q0.copy()
@@ -273,6 +282,7 @@ def fit_hand(
             weight * (pad - inward).ravel(),
             REST_WEIGHT * (pose[0][resting] - q0[resting]),
             LOOP_WEIGHT * loop_gaps(scene),
+            SPRING_WEIGHT * (pose[0][sprung] - spring_aim) / span,
         ]
         if collide:
             into_object, into_hand = scene.depths()
@@ -290,9 +300,12 @@ def fit_hand(
             moved, turned = jac.point_and_direction(world[f], pad[f], int(scene.hand.pads[f]))
             centre_rows.append(moved - radii[k] * turned)
             normal_rows.append(weight * turned)
+        derivative = kin.complete_derivative(pose[0])
         rest = np.zeros((len(resting), jac.columns))
-        rest[:, : len(variables)] = REST_WEIGHT * kin.complete_derivative(pose[0])[np.ix_(resting, variables)]
-        rows = [*centre_rows, *normal_rows, rest, LOOP_WEIGHT * loop_rows(scene, jac)]
+        rest[:, : len(variables)] = REST_WEIGHT * derivative[np.ix_(resting, variables)]
+        spring = np.zeros((len(sprung), jac.columns))
+        spring[:, : len(variables)] = SPRING_WEIGHT * derivative[np.ix_(sprung, variables)] / span[:, None]
+        rows = [*centre_rows, *normal_rows, rest, LOOP_WEIGHT * loop_rows(scene, jac), spring]
         if collide:
             rows.append(COLLISION_WEIGHT * _depth_rows(scene, jac))
         return np.vstack(rows)

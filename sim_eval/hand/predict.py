@@ -171,7 +171,7 @@ def hand_resistance(
             A_ub=limits.rows if limits is not None and len(limits.rows) else None,
             b_ub=limits.bounds if limits is not None and len(limits.rows) else None,
             A_eq=rows,
-            b_eq=np.zeros(len(rows)),
+            b_eq=statics.balance_rhs,
             bounds=bounds,
             method="highs",
         )
@@ -196,17 +196,26 @@ class HandStatics:
             forces' joint torques minus the actuators', the equalities' and the limits'.
         bounds: Each variable's (low, high), None where unbounded.
         edges: Cone edges per contact E.
+        springs: The joints' spring torques at the state (MuJoCo's ``qfrc_spring``: joint and
+            tendon stiffness), shape (J,) [N·m or N]: what ``hand_balance`` must equal.
     """
 
     object_balance: NDArray[np.float64]
     hand_balance: NDArray[np.float64]
     bounds: list[tuple[float | None, float | None]]
     edges: int
+    springs: NDArray[np.float64]
 
     @property
     def size(self) -> int:
         """Number of variables."""
         return len(self.bounds)
+
+    @property
+    def balance_rhs(self) -> NDArray[np.float64]:
+        """Right-hand side of ``[object_balance; hand_balance] x = rhs``: no net wrench on the
+        object, and the hand's joints balanced against its springs, shape (6 + J,)."""
+        return np.concatenate([np.zeros(6), self.springs])
 
 
 def hand_statics(
@@ -222,12 +231,16 @@ def hand_statics(
     edge_count: int,
     stops: bool = True,
     torsion: float = 0.0,
+    passive_stops: bool = False,
 ) -> HandStatics:
     """The statics of contacts ``points`` (K, 3) [m] with inward ``normals`` on hand ``bodies``, in a state.
 
     With ``stops``, the joints resting on a limit get its reaction (:func:`limit_reactions`): a
     load that pushes a joint into its limit meets the limit. A grip leaves them out: limits only
-    react, and two of them against each other would squeeze the object with no actuator at all.
+    react, and two of them against each other would squeeze the object with no actuator at all;
+    with ``passive_stops`` it keeps those of joints no actuator moves (an underactuated finger's
+    passive joint held on its stop, as the Robotiq 2F-85 pinches with its coupler on its stop).
+    Joint and tendon springs push as MuJoCo's ``qfrc_spring`` at the state (``springs``).
     With ``torsion`` [m] > 0 the contacts are soft fingers, as MuJoCo simulates them (condim 4):
     each contact's primitives (:func:`~ogcp.planner.grasp.wrench.contact_wrenches`) add a twist
     about its normal of up to ``torsion`` times its normal force, which the hand supplies through
@@ -252,7 +265,16 @@ def hand_statics(
         contact_torques[:, k * per : (k + 1) * per] = block
     moment = actuator_moments(model, data)[:, dofs].T  # (J, nu)
     couplings = equality_rows(model, data, dofs)  # (n_eq, J)
-    limits = limit_reactions(model, data, hand) if stops else np.zeros((len(dofs), 0))  # (J, L)
+    if stops:
+        limits = limit_reactions(model, data, hand)  # (J, L)
+    elif passive_stops:
+        joints = hand_joints(model, hand)
+        passive = {j for k, j in enumerate(joints) if not np.abs(moment[k]).max(initial=0.0) > 0}
+        limits = limit_reactions(model, data, hand, only=passive)
+    else:
+        limits = np.zeros((len(dofs), 0))
+    mujoco.mj_passive(model, data)  # the springs' forces at this pose (damping needs no velocity here)
+    springs = np.asarray(data.qfrc_spring[dofs], dtype=float).copy()
     low, high = force_ranges(model)
     extra = model.nu + len(couplings) + limits.shape[1]
     return HandStatics(
@@ -263,6 +285,7 @@ def hand_statics(
         + [(None, None)] * len(couplings)
         + [(0.0, None)] * limits.shape[1],
         per,
+        springs,
     )
 
 
@@ -292,15 +315,19 @@ def resting_limits(model: mujoco.MjModel, data: mujoco.MjData, hand: MountedHand
     return resting
 
 
-def limit_reactions(model: mujoco.MjModel, data: mujoco.MjData, hand: MountedHand) -> NDArray[np.float64]:
-    """Torques the joint limits can supply at a pose: one column per resting limit (:func:`resting_limits`), shape (J, L).
+def limit_reactions(
+    model: mujoco.MjModel, data: mujoco.MjData, hand: MountedHand, only: set[int] | None = None
+) -> NDArray[np.float64]:
+    """Torques the joint limits can supply at a pose: one column per resting limit (:func:`resting_limits`;
+    of the joints ``only`` names, if given), shape (J, L).
 
     The limit pushes back with any torque >= 0 along its column (away from the limit); within the
     trial's failure distance only as much as its softness lets it (:func:`~ogcp.sim_eval.hand.travel.stop_reach`).
     """
     joints = hand_joints(model, hand)
     row = {joint: k for k, joint in enumerate(joints)}
-    columns = [side * np.eye(len(joints))[row[joint]] for joint, side in resting_limits(model, data, hand)]
+    resting = [(joint, side) for joint, side in resting_limits(model, data, hand) if only is None or joint in only]
+    columns = [side * np.eye(len(joints))[row[joint]] for joint, side in resting]
     return np.array(columns).T if columns else np.zeros((len(joints), 0))
 
 

@@ -32,7 +32,7 @@ from ogcp.sim_eval.hand.fit import HandFit, fit_hand
 from ogcp.sim_eval.hand.fit_scene import FitScene
 from ogcp.sim_eval.hand.mount import MOUNT, PREFIX, MountedHand, attach_hand
 from ogcp.sim_eval.hand.servo_step import steady_servos
-from ogcp.sim_eval.hand.squeeze import Grip, balanced_grip
+from ogcp.sim_eval.hand.squeeze import Grip, balanced_grip, servo_ctrl
 from ogcp.sim_eval.scene.collision import Part
 from ogcp.sim_eval.scene.grasp_scene import GraspScene, add_object, contact_friction, set_options
 from ogcp.sim_eval.settings import SimSettings
@@ -98,12 +98,13 @@ class HandScene:
 
 
 def servo_targets(model: mujoco.MjModel, hand: MountedHand, angles: ArrayLike) -> NDArray[np.float64]:
-    """Each position actuator's target at a configuration: its length there, within its ctrl range."""
+    """Each position actuator's control that holds a configuration (its length there for a
+    ``<position>`` servo; :func:`~ogcp.sim_eval.hand.squeeze.servo_ctrl`), within its ctrl range."""
     data = mujoco.MjData(model)
     data.qpos[:] = model.qpos0
     data.qpos[hand.qpos] = angles
     mujoco.mj_fwdPosition(model, data)
-    ctrl = data.actuator_length.copy()  # a servo's force is kp (ctrl - length): gear included
+    ctrl = servo_ctrl(model, data.actuator_length)  # no force at rest there: gear included
     limited = model.actuator_ctrllimited.astype(bool)
     ctrl[limited] = np.clip(ctrl[limited], model.actuator_ctrlrange[limited, 0], model.actuator_ctrlrange[limited, 1])
     return ctrl

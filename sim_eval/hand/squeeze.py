@@ -7,14 +7,16 @@ fitted pose: contact forces f_k in the linearised friction cones at the pads (th
 contacts), with
 
     sum_k [f_k, (p_k - c) x f_k / rho] = 0           (no net wrench: the object stays put)
-    sum_k J_k^T f_k = M^T u + E^T eta,  u within the actuators' force ranges
+    sum_k J_k^T f_k = M^T u + E^T eta + L s + tau,  u within the actuators' force ranges
 
-maximising the smallest normal force. A hand with an actuator that has no force limit is capped at
+(``eta`` the equalities' forces, ``s >= 0`` the reactions of the stops that passive joints rest on,
+``tau`` the springs' torques at the pose), maximising the smallest normal force. A hand with an actuator that has no force limit is capped at
 ``max_normal_force`` (F_max) there, as fingertips are, and then presses the least total force that
 keeps every pad at that level.
-Each position servo's target is then its length at the pose plus ``u / kp``: at equilibrium it
-pushes exactly ``u``, so the hand holds the object with those balanced forces, at its actuators'
-limits where the program needs them (as fingertips press at F_max).
+Each position servo's control is then the one under which, at its length at the pose, it pushes
+exactly ``u`` (its length plus ``u / kp`` for MuJoCo's ``<position>``; :func:`servo_ctrl` for any
+affine servo, such as a gripper's 0-255 command), so the hand holds the object with those balanced
+forces, at its actuators' limits where the program needs them (as fingertips press at F_max).
 """
 
 from __future__ import annotations
@@ -24,7 +26,7 @@ from dataclasses import dataclass
 
 import mujoco
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import linprog
 
 from ogcp.sim_eval.hand.mount import MountedHand
@@ -51,18 +53,14 @@ class Grip:
     def targets(self, model: mujoco.MjModel, share: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Servo targets (nu,) that press ``share`` of the grip, and the pads' normal forces (m,) [N].
 
-        Each position servo's target is its length plus ``u / kp``; one the grip puts at its force
-        limit aims twice as far, since the pads sink a little into the soft contacts and it still
-        presses at its limit (where its force is clamped).
+        Each position servo's control pushes ``u`` at the pose (:func:`servo_ctrl`); one the grip
+        puts at its force limit asks for twice that, since the pads sink a little into the soft
+        contacts and it still presses at its limit (where its force is clamped).
         """
         u = share * self.forces
-        gains = model.actuator_gainprm[:, 0]
-        position = position_servos(model)
         limit = np.abs(model.actuator_forcerange).max(axis=1)
         at_limit = model.actuator_forcelimited.astype(bool) & (np.abs(u) >= (1 - 1e-6) * limit)
-        reach = np.where(at_limit, 2.0, 1.0)
-        targets = self.length.copy()
-        targets[position] += reach[position] * u[position] / gains[position]
+        targets = servo_ctrl(model, self.length, np.where(at_limit, 2.0, 1.0) * u)
         limited = model.actuator_ctrllimited.astype(bool)
         targets[limited] = np.clip(
             targets[limited], model.actuator_ctrlrange[limited, 0], model.actuator_ctrlrange[limited, 1]
@@ -102,7 +100,9 @@ def balanced_grip(
     mujoco.mj_fwdPosition(model, data)
     m = len(fingers)
     bodies = [int(hand.pads[finger]) for finger in fingers]
-    statics = hand_statics(model, data, hand, points, normals, bodies, com, torque_scale, mu, EDGES, stops=False)
+    statics = hand_statics(
+        model, data, hand, points, normals, bodies, com, torque_scale, mu, EDGES, stops=False, passive_stops=True
+    )
     n_lambda, n_u = m * EDGES, model.nu
     # Variables [statics', t]: maximise t, every pad's normal force (its edges' weights) >= t.
     cost = np.zeros(statics.size + 1)
@@ -114,7 +114,7 @@ def balanced_grip(
         at_least[k, k * EDGES : (k + 1) * EDGES] = -1.0
     at_least[:, -1] = 1.0
     bounds = _servo_reach(model, data, statics.bounds, n_lambda)
-    problem = {"A_ub": at_least, "b_ub": np.zeros(m), "A_eq": equalities, "b_eq": np.zeros(len(equalities))}
+    problem = {"A_ub": at_least, "b_ub": np.zeros(m), "A_eq": equalities, "b_eq": statics.balance_rhs}
     # An actuator without a force limit (a model that leaves them out) presses as far as its
     # control range lets a stiff servo: tens of newtons, which it holds only while nothing slips.
     # Such a hand grips as fingertips do, its weakest pad at F_max.
@@ -140,8 +140,24 @@ def balanced_grip(
 
 
 def position_servos(model: mujoco.MjModel) -> NDArray[np.bool_]:
-    """Which actuators are position servos, force ``kp (ctrl - length) - kv velocity``, shape (nu,)."""
+    """Which actuators are position servos: force ``g ctrl + b0 + b1 length + b2 velocity`` with
+    ``g > 0`` and ``b1 < 0`` (``kp (ctrl - length) - kv velocity`` for MuJoCo's ``<position>``), shape (nu,)."""
     return np.asarray((model.actuator_biasprm[:, 1] < 0) & (model.actuator_gainprm[:, 0] > 0))
+
+
+def servo_ctrl(model: mujoco.MjModel, length: NDArray[np.float64], force: ArrayLike = 0.0) -> NDArray[np.float64]:
+    """Controls (nu,) under which each position servo pushes ``force`` at rest at ``length``, unclamped.
+
+    ``(force - b0 - b1 length) / g``: the length itself plus ``force / kp`` for a ``<position>``
+    servo, and the command a general affine servo needs (the Robotiq 2F-85's takes 0-255 for
+    0-0.8 rad). Other actuators get their length, as before.
+    """
+    ctrl = np.array(length, dtype=float)
+    servo = position_servos(model)
+    push = np.broadcast_to(np.asarray(force, dtype=float), ctrl.shape)
+    gain, bias = model.actuator_gainprm[servo, 0], model.actuator_biasprm[servo]
+    ctrl[servo] = (push[servo] - bias[:, 0] - bias[:, 1] * ctrl[servo]) / gain
+    return ctrl
 
 
 def _servo_reach(
@@ -149,17 +165,17 @@ def _servo_reach(
 ) -> list[tuple[float | None, float | None]]:
     """The actuator forces' bounds narrowed to what each position servo can press within its control range.
 
-    A servo's force is ``kp (ctrl - length)`` and its target is clamped to ``ctrlrange``: a grip
-    that needs a target past it is never pressed (soft servos need targets far past the pose), so
-    the finger it relies on lets go of the object.
+    A servo's force at rest is ``g ctrl + b0 + b1 length`` (``kp (ctrl - length)``) and its control
+    is clamped to ``ctrlrange``: a grip that needs a control past it is never pressed (soft servos
+    need targets far past the pose), so the finger it relies on lets go of the object.
     """
     narrowed = list(bounds)
-    gains = model.actuator_gainprm[:, 0]
+    gains, bias = model.actuator_gainprm[:, 0], model.actuator_biasprm
     position = position_servos(model)
     for a in range(model.nu):
         if not (position[a] and model.actuator_ctrllimited[a]):
             continue
-        reach = gains[a] * (model.actuator_ctrlrange[a] - data.actuator_length[a])
+        reach = gains[a] * model.actuator_ctrlrange[a] + bias[a, 0] + bias[a, 1] * data.actuator_length[a]
         low, high = narrowed[first + a]
         low = float(reach[0]) if low is None else max(low, float(reach[0]))
         high = float(reach[1]) if high is None else min(high, float(reach[1]))

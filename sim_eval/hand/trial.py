@@ -336,7 +336,8 @@ def simulate_hand_grasp(
     holds: dict[str, Any] = {}
     # The loads run on the scene with the palm and the idle fingers welded where they settled.
     reach = failure_reach(settings.move_threshold, settings.rotation_threshold, body.diagonal)
-    lean = lean_scene(closed, settled, reach) if not compat and not settled.gates["diverged"] else None
+    still = settings.creep_tolerance
+    lean = lean_scene(closed, settled, reach, still) if not compat and not settled.gates["diverged"] else None
     if lean is not None:
         hand["protocol_scene"] = lean.summary
     if not settled.gates["diverged"] and settings.weight_test and not settings.gravity:

@@ -8,6 +8,7 @@ the same trials with a plain ``mj_step`` loop (the reference the rollout is chec
 
 from __future__ import annotations
 
+import math
 import os
 from dataclasses import dataclass, field
 
@@ -177,6 +178,37 @@ def settle(scene: GraspScene, settings: SimSettings) -> Settled:
     state = np.empty(mujoco.mj_stateSize(model, FULL_STATE))
     mujoco.mj_getState(model, data, state, FULL_STATE)
     return Settled(state, pose, gates, forces)
+
+
+def unloaded_drift(scene: GraspScene, settled: Settled) -> float:
+    """Farthest the object moves from a settled state, with no load, over :data:`CREEP_WINDOW` [m]; inf if it diverges."""
+    model = scene.model
+    data = mujoco.MjData(model)
+    mujoco.mj_setState(model, data, settled.state, FULL_STATE)
+    data.ctrl[:] = scene.preload_ctrl
+    q = slice(scene.object_qpos, scene.object_qpos + 3)
+    start = data.qpos[q].copy()
+    farthest = 0.0
+    for _ in range(max(1, round(CREEP_WINDOW / model.opt.timestep))):
+        mujoco.mj_step(model, data)
+        if not np.all(np.isfinite(data.qpos)):
+            return math.inf
+        farthest = max(farthest, float(np.linalg.norm(data.qpos[q] - start)))
+    return farthest
+
+
+def settle_further(scene: GraspScene, settled: Settled, seconds: float) -> Settled:
+    """A settled state run on with no load for ``seconds``: its state and the object's pose (the gates kept)."""
+    model = scene.model
+    data = mujoco.MjData(model)
+    mujoco.mj_setState(model, data, settled.state, FULL_STATE)
+    data.ctrl[:] = scene.preload_ctrl
+    for _ in range(max(1, round(seconds / model.opt.timestep))):
+        mujoco.mj_step(model, data)
+    state = np.empty(mujoco.mj_stateSize(model, FULL_STATE))
+    mujoco.mj_getState(model, data, state, FULL_STATE)
+    pose = data.qpos[scene.object_qpos : scene.object_qpos + 7].copy()
+    return Settled(state, pose, settled.gates, settled.normal_forces)
 
 
 def _physical(directions: NDArray[np.float64], torque_scale: float) -> NDArray[np.float64]:

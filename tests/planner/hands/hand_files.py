@@ -189,19 +189,25 @@ def write_gripper_variant(
     return folder / "g.toml"
 
 
-#: A parallelogram gripper: each jaw hangs from a driven link and a passive follower link whose
-#: tip a ``connect`` pins to the jaw, so the jaw stays upright (a four-bar loop, as the Robotiq
-#: 2F-85 closes its own). Only the drivers have servos; the loops are made stiff, as a real
-#: model's must be for light links under a squeeze.
-FOURBAR = """<mujoco model="fourbar">
-  <compiler angle="radian" autolimits="true"/>
+#: The palm of the two-jaw loop grippers below, with their jaws in it.
+TWO_JAW_PALM = """  <compiler angle="radian" autolimits="true"/>
   <worldbody>
     <body name="palm">
       <geom name="palm" type="box" size="0.015 0.06 0.008" pos="0 0 -0.008"/>
       {jaws}
     </body>
   </worldbody>
-  <contact>
+"""
+
+#: A parallelogram gripper: each jaw hangs from a driven link and a passive follower link whose
+#: tip a ``connect`` pins to the jaw, so the jaw stays upright (a four-bar loop, as the Robotiq
+#: 2F-85 closes its own). Only the drivers have servos; the loops are made stiff, as a real
+#: model's must be for light links under a squeeze.
+FOURBAR = (
+    """<mujoco model="fourbar">
+"""
+    + TWO_JAW_PALM
+    + """  <contact>
     <exclude body1="l_pad" body2="l_follower"/>
     <exclude body1="r_pad" body2="r_follower"/>
   </contact>
@@ -215,6 +221,7 @@ FOURBAR = """<mujoco model="fourbar">
   </actuator>
 </mujoco>
 """
+)
 JAW = """<body name="{s}_driver" pos="0 {y} 0">
         <joint name="{s}_driver" axis="{ax} 0 0" range="-0.3 0.9" damping="0.05"/>
         <geom type="capsule" fromto="0 0 0 0 0 0.05" size="0.004"/>
@@ -258,4 +265,78 @@ def write_fourbar_gripper(folder: Path) -> Path:
     (folder / "fourbar.xml").write_text(FOURBAR.format(jaws=jaws))
     path = folder / "fourbar.toml"
     path.write_text(FOURBAR_DESCRIPTOR)
+    return path
+
+
+#: An adaptive (underactuated) gripper, as the Robotiq 2F-85 is built: each jaw's pad hangs from a
+#: passive chain (a base link, an elbow, the pad's hinge) that a ``connect`` pins to the tip of a
+#: driven link beside it, a five-bar loop with two degrees of freedom and one servo. A spring
+#: holds each elbow on its stop, so the jaws close parallel until something pushes them out of
+#: it. One general affine servo (a 0-255 command, as grippers take) drives both driven links
+#: through a tendon, and a joint equality keeps them together.
+ADAPTIVE = (
+    """<mujoco model="adaptive">
+"""
+    + TWO_JAW_PALM
+    + """  <contact>
+    <exclude body1="l_pad" body2="l_drive"/>
+    <exclude body1="r_pad" body2="r_drive"/>
+    <exclude body1="l_elbow" body2="l_drive"/>
+    <exclude body1="r_elbow" body2="r_drive"/>
+  </contact>
+  <tendon>
+    <fixed name="split"><joint joint="l_drive" coef="0.5"/><joint joint="r_drive" coef="0.5"/></fixed>
+  </tendon>
+  <equality>
+    <connect body1="l_drive" body2="l_pad" anchor="0 0 0.05" {loop}/>
+    <connect body1="r_drive" body2="r_pad" anchor="0 0 0.05" {loop}/>
+    <joint joint1="r_drive" joint2="l_drive" solref="0.004 1" solimp="0.9999 0.9999 0.001"/>
+  </equality>
+  <actuator>
+    <general name="squeeze" tendon="split" gainprm="{gain}" biastype="affine" biasprm="0 -20 -0.5"
+      ctrlrange="0 255" forcerange="-0.6 0.6"/>
+  </actuator>
+</mujoco>
+"""
+)
+ADAPTIVE_JAW = """<body name="{s}_base" pos="0 {y} 0">
+        <joint name="{s}_base" axis="{ax} 0 0" range="-0.3 0.9" damping="0.01"/>
+        <geom type="capsule" fromto="0 0 0 0 0 0.025" size="0.004"/>
+        <body name="{s}_elbow" pos="0 0 0.025">
+          <joint name="{s}_elbow" axis="{ax} 0 0" range="{elbow}" stiffness="0.02" springref="{spring}" damping="0.01"
+            solreflimit="0.004 1" solimplimit="0.95 0.99 0.001"/>
+          <geom type="capsule" fromto="0 0 0 0 0 0.025" size="0.004"/>
+          <body name="{s}_pad" pos="0 0 0.025">
+            <joint name="{s}_pad" axis="{ax} 0 0" range="-1 1" damping="0.01"/>
+            <geom name="{s}_pad" type="box" pos="0 {inward} 0.02" size="0.01 0.004 0.025"/>
+          </body>
+        </body>
+      </body>
+      <body name="{s}_drive" pos="0 {y2} 0">
+        <joint name="{s}_drive" axis="{ax} 0 0" range="-0.3 0.9" damping="0.01"/>
+        <geom type="capsule" fromto="0 0 0 0 0 0.05" size="0.003"/>
+      </body>"""
+
+
+#: Stiff loops: a model's light links need them under a squeeze (MuJoCo's default lets them give).
+STIFF_LOOP = 'solref="0.004 1" solimp="0.9999 0.9999 0.001"'
+
+
+def write_adaptive_gripper(folder: Path, elbow: str = "0 1", spring: float = -1.0, loop: str = STIFF_LOOP) -> Path:
+    """The adaptive gripper and its descriptor in ``folder``; returns the descriptor's path.
+
+    ``elbow`` is the elbows' range [rad] and ``spring`` their spring's reference [rad]: by default the
+    spring presses each elbow on its lower stop, 0, where the jaw stands parallel. ``loop`` holds the
+    ``connect`` equalities' softness attributes.
+    """
+    folder.mkdir(parents=True, exist_ok=True)
+    jaws = "\n      ".join(
+        ADAPTIVE_JAW.format(
+            s=s, y=sign * 0.03, y2=sign * 0.045, ax=sign, inward=-sign * 0.006, elbow=elbow, spring=spring
+        )
+        for s, sign in (("l", 1), ("r", -1))
+    )
+    (folder / "adaptive.xml").write_text(ADAPTIVE.format(jaws=jaws, gain=20 * 0.9 / 255, loop=loop))
+    path = folder / "adaptive.toml"
+    path.write_text(FOURBAR_DESCRIPTOR.replace('"fourbar"', '"adaptive"').replace('"fourbar.xml"', '"adaptive.xml"'))
     return path

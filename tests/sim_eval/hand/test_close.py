@@ -31,10 +31,33 @@ def _closed(kinematics: HandKinematics, settings: SimSettings):
     return opened, close_hand(opened)
 
 
-@pytest.mark.parametrize("hand", ["parallel_gripper", "urdf"])
+#: The gripper's own servos written as a gripper's driver often is: a general affine actuator whose
+#: command runs 0-255 over the jaw's 0-40 mm (the Robotiq 2F-85's form), kp 20000 N/m as the
+#: descriptor's servos: force = 3.137 ctrl - 20000 length - 30 velocity.
+AFFINE_SERVOS = "".join(
+    f'<general name="{side}" joint="{side}" gainprm="{20000 * 0.04 / 255}" biastype="affine" '
+    f'biasprm="0 -20000 -30" ctrlrange="0 255" forcerange="-20 20"/>'
+    for side in ("left", "right")
+)
+
+
+def _pinching_hand(hand: str, folder) -> HandKinematics:
+    if hand == "urdf":
+        return HandKinematics(load_descriptor(write_urdf_gripper(folder)))
+    if hand == "affine":
+        actuated = write_gripper_variant(
+            folder, lambda text: text.replace("</worldbody>", f"</worldbody><actuator>{AFFINE_SERVOS}</actuator>")
+        )
+        kinematics = HandKinematics(load_descriptor(actuated))
+        assert kinematics.servos == ()  # its own actuators drive it
+        return kinematics
+    return HandKinematics(resolve_hand(hand))
+
+
+@pytest.mark.parametrize("hand", ["parallel_gripper", "urdf", "affine"])
 def test_a_pinch_resists_slip_as_two_mu_f(hand, tmp_path):
     """Along the jaws, a pinch holds until 2 mu F, F each jaw's force: its servo's limit over a lever of 1 (slides)."""
-    kinematics = HandKinematics(resolve_hand(hand) if hand != "urdf" else load_descriptor(write_urdf_gripper(tmp_path)))
+    kinematics = _pinching_hand(hand, tmp_path)
     limit = kinematics.descriptor.actuation.force_range
     settings = SimSettings()
     opened, closed = _closed(kinematics, settings)

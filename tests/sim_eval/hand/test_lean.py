@@ -142,3 +142,29 @@ def test_without_a_spec_or_a_finite_state_the_protocol_keeps_the_full_scene(faul
     lean = lean_scene(closed, settled, _reach(settings))
     assert lean.scene is closed.scene and lean.settled is settled
     assert lean.summary["lean"] is False and lean.summary["reason"]
+
+
+def test_a_lean_scene_that_does_not_hold_the_object_still_settles_again_or_gives_way(tmp_path, monkeypatch):
+    """The lean scene must hold the unloaded object as still as the full scene does; where it moves it more,
+    it settles again, and where it still does, the protocol keeps the full scene."""
+    from ogcp.sim_eval.hand import lean as lean_module
+
+    settings = SimSettings()
+    closed, settled = _closed(_three_jaws(tmp_path), settings)
+    still = lean_scene(closed, settled, _reach(settings), creep=settings.creep_tolerance)
+    assert still.summary["lean"] is True and "settled_again" not in still.summary
+    moved = {"calls": 0}
+    real_drift = lean_module.unloaded_drift
+
+    def drifting_once(scene, state):  # the lean scene's mapped state moves; settled again, it does not
+        moved["calls"] += 1
+        return 1.0 if moved["calls"] == 2 else real_drift(scene, state)  # call 1: the full scene
+
+    monkeypatch.setattr(lean_module, "unloaded_drift", drifting_once)
+    again = lean_scene(closed, settled, _reach(settings), creep=settings.creep_tolerance)
+    assert again.summary["lean"] is True and again.summary["settled_again"] is True
+    assert again.settled.state is not settled.state and len(again.settled.pose) == 7
+    monkeypatch.setattr(lean_module, "unloaded_drift", lambda scene, state: 0.0 if scene is closed.scene else 1.0)
+    kept = lean_scene(closed, settled, _reach(settings), creep=settings.creep_tolerance)
+    assert kept.scene is closed.scene and kept.settled is settled and kept.summary["lean"] is False
+    assert "even after settling again" in kept.summary["reason"]
