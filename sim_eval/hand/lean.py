@@ -188,11 +188,12 @@ def _uncoupled(model: mujoco.MjModel, welded: set[int], mount: int) -> set[int]:
         for involved in _couplings(model):
             moving = {b for b in involved if b not in welded and model.body_jntnum[b] > 0}
             if moving and involved & welded:
-                for body in involved:
+                before = len(welded)
+                for body in involved:  # the mount stays: the palm is held rigidly whatever pulls on it
                     while body not in (mount, 0):
                         welded.discard(body)
                         body = int(model.body_parentid[body])
-                changed = True
+                changed = changed or len(welded) < before
     return welded
 
 

@@ -168,3 +168,20 @@ def test_a_lean_scene_that_does_not_hold_the_object_still_settles_again_or_gives
     kept = lean_scene(closed, settled, _reach(settings), creep=settings.creep_tolerance)
     assert kept.scene is closed.scene and kept.settled is settled and kept.summary["lean"] is False
     assert "even after settling again" in kept.summary["reason"]
+
+
+def test_a_tendon_from_the_palm_to_a_jaw_keeps_the_palm_welded(tmp_path):
+    """A spatial tendon ties the palm's rigid group to a moving jaw: the jaw keeps moving, the palm stays held."""
+
+    def edit(text: str) -> str:
+        text = text.replace('<geom name="palm"', '<site name="anchor" pos="0 0.05 0"/><geom name="palm"')
+        text = text.replace('<geom name="left"', '<site name="strap_end" pos="0 0 0.03"/><geom name="left"')
+        strap = '<tendon><spatial name="strap"><site site="anchor"/><site site="strap_end"/></spatial></tendon>'
+        return text.replace("</worldbody>", "</worldbody>" + strap)
+
+    settings = SimSettings()
+    closed, settled = _closed(HandKinematics(load_descriptor(write_gripper_variant(tmp_path, edit))), settings)
+    assert closed.scene.model.ntendon == 1
+    lean = lean_scene(closed, settled, _reach(settings), creep=settings.creep_tolerance)
+    assert lean.summary["lean"] is True and lean.summary["welded_joints"] == ["ogcp_mount_free"]
+    assert lean.scene.model.ntendon == 1
