@@ -203,7 +203,10 @@ class HandReachability:
             recall = float(data["recall"]) if "recall" in data.files else None
         fingers = len(self.descriptor.fingers)
         count = self.samples if self.samples is not None else len(angles)
-        if self.samples is None and not (FIRST_SAMPLES <= count <= MAX_AUTO_SAMPLES and recall is not None):
+        recalls = len(self._recalled()) >= 2  # a one-finger hand has no pair to recall: it keeps its first samples
+        if self.samples is None and not (
+            FIRST_SAMPLES <= count <= MAX_AUTO_SAMPLES and (recall is not None or not recalls)
+        ):
             raise ValueError(f"a grown model of {count} configurations and recall {recall}")
         if names.ndim != 1 or names.dtype.kind != "U" or angles.shape != (count, len(names)):
             raise ValueError(

@@ -5,7 +5,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ogcp.planner.hands import HandKinematics, HandReachability, reachability, resolve_hand, sampled_model
+from ogcp.planner.hands import (
+    HandKinematics,
+    HandReachability,
+    load_descriptor,
+    reachability,
+    resolve_hand,
+    sampled_model,
+)
 from ogcp.planner.infra.cache import CacheEntryWarning, write_entry
 
 
@@ -64,3 +71,22 @@ def test_a_grown_model_without_its_recall_is_rebuilt(tmp_path, small):
     with pytest.warns(CacheEntryWarning, match="grown model of 1000 configurations and recall None"):
         rebuilt = HandReachability("parallel_gripper", cache_dir=tmp_path)
     assert rebuilt.sampled.recall == model.sampled.recall
+
+
+def test_a_one_finger_hand_keeps_its_first_samples_and_its_cache_entry(tmp_path, small):
+    import warnings
+
+    from tests.planner.hands.hand_files import write_gripper_variant
+
+    (tmp_path / "hand").mkdir()
+    path = write_gripper_variant(tmp_path / "hand", lambda text: text)
+    text = path.read_text()
+    path.write_text(
+        text[: text.index("[[fingers]]", text.index("[[fingers]]") + 1)] + text[text.index("[actuation]") :]
+    )
+    model = HandReachability(load_descriptor(path), cache_dir=tmp_path / "cache")
+    assert model.samples == 1_000 and model.sampled.recall is None
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # read back as it was written, not rebuilt
+        again = HandReachability(load_descriptor(path), cache_dir=tmp_path / "cache")
+    np.testing.assert_array_equal(again.q, model.q)
