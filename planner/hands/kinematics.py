@@ -120,7 +120,9 @@ class HandKinematics:
             [k for k, j in enumerate(joint_ids) if j not in {dep for dep, _, _ in self._couplings}], dtype=np.intp
         )
         self.body_groups = self._body_groups()
-        self._collider = collision_model(self.model)
+        self.root = self._root()
+        in_hand = np.array([self._is_below(int(b), self.root) for b in self.model.geom_bodyid], dtype=bool)
+        self._collider = collision_model(self.model, in_hand)
         listed = [
             (self._body(self.model, a, "ignore_collisions"), self._body(self.model, b, "ignore_collisions"))
             for a, b in descriptor.ignore_collisions
@@ -128,7 +130,6 @@ class HandKinematics:
         samples = self.sample(OVERLAP_SAMPLES, OVERLAP_SEED)
         self.overlaps = designed_overlaps(self._collider, self._pose, self.reference(), samples, listed)
         self._warn_if_chain_overlaps()
-        self.root = self._root()
         self.palm_pose = self._palm_pose()
 
     # ----- checks against the compiled model -------------------------------------------------

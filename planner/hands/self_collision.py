@@ -39,9 +39,16 @@ OVERLAP_SEED = 0
 GeomPair = tuple[int, int]
 
 
-def collision_model(model: mujoco.MjModel) -> mujoco.MjModel:
-    """A copy of a hand's model in which every geom that collides with anything collides with every other."""
+def collision_model(model: mujoco.MjModel, hand_geoms: NDArray[np.bool_] | None = None) -> mujoco.MjModel:
+    """A copy of a hand's model in which every geom that collides with anything collides with every other.
+
+    ``hand_geoms`` (shape (ngeom,)) marks the hand's own geoms; the others (a floor or a table in the
+    file the descriptor names, which no scene takes over) collide with nothing.
+    """
     collider = copy.copy(model)
+    if hand_geoms is not None:
+        collider.geom_contype[~hand_geoms] = 0
+        collider.geom_conaffinity[~hand_geoms] = 0
     solid = (collider.geom_contype != 0) | (collider.geom_conaffinity != 0)
     collider.geom_contype[solid] = 1
     collider.geom_conaffinity[solid] = 1

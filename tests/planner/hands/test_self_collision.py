@@ -131,3 +131,15 @@ def test_an_unknown_body_in_the_ignore_list_names_the_models_bodies(tmp_path):
         OgcpError, match=r"ignore_collisions = 'thumb' is not a body of hulls.xml; its bodies are palm, f0_base"
     ):
         HandKinematics(load_descriptor(path))
+
+
+def test_a_geom_outside_the_hand_is_no_part_of_it(tmp_path):
+    """Geoms outside the hand's subtree (a table in the file the descriptor names) collide with nothing:
+    finger 0's tip, bent 0.8 rad, passes through a small box on the world body."""
+    path = write_hull_hand(tmp_path)
+    model = tmp_path / "hulls.xml"
+    table = '<geom name="table" type="box" size="0.004 0.004 0.004" pos="-0.03 0 0.08"/>'
+    model.write_text(model.read_text().replace("<worldbody>", "<worldbody>" + table))
+    with pytest.warns(HandModelWarning):  # the hull pairs, as without the box
+        kinematics = HandKinematics(load_descriptor(path))
+    assert not kinematics.collisions(_bent(kinematics, 0.8))[0, :, -1].any()  # nothing hits the palm group
