@@ -117,11 +117,16 @@ def assignments(m: int) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
     return orders, pairs
 
 
-def finger_model(sampled: SampledHand, chosen: Sequence[int]) -> FingerModel | None:
-    """The tree of the samples where the ``chosen`` fingers and the palm collide with nothing; None if none."""
+def free_rows(sampled: SampledHand, chosen: Sequence[int]) -> NDArray[np.intp]:
+    """The samples in which the ``chosen`` fingers and the palm collide with nothing, shape (n,)."""
     groups = [*chosen, sampled.collisions.shape[1] - 1]
     hits = sampled.collisions[:, groups][:, :, groups]
-    rows = np.flatnonzero(~hits.any(axis=(1, 2)))
+    return np.flatnonzero(~hits.any(axis=(1, 2)))
+
+
+def finger_model(sampled: SampledHand, chosen: Sequence[int]) -> FingerModel | None:
+    """The tree of the samples where the ``chosen`` fingers and the palm collide with nothing; None if none."""
+    rows = free_rows(sampled, chosen)
     if len(rows) == 0:
         return None
     codes = pair_code(sampled.points[rows][:, list(chosen)], sampled.normals[rows][:, list(chosen)])
@@ -185,11 +190,11 @@ def _stream(seed: int, key: int) -> np.random.SeedSequence:
 def _recall(sampled: SampledHand, probes: SampledHand, chosen: Sequence[int]) -> float:
     """Share of the probes (collision-free for ``chosen``) whose code is within the default threshold of a sample's."""
     model = finger_model(sampled, chosen)
-    free = finger_model(probes, chosen)
-    if model is None or free is None:
+    free = free_rows(probes, chosen)
+    if model is None or not len(free):
         return 0.0
-    points = probes.points[free.rows][:, list(chosen)]
-    normals = probes.normals[free.rows][:, list(chosen)]
+    points = probes.points[free][:, list(chosen)]
+    normals = probes.normals[free][:, list(chosen)]
     return float(np.mean(residuals(model, points, normals) <= DEFAULT_HAND_THRESHOLD))
 
 

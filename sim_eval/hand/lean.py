@@ -119,9 +119,12 @@ def lean_scene(closed: HandScene, settled: Settled, reach: float, creep: float |
         lean_model, joints, actuators = _recompile(closed, data, welded)
         lean = _lean_settled(closed, data, settled, lean_model, joints, actuators)
         resettled = False
-        if creep is not None:  # as still as the full scene holds it, within the settling gate's creep
+        # As still as the full scene holds it, within the settling gate's creep; the full scene is
+        # stepped only when the lean one moves the object farther than the creep alone allows.
+        drift = unloaded_drift(*lean) if creep is not None else 0.0
+        if creep is not None and drift > creep:
             limit = unloaded_drift(closed.scene, settled) + creep
-            resettled = unloaded_drift(*lean) > limit
+            resettled = drift > limit
             if resettled:
                 lean = (lean[0], settle_further(*lean, RESETTLE_TIME))
                 moved = unloaded_drift(*lean)

@@ -158,7 +158,7 @@ def test_a_lean_scene_that_does_not_hold_the_object_still_settles_again_or_gives
 
     def drifting_once(scene, state):  # the lean scene's mapped state moves; settled again, it does not
         moved["calls"] += 1
-        return 1.0 if moved["calls"] == 2 else real_drift(scene, state)  # call 1: the full scene
+        return 1.0 if moved["calls"] == 1 else real_drift(scene, state)  # call 2: the full scene
 
     monkeypatch.setattr(lean_module, "unloaded_drift", drifting_once)
     again = lean_scene(closed, settled, _reach(settings), creep=settings.creep_tolerance)
