@@ -336,4 +336,4 @@ def plan_hand(record: dict[str, Any]) -> HandSetup | None:
             f"hand descriptor {descriptor.path} changed since the plan (sha256 {descriptor.sha256[:12]}, "
             f"the plan has {block.descriptor_sha256[:12]}); re-plan, or evaluate with --tips"
         )
-    return HandSetup.of(HandKinematics(descriptor), block.fingers or None)
+    return HandSetup.of(HandKinematics(descriptor), block.fingers or None, block.samples)

@@ -27,6 +27,7 @@ sampling parameters, and rebuilt when damaged.
 from __future__ import annotations
 
 import hashlib
+import itertools
 import math
 import re
 from collections.abc import Sequence
@@ -99,6 +100,16 @@ def _assignment_codes(
     return orders, pair_code(contacts.positions[ordered], contacts.normals[ordered]) / model.scale
 
 
+#: How many times the samples of the last model a search tries when it finds no grasp under a hand.
+DENSER_FACTOR = 4
+#: A denser model is tried only where some grasp's residual is within this many thresholds: the
+#: Allegro hand's best grasp of a 7 cm sphere is at 1.27 with 10,000 samples and 0.98 with 80,000;
+#: the SDH's of a 2 m box at 5.0.
+NEAR_MISS = 1.5
+#: Grasps whose residuals :meth:`HandReachability.near_miss` takes (about 0.3 s).
+NEAR_MISS_GRASPS = 2_000
+
+
 class HandReachability:
     """Constraint P(g): the hand can place the chosen fingers' pads on the grasp's contacts.
 
@@ -138,6 +149,9 @@ class HandReachability:
         self.seed, self.threshold = seed, float(threshold)
         #: The fixed size asked for; None: grown until it recalls the hand (then the size reached).
         self.samples: int | None = samples
+        #: Whether a search that finds no grasp under this model may try a denser one
+        #: (:meth:`denser`): the size was not fixed, by the caller or the descriptor.
+        self.growable = samples is None
         self.cache_dir = Path(cache_dir) if cache_dir else default_cache_dir()
         self.sampled = self._load_or_sample()
         self.samples = len(self.sampled.angles)
@@ -338,6 +352,39 @@ class HandReachability:
         return bool(
             boxes_within(bounds, orders, pairs, model.scale, radius2, boxes.low, boxes.high, boxes.points, boxes.starts)
         )
+
+    def near_miss(self, contacts: ContactSet, m: int, seed: int = 0) -> float:
+        """The least residual of up to :data:`NEAR_MISS_GRASPS` of the contacts' m-grasps (all, when
+        there are no more; else drawn with ``seed``): how near the model came to accepting one."""
+        n = len(contacts)
+        if n < m:
+            return math.inf
+        if math.comb(n, m) <= NEAR_MISS_GRASPS:
+            grasps = np.array(list(itertools.combinations(range(n), m)), dtype=np.intp)
+        else:
+            rng = np.random.default_rng(seed)
+            grasps = np.argsort(rng.random((NEAR_MISS_GRASPS, n)), axis=1)[:, :m]
+        return float(self.residuals(contacts.positions[grasps], contacts.normals[grasps]).min())
+
+    def denser(self, contacts: ContactSet, m: int) -> HandReachability | None:
+        """The same hand's model with :data:`DENSER_FACTOR` times the samples (at most
+        :data:`~ogcp.planner.hands.sampled_model.MAX_AUTO_SAMPLES`), for a search on ``contacts``
+        that found no m-grasp under this one; None where the size was fixed or is at that limit, or
+        where no grasp came within :data:`NEAR_MISS` thresholds (a 2 m box for a 20 cm hand).
+
+        A grown model stops once it recalls the hand's own poses on average; a grasp the hand
+        reaches only in a narrow family of poses (three pads on one sphere: their normals must meet
+        in one point) can still lie just beyond every sample. Sampled once, then cached like this one.
+        """
+        count = len(self.sampled.angles)
+        if not self.growable or count >= MAX_AUTO_SAMPLES:
+            return None
+        if self.near_miss(contacts, m) > NEAR_MISS * self.threshold:
+            return None
+        size = min(DENSER_FACTOR * count, MAX_AUTO_SAMPLES)
+        model = HandReachability(self.descriptor, self.fingers, size, self.seed, self.threshold, self.cache_dir)
+        model.growable = True
+        return model
 
     def why_none(self) -> str:
         """What may change a search's finding that no grasp satisfies this constraint (one line)."""

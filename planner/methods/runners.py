@@ -10,11 +10,11 @@ from __future__ import annotations
 import contextlib
 import threading
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from dataclasses import dataclass, fields
 from functools import lru_cache
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 from ogcp.planner.baselines.es import ESResult, ExhaustiveSearch
 from ogcp.planner.baselines.hfts import HFTS, HFTSResult
@@ -39,6 +39,8 @@ from ogcp.planner.search.result import SearchResult
 #: [s] Budget of the A* that finds the optimum next to HFTS's runs when no time limit is set: A*
 #: proves m = 3 on every built-in object in about 10 s, and at large m it may never finish.
 OPTIMUM_SECONDS = 60.0
+
+R = TypeVar("R")
 
 
 @dataclass(frozen=True)
@@ -114,15 +116,43 @@ def constraints_of(config: HandOptions, m: int) -> tuple[list[Constraint], HandR
     return [*constraints, hand], hand
 
 
-@contextlib.contextmanager
-def _explained(hand: HandReachability | None) -> Iterator[None]:
-    """A search that finds no grasp under a hand says what about the hand's model may change that."""
-    try:
-        yield
-    except NoGraspError as exc:
-        if hand is None:
-            raise
-        raise NoGraspError(f"{exc}: {hand.why_none()}") from None
+def _under_denser_hands(
+    search: Callable[[list[Constraint], float | None], R],
+    contacts: ContactSet,
+    m: int,
+    constraints: list[Constraint],
+    hand: HandReachability | None,
+    time_limit: float | None,
+    retry: bool = True,
+) -> tuple[R, HandReachability | None]:
+    """Run a search; one that finds no grasp under a hand runs again under denser models of it.
+
+    Each retry's model has :data:`~ogcp.planner.hands.reachability.DENSER_FACTOR` times the
+    samples (:meth:`HandReachability.denser`: where some grasp of the m-contact ``contacts`` came
+    near), within what is left of ``time_limit`` [s]. The
+    search is called with the constraints and the time it may take. Without ``retry`` (a
+    checkpointed exhaustive search, whose finished chunks belong to the first model) it runs once.
+
+    Returns:
+        The result and the hand model it was found under.
+
+    Raises:
+        NoGraspError: Once no denser model finds one, saying what about the hand may change that.
+    """
+    started, left = time.perf_counter(), time_limit
+    while True:
+        try:
+            return search(constraints, left), hand
+        except NoGraspError as exc:
+            if hand is None:
+                raise
+            denser = hand.denser(contacts, m) if retry else None
+            if time_limit is not None:
+                left = time_limit - (time.perf_counter() - started)
+            if denser is None or (left is not None and left <= 0):
+                raise NoGraspError(f"{exc}: {hand.why_none()}") from None
+            constraints = [denser if c is hand else c for c in constraints]
+            hand = denser
 
 
 def engine_arguments(config: MethodConfig) -> dict[str, Any]:
@@ -140,17 +170,19 @@ def run_search(config: AStarConfig, contacts: ContactSet, m: int, options: RunOp
             found any valid grasp; with one, it is returned with status ``stopped``,
             ``memory`` or ``interrupted``.
     """
-    constraints, hand = constraints_of(config, m)
-    planner = GraspPlanner(
-        method=config.method,
-        constraints=constraints,
-        time_limit=options.time_limit,
-        jobs=options.jobs,
-        memory_limit=options.memory_limit,
-        **engine_arguments(config),
-    )
-    with _explained(hand):
-        result = planner.plan(contacts, m, progress=options.progress, stop=options.stop, lines=options.lines)
+
+    def search(constraints: list[Constraint], time_limit: float | None) -> SearchResult:
+        planner = GraspPlanner(
+            method=config.method,
+            constraints=constraints,
+            time_limit=time_limit,
+            jobs=options.jobs,
+            memory_limit=options.memory_limit,
+            **engine_arguments(config),
+        )
+        return planner.plan(contacts, m, progress=options.progress, stop=options.stop, lines=options.lines)
+
+    result, hand = _under_denser_hands(search, contacts, m, *constraints_of(config, m), options.time_limit)
     return MethodRun(result, add_hand(result.to_dict(contact_set_record(contacts)), hand, contacts))
 
 
@@ -161,21 +193,23 @@ def run_exhaustive(config: ESConfig | ESPrunedConfig, contacts: ContactSet, m: i
         OgcpError: For invalid parameters, a checkpoint of another run, or no admissible grasp.
         SearchTimeout: When the time limit ends it before any admissible grasp was evaluated.
     """
-    constraints, hand = constraints_of(config, m)
-    search = ExhaustiveSearch(
-        pruned=config.method == ESPrunedConfig.method,
-        jobs=options.jobs,
-        backend=options.backend,
-        address=options.address,
-        checkpoint=options.checkpoint,
-        progress=options.progress,
-        constraints=constraints,
-        time_limit=options.time_limit,
-        lines=options.lines,
-        **engine_arguments(config),
-    )
-    with _explained(hand):
-        result = search.run(contacts, m)
+
+    def search(constraints: list[Constraint], time_limit: float | None) -> ESResult:
+        return ExhaustiveSearch(
+            pruned=config.method == ESPrunedConfig.method,
+            jobs=options.jobs,
+            backend=options.backend,
+            address=options.address,
+            checkpoint=options.checkpoint,
+            progress=options.progress,
+            constraints=constraints,
+            time_limit=time_limit,
+            lines=options.lines,
+            **engine_arguments(config),
+        ).run(contacts, m)
+
+    retry = options.checkpoint is None  # a checkpoint's chunks belong to the first model
+    result, hand = _under_denser_hands(search, contacts, m, *constraints_of(config, m), options.time_limit, retry)
     record = result.to_dict(contact_set_record(contacts))
     if options.contact_seed is not None:
         record["config"]["seed"] = options.contact_seed

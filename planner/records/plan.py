@@ -174,6 +174,7 @@ def hand_record(hand: HandReachability, grasp: Sequence[int], contacts: ContactS
         "residual": reach.residual,
         "reachable": reach.residual <= hand.threshold,
         "finger_contacts": [grasp[i] for i in reach.fingers],
+        "samples": hand.samples,
     }
 
 
@@ -390,6 +391,7 @@ class PlanHand:
     descriptor_sha256: str | None = None
     fingers: tuple[str, ...] = ()
     joint_names: tuple[str, ...] = ()
+    samples: int | None = None
 
 
 @dataclass(frozen=True)
@@ -510,6 +512,7 @@ class PlanView:
             return None
         name, angles = block.get("name"), block.get("joint_angles")
         descriptor, digest = block.get("descriptor"), block.get("descriptor_sha256")
+        samples = block.get("samples")
         return PlanHand(
             name=None if name is None else str(name),
             joint_angles=tuple(float(a) for a in angles if _is_number(a)) if isinstance(angles, list) else (),
@@ -519,6 +522,7 @@ class PlanView:
             descriptor_sha256=digest if isinstance(digest, str) else None,
             fingers=_names(block.get("fingers")),
             joint_names=_names(block.get("joint_names")),
+            samples=samples if isinstance(samples, int) and not isinstance(samples, bool) and samples > 0 else None,
         )
 
     @property

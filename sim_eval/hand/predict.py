@@ -37,7 +37,7 @@ from scipy.optimize import linprog
 from ogcp.planner.grasp.wrench import cone_edges, contact_wrenches
 from ogcp.planner.hands.model_checks import equality_jacobian
 from ogcp.sim_eval.hand.mount import MountedHand, in_subtree
-from ogcp.sim_eval.hand.travel import ServoTravel, stop_reach
+from ogcp.sim_eval.hand.travel import ServoTravel, actuator_moments, stop_reach
 
 _MOVABLE = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
 #: A joint this close to a limit rests on it [rad or m] (past it too: MuJoCo's limits are soft).
@@ -329,13 +329,6 @@ def limit_reactions(
     resting = [(joint, side) for joint, side in resting_limits(model, data, hand) if only is None or joint in only]
     columns = [side * np.eye(len(joints))[row[joint]] for joint, side in resting]
     return np.array(columns).T if columns else np.zeros((len(joints), 0))
-
-
-def actuator_moments(model: mujoco.MjModel, data: mujoco.MjData) -> NDArray[np.float64]:
-    """The actuators' moment arms, dense, shape (nu, nv)."""
-    dense = np.zeros((model.nu, model.nv))
-    mujoco.mju_sparse2dense(dense, data.actuator_moment, data.moment_rownnz, data.moment_rowadr, data.moment_colind)
-    return dense
 
 
 def force_ranges(model: mujoco.MjModel) -> tuple[list[float | None], list[float | None]]:

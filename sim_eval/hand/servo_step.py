@@ -17,7 +17,7 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from ogcp.sim_eval.hand.predict import actuator_moments
+from ogcp.sim_eval.hand.travel import actuator_moments
 
 #: The largest servo frequency times the time step the scene keeps: the SDH's value. At 0.5 two of
 #: four box grasps of an Allegro-like hand still crept; at 0.25 and 0.2 all four held.

@@ -43,19 +43,26 @@ def stop_stiffness(model: mujoco.MjModel, joint: int) -> float:
 class ServoTravel:
     """Linear rows that keep the servos' force changes within what the failure distance allows.
 
-    A position servo on joint j (force ``kp (ctrl - gear q)``) changes its force by
-    ``du_j = kp_j |gear_j| dq_j`` when its joint turns by dq_j. A hand body b that carries contacts
-    then moves its contact point p_b by ``J_b dq`` (J_b its translational Jacobian over those
-    joints), and the trial counts a failure once the object, which the contacts hold, moved
+    A servo whose force falls with its length (MuJoCo's affine bias ``b1 < 0``: a ``<position>``
+    actuator, or a ``<general>`` one with ``biasprm="0 -kp -kv"``) is a spring of stiffness
+    ``s = -b1`` along its length, on a joint, a tendon or a site. Its force changes by ``du = s dL``
+    when its length does, ``dL = M dq`` (M its moment arms, gear and tendon coefficients in).
+    Each servo's force change is taken as the least joint motion ``dq`` (per unit force, a column
+    of :attr:`motion`) that changes its own length by ``du / s``, keeps the other servos' lengths,
+    and moves as the hand's equalities tie it (a tendon split over two jaws that an equality
+    couples moves both). A hand body b that carries contacts then moves its contact point p_b by
+    ``J_b dq``, and the trial counts a failure once the object, which the contacts hold, moved
     ``travel``. So to first order the force changes satisfy, per body and axis,
 
-        -h  <=  sum_j J_b[:, j] (u_j - u0_j) / (kp_j |gear_j|)  <=  h,     h = travel / sqrt(3)
+        -h  <=  sum_a J_b motion[:, a] (u_a - u0_a)  <=  h,     h = travel / sqrt(3)
 
     around the settled forces u0: the box of half-width h is the largest inside the sphere of
     radius ``travel``, so every motion it allows stays short of the failure distance. The program
     then finds the resistance the servos build before the object has moved that far, not the
-    force range they would reach after a larger motion. Actuators on tendons or sites keep their
-    force ranges alone.
+    force range they would reach after a larger motion. For a servo on a joint, the motion is
+    that joint's alone, ``du / (kp |gear|)``. Where joints no servo drives and no equality ties
+    (passive links) let the servo move without the pads, the least motion moves the pads less
+    than the hand will, and the bound is loose.
 
     Attributes:
         rows: ``A_ub`` over the program's variables, shape (R, n).
@@ -76,26 +83,47 @@ class ServoTravel:
         first_force: int,
         size: int,
     ) -> ServoTravel:
-        """The rows for a state: contacts ``points`` (K, 3) [m] on hand ``bodies`` (K,); actuator a's
-        force is column ``first_force + a`` of ``size`` variables."""
-        servos = []  # (actuator, dof, stiffness kp |gear| [N·m/rad or N/m])
-        for a in range(model.nu):
-            stiffness = -float(model.actuator_biasprm[a, 1]) * abs(float(model.actuator_gear[a, 0]))
-            if model.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_JOINT and stiffness > 0:
-                servos.append((a, int(model.jnt_dofadr[model.actuator_trnid[a, 0]]), stiffness))
+        """The rows for a state (``mj_forward`` done): contacts ``points`` (K, 3) [m] on hand ``bodies``
+        (K,); actuator a's force is column ``first_force + a`` of ``size`` variables."""
+        servos = np.flatnonzero(-model.actuator_biasprm[:, 1] > 0)
+        motion = servo_motion(model, data, servos)  # (nv, servos)
         rows, limits = [], []
-        settled = np.array([float(data.actuator_force[a]) for a, _, _ in servos])
+        settled = np.asarray(data.actuator_force[servos], dtype=float)
         for jacobian in _carrying_jacobians(model, data, points, bodies):
-            moves = np.array([jacobian[:, dof] / stiffness for _, dof, stiffness in servos]).T.reshape(3, -1)
+            moves = jacobian @ motion  # (3, servos): contact motion per unit force change
             for axis in range(3):
-                if not moves[axis].any():
+                if not np.abs(moves[axis]).max(initial=0.0) > 0:
                     continue
                 for sign in (1.0, -1.0):
                     row = np.zeros(size)
-                    row[[first_force + a for a, _, _ in servos]] = sign * moves[axis]
+                    row[first_force + servos] = sign * moves[axis]
                     rows.append(row)
                     limits.append(travel / math.sqrt(3.0) + sign * float(moves[axis] @ settled))
         return cls(np.array(rows).reshape(-1, size), np.array(limits))
+
+
+def actuator_moments(model: mujoco.MjModel, data: mujoco.MjData) -> NDArray[np.float64]:
+    """The actuators' moment arms (d length / d qvel), dense, shape (nu, nv)."""
+    dense = np.zeros((model.nu, model.nv))
+    mujoco.mju_sparse2dense(dense, data.actuator_moment, data.moment_rownnz, data.moment_rowadr, data.moment_colind)
+    return dense
+
+
+def servo_motion(model: mujoco.MjModel, data: mujoco.MjData, servos: NDArray[np.intp]) -> NDArray[np.float64]:
+    """The least joint motion per unit force change of each servo, the others' lengths and the equalities kept, shape (nv, S).
+
+    Column a solves ``M dq = e_a / s_a`` (M the servos' moment arms, s their stiffnesses) with the
+    equalities' rows ``E dq = 0`` (a joint coupling that moves two jaws as one, a loop that carries a
+    pad hung from a passive link), in the least-squares sense where those conflict.
+    """
+    if not len(servos):
+        return np.zeros((model.nv, 0))
+    stiffness = -model.actuator_biasprm[servos, 1]
+    moments = actuator_moments(model, data)[servos]
+    tied = equality_jacobian(model, data)
+    system = np.vstack([moments, tied])
+    wanted = np.vstack([np.diag(1.0 / stiffness), np.zeros((len(tied), len(servos)))])
+    return np.asarray(np.linalg.lstsq(system, wanted, rcond=None)[0])
 
 
 def stop_reach(

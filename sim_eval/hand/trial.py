@@ -73,21 +73,29 @@ class HandSetup:
         model: Its reachability model (the fit's starts); None: built on first use (grasps
             posed by another planner are not fitted and never need it).
         fingers: Names of the fingers that take the contacts; None: the first m.
+        samples: The size of the model the plan was made under, where a search made it denser
+            than the hand's own (:meth:`HandReachability.denser`); None: the hand's own.
     """
 
     kinematics: HandKinematics
     model: HandReachability | None = None
     fingers: tuple[str, ...] | None = None
+    samples: int | None = None
 
     @functools.cached_property
     def reach(self) -> HandReachability:
         """The reachability model: the given one, else sampled (or read from its cache) now."""
-        return self.model or HandReachability(self.kinematics.descriptor, self.fingers)
+        if self.model is not None:
+            return self.model
+        own = HandReachability(self.kinematics.descriptor, self.fingers)
+        if own.growable and self.samples is not None and self.samples > len(own.q):
+            return HandReachability(self.kinematics.descriptor, self.fingers, self.samples)  # the plan's, cached
+        return own
 
     @classmethod
-    def of(cls, hand: HandKinematics, fingers: Sequence[str] | None = None) -> HandSetup:
+    def of(cls, hand: HandKinematics, fingers: Sequence[str] | None = None, samples: int | None = None) -> HandSetup:
         """A setup for a compiled hand (its reachability model is built on first use)."""
-        return cls(hand, None, tuple(fingers) if fingers is not None else None)
+        return cls(hand, None, tuple(fingers) if fingers is not None else None, samples)
 
 
 def fit_grasp(

@@ -2,9 +2,13 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 
+from ogcp.benchmarks.cli import main
+from ogcp.planner import resolve_object, sample_contacts
 from ogcp.planner.hands import (
     HandKinematics,
     HandReachability,
@@ -13,7 +17,11 @@ from ogcp.planner.hands import (
     resolve_hand,
     sampled_model,
 )
+from ogcp.planner.infra import NoGraspError
 from ogcp.planner.infra.cache import CacheEntryWarning, write_entry
+from ogcp.planner.methods import runners
+from ogcp.planner.search import GraspPlanner
+from ogcp.sim_eval.evaluate import plan_hand
 
 
 @pytest.fixture
@@ -90,3 +98,38 @@ def test_a_one_finger_hand_keeps_its_first_samples_and_its_cache_entry(tmp_path,
         warnings.simplefilter("error")  # read back as it was written, not rebuilt
         again = HandReachability(load_descriptor(path), cache_dir=tmp_path / "cache")
     np.testing.assert_array_equal(again.q, model.q)
+
+
+def test_a_search_that_finds_nothing_under_a_grown_model_tries_a_denser_one(tmp_path, small, capsys):
+    """A 10 cm sphere on 12 contacts: no grasp within 1,000 SDH samples (the best at 1.22 thresholds), some
+    within 4,000; the plan is made under the denser model and says so."""
+    small.setattr(sampled_model, "AUTO_RECALL", 0.0)  # the first 1,000 samples are kept
+    small.setenv("OGCP_CACHE", str(tmp_path))
+    runners.hand_model.cache_clear()  # the runners keep models by hand name, whatever the cache
+    try:
+        assert main(["plan", "sphere", "-n", "12", "-m", "3", "--diagonal", "0.1", "--hand", "sdh", "--json"]) == 0
+    finally:
+        runners.hand_model.cache_clear()
+    record = json.loads(capsys.readouterr().out)
+    (constraint,) = record["config"]["constraints"]
+    assert constraint["samples"] == record["hand"]["samples"] == 4_000 and record["hand"]["reachable"]
+    assert plan_hand(record).reach.samples == 4_000  # the fit starts from the plan's model
+    first = HandReachability("sdh", cache_dir=tmp_path)
+    contacts = sample_contacts(resolve_object("sphere", 0.1)[0], n=12, seed=0)
+    assert first.samples == 1_000 and first.growable
+    with pytest.raises(NoGraspError):
+        GraspPlanner(constraints=[first]).plan(contacts, 3)
+    assert 1.0 < first.near_miss(contacts, 3) < reachability.NEAR_MISS
+    denser = first.denser(contacts, 3)
+    assert denser is not None and denser.samples == 4_000 and denser.growable
+    assert GraspPlanner(constraints=[denser]).plan(contacts, 3).q1 > 0
+    assert denser.denser(contacts, 3) is None  # at the cap
+    assert HandReachability("sdh", samples=1_000, cache_dir=tmp_path).denser(contacts, 3) is None  # fixed: kept
+
+
+def test_no_denser_model_is_tried_where_no_grasp_comes_near(tmp_path, small):
+    small.setattr(sampled_model, "AUTO_RECALL", 0.0)
+    first = HandReachability("sdh", cache_dir=tmp_path)
+    contacts = sample_contacts(resolve_object("box", 2.0)[0], n=12, seed=0)  # far wider than the SDH opens
+    assert first.near_miss(contacts, 3) > 3 * reachability.NEAR_MISS
+    assert first.denser(contacts, 3) is None

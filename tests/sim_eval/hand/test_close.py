@@ -41,6 +41,20 @@ AFFINE_SERVOS = "".join(
 )
 
 
+def tendon_servo(stiffness: float = 40000.0, limit: float = 40.0) -> str:
+    """The jaws driven as the Franka hand's are: one general affine actuator (``stiffness`` [N/m],
+    ``limit`` [N], command 0-255 over 0-40 mm) on a tendon that averages the two slides
+    (coefficients 0.5), the slides tied equal by a joint equality. The tendon's force splits half to
+    each jaw: by default 20 N and 20000 N/m a jaw, as the descriptor's own servos."""
+    return (
+        '<tendon><fixed name="split"><joint joint="left" coef="0.5"/><joint joint="right" coef="0.5"/></fixed></tendon>'
+        '<equality><joint joint1="left" joint2="right" solref="0.004 1" solimp="0.95 0.99 0.001"/></equality>'
+        f'<actuator><general name="split" tendon="split" gainprm="{stiffness * 0.04 / 255}" biastype="affine" '
+        f'biasprm="0 -{stiffness:g} -{stiffness * 0.0015:g}" ctrlrange="0 255" forcerange="-{limit:g} {limit:g}"/>'
+        "</actuator>"
+    )
+
+
 def _pinching_hand(hand: str, folder) -> HandKinematics:
     if hand == "urdf":
         return HandKinematics(load_descriptor(write_urdf_gripper(folder)))
@@ -51,10 +65,15 @@ def _pinching_hand(hand: str, folder) -> HandKinematics:
         kinematics = HandKinematics(load_descriptor(actuated))
         assert kinematics.servos == ()  # its own actuators drive it
         return kinematics
+    if hand == "tendon":
+        split = write_gripper_variant(
+            folder, lambda text: text.replace("</worldbody>", f"</worldbody>{tendon_servo()}")
+        )
+        return HandKinematics(load_descriptor(split))
     return HandKinematics(resolve_hand(hand))
 
 
-@pytest.mark.parametrize("hand", ["parallel_gripper", "urdf", "affine"])
+@pytest.mark.parametrize("hand", ["parallel_gripper", "urdf", "affine", "tendon"])
 def test_a_pinch_resists_slip_as_two_mu_f(hand, tmp_path):
     """Along the jaws, a pinch holds until 2 mu F, F each jaw's force: its servo's limit over a lever of 1 (slides)."""
     kinematics = _pinching_hand(hand, tmp_path)
@@ -213,3 +232,31 @@ def test_the_object_is_damped_while_the_hand_closes_and_free_after(steady, monke
     assert during[:3] == pytest.approx([mass / hand_scene_module.CLOSING_DRAG_TIME] * 3 if steady else [0.0] * 3)
     assert np.array_equal(model.dof_damping, before)  # settling and the protocol see the free object
     assert closed.scene.start_qpos is not None
+
+
+@pytest.mark.parametrize("travel", [None, 2e-4, 1e-3])
+def test_a_tendon_servo_resists_within_the_travel_what_its_stiffness_builds(travel, tmp_path):
+    """The Franka-style jaws pushed along y: the equality hands the far jaw's share to the near one, so the pinch
+    holds the tendon's whole force, which grows by its stiffness s times the jaws' travel (h / sqrt(3)) up to its limit.
+    """
+    from ogcp.sim_eval.hand.predict import hand_resistance, realised_contacts
+    from ogcp.sim_eval.hand.trial import _settled_data
+
+    stiffness, limit = 400.0, 100.0  # [N/m], [N]: a soft servo; its command's range leaves it far from its limit
+    servo = tendon_servo(stiffness, limit)
+    kinematics = HandKinematics(
+        load_descriptor(
+            write_gripper_variant(tmp_path, lambda text: text.replace("</worldbody>", f"</worldbody>{servo}"))
+        )
+    )
+    settings = SimSettings()
+    _, closed = _closed(kinematics, settings)
+    data = _settled_data(closed, settle(closed.scene, settings))
+    model = closed.scene.model
+    contacts = realised_contacts(model, data, closed.hand, closed.scene.object_geoms)
+    along = np.array([[0, 1, 0, 0, 0, 0], [0, -1, 0, 0, 0, 0]], dtype=float)
+    resisted = hand_resistance(model, data, closed.hand, contacts, np.zeros(3), 0.05, MU, 8, along, travel=travel)
+    settled = float(data.actuator_force[0])
+    assert 0 < settled < limit / 10
+    expected = limit if travel is None else settled + stiffness * travel / np.sqrt(3.0)
+    np.testing.assert_allclose(resisted, expected, rtol=0.02)

@@ -131,9 +131,10 @@ def test_a_four_bar_gripper_plans_closes_and_is_measured_against_its_own_predict
     settled = dict(zip(hand["fit"]["joint_names"], hand["settled_joint_angles"], strict=True))
     for side in "lr":  # the loops held under the squeeze: the jaws stayed upright
         assert settled[f"{side}_pad"] == pytest.approx(-settled[f"{side}_driver"], abs=0.01)
-    # The loops' forces are in the prediction (without them it has none to give: NaN). 0.30 from the lean
-    # scene settled again, 0.27 from the unsettled mapped state it replaced.
-    assert np.nanmedian(grasp.fidelity) < 0.35
+    # The loops' forces are in the prediction (without them it has none to give: NaN). 0.42 since the servos'
+    # travel bound moves each jaw through its loop (it translates, 50 mm from the driver's axis); 0.30 when it
+    # turned the driver alone, the pad 80 mm out, which the loop does not let it do.
+    assert np.nanmedian(grasp.fidelity) < 0.45
 
 
 DRIVE_FORCE = 0.6  # [N] the adaptive gripper's tendon force limit: 0.3 N·m on each driven link
