@@ -15,7 +15,7 @@ A descriptor is a TOML file beside the hand's model::
     pad_normal = [0.0, 1.0, 0.0]  # unit, out of the pad, in tip_body's frame
     tip_radius = 0.008            # [m] pad rounding
     # joints = [...]              # optional; default: the joints from palm to tip_body
-    [actuation]                   # for joints that no actuator drives
+    [actuation]                   # for joints that no servo holds (no actuator, or a motor)
     kp = 5.0                      # [N·m/rad] (or N/m for slide joints)
     force_range = 2.0             # [N·m] (or N)
 
@@ -92,7 +92,7 @@ class FingerSpec:
 
 @dataclass(frozen=True)
 class Actuation:
-    """Position servos added to joints that no actuator of the model drives.
+    """Position servos added to joints that no servo of the model holds (no actuator, or a motor).
 
     Attributes:
         kp: Stiffness [N·m/rad] (N/m for slide joints).

@@ -44,6 +44,7 @@ from ogcp.planner.hands.self_collision import (
     designed_overlaps,
     penetrating_pairs,
 )
+from ogcp.planner.hands.servos import add_servos
 from ogcp.planner.infra.errors import OgcpError
 
 #: Range given to a hinge that has none [rad].
@@ -104,7 +105,8 @@ class HandKinematics:
         fingers = [self._finger(plain, k) for k in range(len(descriptor.fingers))]
         self.fingers = tuple(dataclasses.replace(f, joints=joints_with_loops(f.joints, self.loops)) for f in fingers)
         joint_ids = sorted({j for finger in self.fingers for j in finger.joints})
-        self.servos = self._add_servos(spec, plain, joint_ids)
+        servos = add_servos(spec, plain, joint_ids, self.loops, descriptor.actuation, str(descriptor.path))
+        self.servos, self.replaced_actuators = servos.joints, servos.replaced
         self.model = compile_spec(descriptor, spec)
         self.spec = spec
         self.data = mujoco.MjData(self.model)
@@ -237,43 +239,6 @@ class HandKinematics:
             return UNLIMITED_HINGE
         name = mujoco.mj_id2name(self.model, mujoco.mjtObj.mjOBJ_JOINT, joint)
         raise OgcpError(f"{self.descriptor.path}: slide joint {name!r} has no range; give it one in the model")
-
-    def _add_servos(self, spec: mujoco.MjSpec, model: mujoco.MjModel, joints: list[int]) -> tuple[str, ...]:
-        """Position servos on the finger joints that no actuator drives; their joint names."""
-        driven = set()
-        for a in range(model.nu):
-            if model.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_JOINT:
-                driven.add(int(model.actuator_trnid[a, 0]))
-            elif model.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_TENDON:
-                tendon = int(model.actuator_trnid[a, 0])
-                start, count = model.tendon_adr[tendon], model.tendon_num[tendon]
-                for w in range(start, start + count):
-                    if model.wrap_type[w] == mujoco.mjtWrap.mjWRAP_JOINT:
-                        driven.add(int(model.wrap_objid[w]))
-        # A loop passes its driven joint's drive on to its other joints: a servo there would fight it.
-        passive = {j for loop in self.loops if set(loop.joints) & driven for j in loop.joints} - driven
-        actuation = self.descriptor.actuation
-        added = []
-        for j in joints:
-            if j in driven or j in passive or self._follows(model, j, driven | set(joints)):
-                continue
-            name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j)
-            inertia = float(model.dof_M0[model.jnt_dofadr[j]])
-            kv = actuation.kv if actuation.kv is not None else 2.0 * np.sqrt(actuation.kp * max(inertia, 1e-9))
-            act = spec.add_actuator(name=f"ogcp_servo_{name}", target=name, trntype=mujoco.mjtTrn.mjTRN_JOINT)
-            act.set_to_position(kp=actuation.kp, kv=kv)
-            act.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
-            act.forcerange = [-actuation.force_range, actuation.force_range]
-            added.append(name)
-        return tuple(added)
-
-    @staticmethod
-    def _follows(model: mujoco.MjModel, joint: int, drivers: set[int]) -> bool:
-        """Whether an active joint equality ties ``joint`` to one of ``drivers``: it needs no servo of its own."""
-        for e in range(model.neq):
-            if model.eq_type[e] == mujoco.mjtEq.mjEQ_JOINT and model.eq_active0[e] and model.eq_obj1id[e] == joint:
-                return int(model.eq_obj2id[e]) in drivers
-        return False
 
     def _reference_qpos(self) -> NDArray[np.float64]:
         qpos = self.model.qpos0.copy()
@@ -522,5 +487,6 @@ class HandKinematics:
             "limits": self.limits.tolist(),
             "fingers": [f.name for f in self.fingers],
             "servos_added": list(self.servos),
+            "actuators_replaced": list(self.replaced_actuators),
             "ignored_collisions": sorted(self.designed_pairs()),
         }

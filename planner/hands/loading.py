@@ -1,11 +1,11 @@
-"""A hand's MuJoCo model from its descriptor: MJCF or URDF, checked, with servos on undriven joints.
+"""A hand's MuJoCo model from its descriptor: MJCF or URDF, checked, with servos on joints none holds.
 
 MuJoCo compiles URDF itself but looks mesh files up by their base name in the model's folder and
 fuses bodies that no joint moves (a pad's link would vanish). :func:`hand_spec` therefore hands a
 URDF's meshes over by name, resolving ``package://`` and relative paths against the URDF's folder
-and the folders above it, and keeps every body. Joints on a finger that no actuator drives get a
-position servo from the descriptor's ``[actuation]``, as a user's actuator-less model must be
-closed somehow; the model's own actuators are kept as they are.
+and the folders above it, and keeps every body. Joints on a finger that no servo holds get a
+position servo from the descriptor's ``[actuation]`` (:mod:`~ogcp.planner.hands.servos`), as a
+user's actuator-less model must be closed somehow; the model's own servos are kept as they are.
 """
 
 from __future__ import annotations

@@ -8,6 +8,7 @@ import pytest
 import trimesh
 
 from ogcp.planner.hands import HandKinematics, load_descriptor, resolve_hand
+from ogcp.planner.hands.servos import HandActuatorWarning
 from ogcp.sim_eval.hand.fit import fit_hand
 from ogcp.sim_eval.hand.fit_scene import FitScene
 from ogcp.sim_eval.hand.scene import PREGRASP_RADII, build_hand_scene, close_hand
@@ -65,6 +66,15 @@ def _pinching_hand(hand: str, folder) -> HandKinematics:
         kinematics = HandKinematics(load_descriptor(actuated))
         assert kinematics.servos == ()  # its own actuators drive it
         return kinematics
+    if hand == "motor":  # force-controlled: closed by ogcp's position servos within the motors' 20 N
+        motors = "".join(f'<motor name="{s}" joint="{s}" gear="2" ctrlrange="-10 10"/>' for s in ("left", "right"))
+        driven = write_gripper_variant(
+            folder, lambda text: text.replace("</worldbody>", f"</worldbody><actuator>{motors}</actuator>")
+        )
+        with pytest.warns(HandActuatorWarning, match=r"actuators left, right hold no pose"):
+            kinematics = HandKinematics(load_descriptor(driven))
+        assert kinematics.replaced_actuators == ("left", "right") and kinematics.servos == ("left", "right")
+        return kinematics
     if hand == "tendon":
         split = write_gripper_variant(
             folder, lambda text: text.replace("</worldbody>", f"</worldbody>{tendon_servo()}")
@@ -73,7 +83,7 @@ def _pinching_hand(hand: str, folder) -> HandKinematics:
     return HandKinematics(resolve_hand(hand))
 
 
-@pytest.mark.parametrize("hand", ["parallel_gripper", "urdf", "affine", "tendon"])
+@pytest.mark.parametrize("hand", ["parallel_gripper", "urdf", "affine", "tendon", "motor"])
 def test_a_pinch_resists_slip_as_two_mu_f(hand, tmp_path):
     """Along the jaws, a pinch holds until 2 mu F, F each jaw's force: its servo's limit over a lever of 1 (slides)."""
     kinematics = _pinching_hand(hand, tmp_path)

@@ -1,0 +1,143 @@
+"""Position servos for a hand's finger joints where the model's own actuators hold no pose.
+
+Closing a hand needs servos: position targets past the surface, pressing within their force
+limits. A finger joint is *held* when an actuator with a stiffness on its length moves it,
+directly or through a tendon (MuJoCo's affine bias with ``biasprm[1] < 0``: a ``<position>``, an
+``<intvelocity>``, a ``<general>`` servo such as the Robotiq 2F-85's). A joint no actuator drives
+gets a position servo of the descriptor's ``[actuation]``, as a user's actuator-less model must be
+closed somehow. A joint driven by an actuator that holds no pose (a ``<motor>``, whose force is its
+command; a ``<velocity>`` servo) is closed the same way: that actuator is replaced by a position
+servo of ``[actuation]``'s stiffness within the actuator's own force limit (its ``forcerange``,
+else its command range times its gain; times its gear), and loading says so in one line.
+Actuators on tendons or sites are kept as they are.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from ogcp.planner.hands.descriptor import Actuation
+from ogcp.planner.hands.loops import Loop
+
+
+class HandActuatorWarning(UserWarning):
+    """A hand's actuators were changed so that the hand can close (one line, naming them)."""
+
+
+@dataclass(frozen=True)
+class AddedServos:
+    """What :func:`add_servos` changed in a hand's spec.
+
+    Attributes:
+        joints: Names of the joints that got ogcp's position servo.
+        replaced: Names of the model's actuators that held no pose and were replaced.
+    """
+
+    joints: tuple[str, ...]
+    replaced: tuple[str, ...]
+
+
+def holds_pose(model: mujoco.MjModel, actuator: int) -> bool:
+    """Whether an actuator's force falls as its length grows (a servo that holds a position)."""
+    affine = int(model.actuator_biastype[actuator]) == mujoco.mjtBias.mjBIAS_AFFINE
+    return bool(affine and model.actuator_biasprm[actuator, 1] < 0)
+
+
+def _force_limit(model: mujoco.MjModel, actuator: int, fallback: float) -> float:
+    """[N·m or N] The most an actuator pushes on its joint: its force range, else its command range
+    times its gain, else ``fallback``; times its gear."""
+    gear = abs(float(model.actuator_gear[actuator, 0]))
+    if model.actuator_forcelimited[actuator]:
+        return gear * float(np.abs(model.actuator_forcerange[actuator]).max())
+    if model.actuator_ctrllimited[actuator]:
+        return (
+            gear
+            * float(np.abs(model.actuator_ctrlrange[actuator]).max())
+            * abs(float(model.actuator_gainprm[actuator, 0]))
+        )
+    return fallback
+
+
+def _driven_joints(model: mujoco.MjModel, actuators: Iterable[int]) -> set[int]:
+    """The joints the actuators move, directly or through a fixed tendon."""
+    driven = set()
+    for a in actuators:
+        if model.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_JOINT:
+            driven.add(int(model.actuator_trnid[a, 0]))
+        elif model.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_TENDON:
+            tendon = int(model.actuator_trnid[a, 0])
+            start, count = model.tendon_adr[tendon], model.tendon_num[tendon]
+            for w in range(start, start + count):
+                if model.wrap_type[w] == mujoco.mjtWrap.mjWRAP_JOINT:
+                    driven.add(int(model.wrap_objid[w]))
+    return driven
+
+
+def follows(model: mujoco.MjModel, joint: int, drivers: set[int]) -> bool:
+    """Whether an active joint equality ties ``joint`` to one of ``drivers``: it needs no servo of its own."""
+    for e in range(model.neq):
+        if model.eq_type[e] == mujoco.mjtEq.mjEQ_JOINT and model.eq_active0[e] and model.eq_obj1id[e] == joint:
+            return int(model.eq_obj2id[e]) in drivers
+    return False
+
+
+def add_servos(
+    spec: mujoco.MjSpec,
+    model: mujoco.MjModel,
+    joints: Sequence[int],
+    loops: Sequence[Loop],
+    actuation: Actuation,
+    where: str,
+) -> AddedServos:
+    """Position servos on the finger ``joints`` that no actuator holds, in ``spec`` (compiled as ``model``).
+
+    Args:
+        spec: The hand's spec, changed in place.
+        model: The spec compiled before the change.
+        joints: The fingers' joint ids.
+        loops: The hand's closed loops: a loop passes its driven joint's drive on to its other
+            joints, and a servo there would fight it.
+        actuation: The descriptor's ``[actuation]``.
+        where: The descriptor's path, for the warning.
+    """
+    finger_joints = set(joints)
+    replaced = [
+        a
+        for a in range(model.nu)
+        if not holds_pose(model, a)
+        and model.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_JOINT
+        and int(model.actuator_trnid[a, 0]) in finger_joints
+    ]
+    limits = {int(model.actuator_trnid[a, 0]): _force_limit(model, a, actuation.force_range) for a in replaced}
+    names = tuple(mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, a) or f"actuator {a}" for a in replaced)
+    for element in [spec.actuators[a] for a in replaced]:
+        spec.delete(element)
+    driven = _driven_joints(model, (a for a in range(model.nu) if a not in set(replaced)))
+    passive = {j for loop in loops if set(loop.joints) & driven for j in loop.joints} - driven
+    added = []
+    for j in joints:
+        if j in driven or j in passive or follows(model, j, driven | finger_joints):
+            continue
+        name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j)
+        inertia = float(model.dof_M0[model.jnt_dofadr[j]])
+        kv = actuation.kv if actuation.kv is not None else 2.0 * np.sqrt(actuation.kp * max(inertia, 1e-9))
+        act = spec.add_actuator(name=f"ogcp_servo_{name}", target=name, trntype=mujoco.mjtTrn.mjTRN_JOINT)
+        act.set_to_position(kp=actuation.kp, kv=kv)
+        act.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
+        limit = limits.get(j, actuation.force_range)
+        act.forcerange = [-limit, limit]
+        added.append(name)
+    if names:
+        warnings.warn(
+            f"{where}: actuators {', '.join(names)} hold no pose (no stiffness on their length: motors or velocity "
+            f"servos); closing the hand needs one, so their joints get position servos of [actuation] kp "
+            f"{actuation.kp:g} within those actuators' force limits",
+            HandActuatorWarning,
+            stacklevel=4,
+        )
+    return AddedServos(tuple(added), names)
