@@ -19,7 +19,6 @@ order [rad or m]; joints outside the fingers (a wrist above the palm) stay at th
 from __future__ import annotations
 
 import dataclasses
-import warnings
 from dataclasses import dataclass
 
 import mujoco
@@ -36,7 +35,10 @@ from ogcp.planner.hands.loops import (
     joints_with_loops,
     loop_system,
 )
-from ogcp.planner.hands.model_checks import underactuated_fingers
+from ogcp.planner.hands.model_checks import (
+    HandModelWarning,  # noqa: F401  (its first home: warnings filtered by this path)
+    warn_about_model,
+)
 from ogcp.planner.hands.self_collision import (
     OVERLAP_SAMPLES,
     OVERLAP_SEED,
@@ -49,14 +51,6 @@ from ogcp.planner.infra.errors import OgcpError
 
 #: Range given to a hinge that has none [rad].
 UNLIMITED_HINGE = (-np.pi, np.pi)
-#: [rad] A hand none of whose finger hinges moves more than this (2 degrees) gets a warning.
-STIFF_HINGE = np.radians(2.0)
-
-
-class HandModelWarning(UserWarning):
-    """A hand model that compiles but is most likely not what its author meant."""
-
-
 _MOVABLE = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
 
 
@@ -114,10 +108,8 @@ class HandKinematics:
         self.joint_names = tuple(mujoco.mj_id2name(self.model, mujoco.mjtObj.mjOBJ_JOINT, j) for j in joint_ids)
         self.qpos_index = self.model.jnt_qposadr[self.joint_ids]
         self.limits = np.array([self._range(j) for j in joint_ids])
-        self._warn_if_degrees_meant_radians()
         self.reference_qpos = self._reference_qpos()
         self._couplings = self._joint_couplings()
-        self._warn_if_underactuated()
         self.independent = np.array(
             [k for k, j in enumerate(joint_ids) if j not in {dep for dep, _, _ in self._couplings}], dtype=np.intp
         )
@@ -131,56 +123,8 @@ class HandKinematics:
         ]
         samples = self.sample(OVERLAP_SAMPLES, OVERLAP_SEED)
         self.overlaps = designed_overlaps(self._collider, self._pose, self.reference(), samples, listed)
-        self._warn_if_chain_overlaps()
         self.palm_pose = self._palm_pose()
-
-    # ----- checks against the compiled model -------------------------------------------------
-
-    def _warn_if_degrees_meant_radians(self) -> None:
-        """Warn when no finger hinge moves more than :data:`STIFF_HINGE` [rad]: the model's ranges
-        were most likely written in radians where MJCF reads degrees (its default)."""
-        hinges = [k for k, j in enumerate(self.joint_ids) if self.model.jnt_type[j] == mujoco.mjtJoint.mjJNT_HINGE]
-        if not hinges:
-            return
-        widest = float(np.max(self.limits[hinges, 1] - self.limits[hinges, 0]))
-        if widest < STIFF_HINGE:
-            warnings.warn(
-                f"{self.descriptor.path}: no finger hinge of the {self.descriptor.name} hand moves more than "
-                f"{np.degrees(widest):.2g} degrees; MJCF reads angles in degrees unless the model says "
-                '<compiler angle="radian"/>',
-                HandModelWarning,
-                stacklevel=3,
-            )
-
-    def _warn_if_underactuated(self) -> None:
-        """Warn about fingers whose servos cannot hold every fitted pose (:mod:`ogcp.planner.hands.model_checks`)."""
-        fingers = [(finger.name, finger.joints) for finger in self.fingers]
-        short = underactuated_fingers(self.model, self.reference_qpos, fingers)
-        if short:
-            warnings.warn(
-                f"{self.descriptor.path}: the {self.descriptor.name} hand has fingers with fewer servo directions "
-                f"than directions of motion: {'; '.join(short)}; the fit poses every joint, and the servos may not "
-                "hold that pose when the hand closes",
-                HandModelWarning,
-                stacklevel=3,
-            )
-
-    def _warn_if_chain_overlaps(self) -> None:
-        """Say which links of one chain overlap through most of their range: ignored as collisions."""
-        if not self.overlaps.on_chain:
-            return
-        found: dict[tuple[str, str], float] = {}
-        for (g, h), share in self.overlaps.on_chain.items():
-            a, b = sorted(self.model.body(int(self.model.geom_bodyid[k])).name for k in (g, h))
-            found[a, b] = max(share, found.get((a, b), 0.0))
-        listed = ", ".join(f"{a} and {b} ({share:.0%})" for (a, b), share in sorted(found.items()))
-        warnings.warn(
-            f"{self.descriptor.path}: links of one chain of the {self.descriptor.name} hand overlap in most sampled "
-            f"poses, so their collision geometry is coarser than the hand (a convex hull of a non-convex mesh?): "
-            f"{listed}; their contacts are ignored (list more pairs under ignore_collisions)",
-            HandModelWarning,
-            stacklevel=3,
-        )
+        warn_about_model(self)
 
     def _body(self, model: mujoco.MjModel, name: str, field: str) -> int:
         body = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, name)

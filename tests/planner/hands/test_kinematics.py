@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from ogcp.planner.hands import HandKinematics, load_descriptor, resolve_hand
+from ogcp.planner.hands.kinematics import HandModelWarning
 from ogcp.planner.infra import OgcpError
 
 from .hand_files import (
@@ -73,7 +74,8 @@ def test_mujoco_forward_kinematics_equals_the_old_sdh_figures(tmp_path):
         resolve_hand("sdh").path.read_text().replace("tip_offset = [0.009, 0.0, 0.0595]", "tip_offset = [0, 0, 0.0685]")
     )
     (tmp_path / "old.toml").write_text(text.replace('mjcf = "sdh.xml"', f'mjcf = "{resolve_hand("sdh").model_path}"'))
-    kinematics = HandKinematics(load_descriptor(tmp_path / "old.toml"))
+    with pytest.warns(HandModelWarning, match=r"finger_1 \(9.00 mm inside distal_1\)"):  # the end, not the pad
+        kinematics = HandKinematics(load_descriptor(tmp_path / "old.toml"))
     assert kinematics.joint_names == ("base_1", "prox_1", "dist_1", "base_2", "prox_2", "dist_2", "prox_3", "dist_3")
     for old, tips, normals in zip(OLD_CONFIGURATIONS, OLD_TIPS, OLD_NORMALS, strict=True):
         base, *flexions = old
@@ -279,3 +281,34 @@ def test_a_finger_whose_joints_share_one_servo_gets_a_one_line_warning(tmp_path,
         HandModelWarning, match=r"f0 \(2 joints, f0_a, f0_b; 2 directions of motion, 1 servo direction\)"
     ):
         HandKinematics(load_descriptor(path))
+
+
+@pytest.mark.parametrize(
+    ("offset", "said"),
+    [
+        (
+            "[0.0, -0.0025, 0.06]",
+            r"left \(1.50 mm inside left\)",
+        ),  # 1.5 mm into the jaw, as the Franka hand's pad box is behind its bumps
+        ("[0.0, -0.005, 0.06]", r"left \(1.00 mm off left's surface\)"),
+        ("[0.0, -0.004, 0.5]", r"left \(no geometry of left under it\)"),
+    ],
+)
+def test_a_pad_point_off_its_tips_surface_is_named(tmp_path, offset, said, recwarn):
+    path = write_gripper_variant(
+        tmp_path,
+        lambda text: text,
+        lambda text: text.replace("tip_offset = [0.0, -0.004, 0.06]", f"tip_offset = {offset}"),
+    )
+    with pytest.warns(HandModelWarning, match=said):
+        HandKinematics(load_descriptor(path))
+
+
+def test_pads_on_their_surfaces_load_without_a_word(recwarn):
+    for hand in ("sdh", "shadow_hand", "parallel_gripper"):
+        try:
+            descriptor = resolve_hand(hand)
+        except OgcpError:  # the Shadow hand, where it was not fetched
+            continue
+        HandKinematics(descriptor)
+    assert not [w for w in recwarn if "pad points" in str(w.message)]
