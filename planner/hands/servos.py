@@ -1,13 +1,14 @@
 """Position servos for a hand's finger joints where the model's own actuators hold no pose.
 
 Closing a hand needs servos: position targets past the surface, pressing within their force
-limits. A finger joint is *held* when an actuator with a stiffness on its length moves it,
-directly or through a tendon (MuJoCo's affine bias with ``biasprm[1] < 0``: a ``<position>``, an
-``<intvelocity>``, a ``<general>`` servo such as the Robotiq 2F-85's). A joint no actuator drives
-gets a position servo of the descriptor's ``[actuation]``, as a user's actuator-less model must be
-closed somehow. A joint driven by an actuator that holds no pose (a ``<motor>``, whose force is its
-command; a ``<velocity>`` servo) is closed the same way: that actuator is replaced by a position
-servo of ``[actuation]``'s stiffness within the actuator's own force limit (its ``forcerange``,
+limits. A finger joint is *held* when an actuator with a stiffness on its length moves it toward
+its command, directly or through a tendon (MuJoCo's affine bias with ``biasprm[1] < 0``: a
+``<position>``, filtered or not, a ``<general>`` servo such as the Robotiq 2F-85's). A joint no
+actuator drives gets a position servo of the descriptor's ``[actuation]``, as a user's
+actuator-less model must be closed somehow. A joint driven by an actuator that holds no pose (a
+``<motor>``, whose force is its command; a ``<velocity>`` servo; an ``<intvelocity>``, whose
+command is a velocity its activation integrates) is closed the same way: that actuator is replaced
+by a position servo of ``[actuation]``'s stiffness within the actuator's own force limit (its ``forcerange``,
 else its command range times its gain; times its gear), and loading says so in one line.
 Actuators on tendons or sites are kept as they are.
 """
@@ -43,9 +44,12 @@ class AddedServos:
 
 
 def holds_pose(model: mujoco.MjModel, actuator: int) -> bool:
-    """Whether an actuator's force falls as its length grows (a servo that holds a position)."""
+    """Whether an actuator's force falls as its length grows and its command is where it holds (a servo
+    that holds a position). An ``<intvelocity>`` servo holds where its activation integrated its
+    command to, a velocity: ogcp cannot set it a target, so it counts as holding none."""
     affine = int(model.actuator_biastype[actuator]) == mujoco.mjtBias.mjBIAS_AFFINE
-    return bool(affine and model.actuator_biasprm[actuator, 1] < 0)
+    integrates = int(model.actuator_dyntype[actuator]) == mujoco.mjtDyn.mjDYN_INTEGRATOR
+    return bool(affine and not integrates and model.actuator_biasprm[actuator, 1] < 0)
 
 
 def _force_limit(model: mujoco.MjModel, actuator: int, fallback: float) -> float:

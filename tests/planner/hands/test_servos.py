@@ -35,6 +35,15 @@ def test_motors_and_velocity_servos_are_replaced_within_their_own_limits(tmp_pat
     assert kinematics.describe()["actuators_replaced"] == ["m", "v"]
 
 
+def test_an_integrated_velocity_servo_is_replaced_too(tmp_path):
+    """Its command is a velocity that its activation integrates into the target: no target ogcp can set."""
+    with pytest.warns(HandActuatorWarning, match=r"actuators iv hold no pose"):
+        kinematics = _gripper(
+            tmp_path, '<intvelocity name="iv" joint="left" kp="500" actrange="0 0.04" forcerange="-9 9"/>'
+        )
+    assert kinematics.replaced_actuators == ("iv",) and _limit(kinematics, "left") == pytest.approx(9.0)
+
+
 def test_an_unlimited_motor_takes_the_descriptors_force_range(tmp_path):
     with pytest.warns(HandActuatorWarning):
         kinematics = _gripper(tmp_path, '<motor name="m" joint="left"/><position name="p" joint="right" kp="500"/>')

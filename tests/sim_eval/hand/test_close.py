@@ -66,6 +66,17 @@ def _pinching_hand(hand: str, folder) -> HandKinematics:
         kinematics = HandKinematics(load_descriptor(actuated))
         assert kinematics.servos == ()  # its own actuators drive it
         return kinematics
+    if hand == "filtered":  # position servos whose force follows the command through a 5 ms filter
+        servos = "".join(
+            f'<position name="{s}" joint="{s}" kp="20000" kv="30" timeconst="0.005" forcerange="-20 20"/>'
+            for s in ("left", "right")
+        )
+        filtered = write_gripper_variant(
+            folder, lambda text: text.replace("</worldbody>", f"</worldbody><actuator>{servos}</actuator>")
+        )
+        kinematics = HandKinematics(load_descriptor(filtered))
+        assert kinematics.servos == () and kinematics.replaced_actuators == ()
+        return kinematics
     if hand == "motor":  # force-controlled: closed by ogcp's position servos within the motors' 20 N
         motors = "".join(f'<motor name="{s}" joint="{s}" gear="2" ctrlrange="-10 10"/>' for s in ("left", "right"))
         driven = write_gripper_variant(
@@ -83,7 +94,7 @@ def _pinching_hand(hand: str, folder) -> HandKinematics:
     return HandKinematics(resolve_hand(hand))
 
 
-@pytest.mark.parametrize("hand", ["parallel_gripper", "urdf", "affine", "tendon", "motor"])
+@pytest.mark.parametrize("hand", ["parallel_gripper", "urdf", "affine", "tendon", "motor", "filtered"])
 def test_a_pinch_resists_slip_as_two_mu_f(hand, tmp_path):
     """Along the jaws, a pinch holds until 2 mu F, F each jaw's force: its servo's limit over a lever of 1 (slides)."""
     kinematics = _pinching_hand(hand, tmp_path)
