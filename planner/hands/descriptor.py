@@ -14,6 +14,7 @@ A descriptor is a TOML file beside the hand's model::
     tip_offset = [0.0, 0.0, 0.02] # [m] the pad's contact point, in tip_body's frame
     pad_normal = [0.0, 1.0, 0.0]  # unit, out of the pad, in tip_body's frame
     tip_radius = 0.008            # [m] pad rounding
+    # pad_width = 0.02            # [m] optional: a flat pad's face (a jaw); the fit lays it flat
     # joints = [...]              # optional; default: the joints from palm to tip_body
     [actuation]                   # for joints that no servo holds (no actuator, or a motor)
     kp = 5.0                      # [N·m/rad] (or N/m for slide joints)
@@ -51,7 +52,7 @@ _TOP_KEYS = ("schema", "name", "mjcf", "palm", "fingers", "actuation", "fetched"
 _REACHABILITY_KEYS = ("samples",)
 #: The most joint configurations a descriptor may ask the reachability model to sample.
 MAX_REACH_SAMPLES = 2_000_000
-_FINGER_KEYS = ("name", "tip_body", "tip_offset", "pad_normal", "tip_radius", "joints")
+_FINGER_KEYS = ("name", "tip_body", "tip_offset", "pad_normal", "tip_radius", "pad_width", "joints")
 _ACTUATION_KEYS = ("kp", "force_range", "kv")
 #: Defaults of ``[actuation]`` (DexGraspBench's gains for the Shadow hand, a 2 N·m limit).
 DEFAULT_KP = 5.0
@@ -71,6 +72,9 @@ class FingerSpec:
             the surface, and contact sampling keeps contacts a pad of this radius can touch.
         joints: Joints that move this finger, or None for the joints on the chain from the
             palm to ``tip_body``.
+        pad_width: Width of a flat pad's face [m] (a parallel gripper's jaw); 0: a rounded pad.
+            A flat pad tilted by a small angle t touches with its edge, lifted width / 2 t
+            off the surface: the fit turns it flat onto the contact's surface.
     """
 
     name: str
@@ -79,6 +83,7 @@ class FingerSpec:
     pad_normal: tuple[float, float, float]
     tip_radius: float
     joints: tuple[str, ...] | None = None
+    pad_width: float = 0.0
 
     def offset(self) -> NDArray[np.float64]:
         """``tip_offset`` as an array, shape (3,) [m]."""
@@ -311,6 +316,7 @@ def _finger(entry: object, where: str) -> FingerSpec:
         pad_normal=normal,
         tip_radius=_number(entry, "tip_radius", where, 0.0, MAX_LENGTH / 10),
         joints=joints,
+        pad_width=_number(entry, "pad_width", where, 0.0, MAX_LENGTH / 10) if "pad_width" in entry else 0.0,
     )
 
 

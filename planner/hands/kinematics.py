@@ -65,6 +65,7 @@ class Finger:
         offset: Pad contact point in the tip body's frame, shape (3,) [m].
         normal: Unit pad normal in the tip body's frame, shape (3,).
         radius: Pad rounding [m].
+        width: A flat pad's width [m]; 0 for a rounded pad.
     """
 
     name: str
@@ -73,6 +74,7 @@ class Finger:
     offset: NDArray[np.float64]
     normal: NDArray[np.float64]
     radius: float
+    width: float = 0.0
 
 
 class HandKinematics:
@@ -173,7 +175,9 @@ class HandKinematics:
                 raise OgcpError(
                     f"{where}: joint {name!r} must be a hinge or a slide (ball and free joints are not fingers)"
                 )
-        return Finger(spec.name, body, tuple(sorted(joints)), spec.offset(), spec.normal(), spec.tip_radius)
+        return Finger(
+            spec.name, body, tuple(sorted(joints)), spec.offset(), spec.normal(), spec.tip_radius, spec.pad_width
+        )
 
     def _range(self, joint: int) -> tuple[float, float]:
         if self.model.jnt_limited[joint]:

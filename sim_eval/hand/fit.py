@@ -45,6 +45,10 @@ LOOP_TOLERANCE = 1e-4
 LOOP_WEIGHT = 10.0
 #: Weight of the pad-normal term, as a multiple of the pad's rounding radius [m per unit difference].
 NORMAL_WEIGHT_RADII = 0.5
+#: Weight of a flat pad's normal term, as a multiple of its width [m per unit difference]: a 20 mm
+#: jaw weighs a tilt 100 mm per radian, so that it lies flat (1.7 degrees of tilt on a 3.5 cm box
+#: touched with a jaw's edge, and a 2 N load rolled the box out of a 15 N pinch).
+FLAT_PAD_WEIGHT = 5.0
 #: Weight of keeping the other fingers where they started [m per rad].
 REST_WEIGHT = 1e-3
 #: Weight of a link's depth beyond the tolerance, relative to a pad residual.
@@ -238,7 +242,8 @@ def fit_hand(
     q0 = kin.complete(np.clip(q0, kin.limits[:, 0] + inset, kin.limits[:, 1] - inset))
     radii = np.array([kin.fingers[f].radius for f in chosen])
     aim = _Targets(scene, chosen, where - radii[:, None] * inward, inward, radii)
-    weight = NORMAL_WEIGHT_RADII * float(radii.mean())
+    widths = np.array([kin.fingers[f].width for f in chosen])
+    weights = np.maximum(NORMAL_WEIGHT_RADII * float(radii.mean()), FLAT_PAD_WEIGHT * widths)  # (m,)
     free = kin.independent
     chosen_joints = {j for f in chosen for j in kin.fingers[f].joints}
     resting = np.array([k for k in free if int(kin.joint_ids[k]) not in chosen_joints], dtype=np.intp)
@@ -279,7 +284,7 @@ def fit_hand(
         centre, pad = aim.centres(pose)
         parts = [
             (centre - aim.targets).ravel(),
-            weight * (pad - inward).ravel(),
+            (weights[:, None] * (pad - inward)).ravel(),
             REST_WEIGHT * (pose[0][resting] - q0[resting]),
             LOOP_WEIGHT * loop_gaps(scene),
             SPRING_WEIGHT * (pose[0][sprung] - spring_aim) / span,
@@ -299,7 +304,7 @@ def fit_hand(
         for k, f in enumerate(chosen):
             moved, turned = jac.point_and_direction(world[f], pad[f], int(scene.hand.pads[f]))
             centre_rows.append(moved - radii[k] * turned)
-            normal_rows.append(weight * turned)
+            normal_rows.append(weights[k] * turned)
         derivative = kin.complete_derivative(pose[0])
         rest = np.zeros((len(resting), jac.columns))
         rest[:, : len(variables)] = REST_WEIGHT * derivative[np.ix_(resting, variables)]

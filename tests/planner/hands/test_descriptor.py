@@ -69,6 +69,14 @@ def test_a_good_descriptor_reads_with_its_paths_resolved_and_digests(tmp_path):
             "fingers[0]: tip_radius = 0 is outside (0, 0.2]",
         ),
         (
+            lambda t: t.replace("tip_radius = 0.004\n[[", "tip_radius = 0.004\npad_width = -0.02\n[["),
+            "fingers[0]: pad_width = -0.02 is outside (0, 0.2]",
+        ),
+        (
+            lambda t: t.replace("tip_radius = 0.004\n[[", 'tip_radius = 0.004\npad_width = "wide"\n[['),
+            "fingers[0]: pad_width must be a finite number, got 'wide'",
+        ),
+        (
             lambda t: t.replace('tip_body = "right"', 'tip_body = "left"'),
             "fingers[0] and fingers[1] have the same tip body 'left'",
         ),

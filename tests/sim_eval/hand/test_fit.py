@@ -105,3 +105,25 @@ def test_a_floating_hand_model_is_mounted_without_its_free_joint(tmp_path):
     normals = np.array([[0.0, -1.0, 0.0], [0.0, 1.0, 0.0]])
     fit = fit_hand(FitScene(gripper), [0, 1], points, normals)
     assert fit.realised and fit.residuals.max() < 1e-6
+
+
+def test_a_flat_jaw_is_laid_flat_on_contacts_that_are_not_exactly_opposite(tmp_path):
+    """Contacts 1.6 mm apart along the faces of a 3.5 cm box: rounded pads reach both and tilt the jaws by
+    the line's angle; jaws with a pad_width lie flat and take up the offset, within the tolerance."""
+    box = trimesh.creation.box(extents=(0.0466, 0.0466, 0.0466))
+    parts = [(box.vertices, box.faces)]
+    points = np.array([[0.0, 0.0233, 0.0038], [0.0, -0.0233, 0.0054]])
+    normals = np.array([[0.0, -1.0, 0.0], [0.0, 1.0, 0.0]])
+    rounded = HandKinematics(resolve_hand("parallel_gripper"))
+    widened = write_gripper_variant(
+        tmp_path,
+        lambda text: text,
+        lambda text: text.replace("tip_radius = 0.004", "tip_radius = 0.004\npad_width = 0.02"),
+    )
+    flat = HandKinematics(load_descriptor(widened))
+    assert [f.width for f in flat.fingers] == [0.02, 0.02] and [f.width for f in rounded.fingers] == [0.0, 0.0]
+    tilted = fit_hand(FitScene(rounded, parts), [0, 1], points, normals)
+    laid = fit_hand(FitScene(flat, parts), [0, 1], points, normals)
+    assert tilted.realised and laid.realised
+    assert np.degrees(tilted.normal_angles.min()) > 1.0 and tilted.residuals.max() < 0.1e-3
+    assert np.degrees(laid.normal_angles.max()) < 0.3 and 0.5e-3 < laid.residuals.max() <= RESIDUAL_TOLERANCE
