@@ -14,7 +14,7 @@ A descriptor is a TOML file beside the hand's model::
     tip_offset = [0.0, 0.0, 0.02] # [m] the pad's contact point, in tip_body's frame
     pad_normal = [0.0, 1.0, 0.0]  # unit, out of the pad, in tip_body's frame
     tip_radius = 0.008            # [m] pad rounding
-    # pad_width = 0.02            # [m] optional: a flat pad's face (a jaw); the fit lays it flat
+    # pad_width = 0.02            # [m] optional: a flat pad's face (a jaw), laid flat, touching anywhere on it
     # joints = [...]              # optional; default: the joints from palm to tip_body
     [actuation]                   # for joints that no servo holds (no actuator, or a motor)
     kp = 5.0                      # [N·m/rad] (or N/m for slide joints)
@@ -74,7 +74,8 @@ class FingerSpec:
             palm to ``tip_body``.
         pad_width: Width of a flat pad's face [m] (a parallel gripper's jaw); 0: a rounded pad.
             A flat pad tilted by a small angle t touches with its edge, lifted width / 2 t
-            off the surface: the fit turns it flat onto the contact's surface.
+            off the surface: the fit lays it flat on the contact's surface, anywhere within
+            half its width of the contact.
     """
 
     name: str

@@ -15,6 +15,11 @@ are its design); ``q_o`` the joints of the fingers that take no contact, kept ne
 The first solve leaves collisions out; when a link ends up inside the object, a second solve adds
 them. The hand's own solver options never matter here: only kinematics and distances are used.
 
+A flat pad (a finger's ``pad_width``) weighs its tilt by :data:`FLAT_PAD_WEIGHT` widths and its
+centre's offset along the contact's surface by :data:`FLAT_PAD_SLIDE`: it lies flat and may touch
+anywhere within half its width; its residual is its face's distance from the contact's surface and
+its slide beyond that half width.
+
 A fit is *realised* when every chosen finger's residual is within :data:`RESIDUAL_TOLERANCE` and
 no link is inside the object or another link beyond :data:`LINK_TOLERANCE`; otherwise
 :attr:`HandFit.reason` names the finger and its residual, or the link and its depth.
@@ -49,6 +54,10 @@ NORMAL_WEIGHT_RADII = 0.5
 #: jaw weighs a tilt 100 mm per radian, so that it lies flat (1.7 degrees of tilt on a 3.5 cm box
 #: touched with a jaw's edge, and a 2 N load rolled the box out of a 15 N pinch).
 FLAT_PAD_WEIGHT = 5.0
+#: Weight of a flat pad's slide along the surface, relative to its distance from it: a flat pad
+#: touches wherever its face lies on the contact's surface, so sliding costs little (10 mm of slide
+#: as much as 1 mm off the surface) and is free, for being realised, within half its width.
+FLAT_PAD_SLIDE = 0.1
 #: Weight of keeping the other fingers where they started [m per rad].
 REST_WEIGHT = 1e-3
 #: Weight of a link's depth beyond the tolerance, relative to a pad residual.
@@ -168,6 +177,25 @@ class _Targets:
     targets: NDArray[np.float64]
     normals: NDArray[np.float64]
     radii: NDArray[np.float64]
+    widths: NDArray[np.float64]
+
+    def projections(self) -> NDArray[np.float64]:
+        """Each pad's weights of its centre's offset, shape (m, 3, 3): the identity for a round pad;
+        for a flat one, the offset off the contact's surface in full, the slide along it by
+        :data:`FLAT_PAD_SLIDE`."""
+        normal = np.einsum("ki,kj->kij", self.normals, self.normals)
+        flat = normal + FLAT_PAD_SLIDE * (np.eye(3) - normal)
+        return np.where((self.widths > 0)[:, None, None], flat, np.eye(3))
+
+    def residuals(self, centre: NDArray[np.float64]) -> NDArray[np.float64]:
+        """How far each pad is from touching its contact, shape (m,) [m]: a round pad's centre from its
+        target; a flat pad's face from the contact's surface and, beyond half its width, its centre
+        along the surface."""
+        offset = centre - self.targets
+        along = np.einsum("ki,ki->k", offset, self.normals)
+        slide = np.linalg.norm(offset - along[:, None] * self.normals, axis=1)
+        flat = np.hypot(along, np.maximum(slide - 0.5 * self.widths, 0.0))
+        return np.where(self.widths > 0, flat, np.linalg.norm(offset, axis=1))
 
     def centres(self, pose: Pose) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """The chosen pads' centres of rounding and normals in a pose, each shape (m, 3)."""
@@ -190,7 +218,7 @@ class _Targets:
             rotation=pose[1],
             translation=pose[2],
             fingers=self.fingers,
-            residuals=np.linalg.norm(centre - self.targets, axis=1),
+            residuals=self.residuals(centre),
             normal_angles=np.arccos(cosine),
             penetration=float(into_object.max()),
             self_penetration=float(into_hand.max()),
@@ -241,8 +269,9 @@ def fit_hand(
     inset = START_INSET * (kin.limits[:, 1] - kin.limits[:, 0])
     q0 = kin.complete(np.clip(q0, kin.limits[:, 0] + inset, kin.limits[:, 1] - inset))
     radii = np.array([kin.fingers[f].radius for f in chosen])
-    aim = _Targets(scene, chosen, where - radii[:, None] * inward, inward, radii)
     widths = np.array([kin.fingers[f].width for f in chosen])
+    aim = _Targets(scene, chosen, where - radii[:, None] * inward, inward, radii, widths)
+    weigh = aim.projections()  # (m, 3, 3)
     weights = np.maximum(NORMAL_WEIGHT_RADII * float(radii.mean()), FLAT_PAD_WEIGHT * widths)  # (m,)
     free = kin.independent
     chosen_joints = {j for f in chosen for j in kin.fingers[f].joints}
@@ -283,7 +312,7 @@ def fit_hand(
         pose = unpack(x, variables)
         centre, pad = aim.centres(pose)
         parts = [
-            (centre - aim.targets).ravel(),
+            np.einsum("kij,kj->ki", weigh, centre - aim.targets).ravel(),
             (weights[:, None] * (pad - inward)).ravel(),
             REST_WEIGHT * (pose[0][resting] - q0[resting]),
             LOOP_WEIGHT * loop_gaps(scene),
@@ -303,7 +332,7 @@ def fit_hand(
         centre_rows, normal_rows = [], []
         for k, f in enumerate(chosen):
             moved, turned = jac.point_and_direction(world[f], pad[f], int(scene.hand.pads[f]))
-            centre_rows.append(moved - radii[k] * turned)
+            centre_rows.append(weigh[k] @ (moved - radii[k] * turned))
             normal_rows.append(weights[k] * turned)
         derivative = kin.complete_derivative(pose[0])
         rest = np.zeros((len(resting), jac.columns))
@@ -400,7 +429,8 @@ def measure_pose(
     inward = np.asarray(normals, dtype=float)
     inward = inward / np.linalg.norm(inward, axis=1, keepdims=True)
     radii = np.array([scene.kinematics.fingers[f].radius for f in chosen])
-    aim = _Targets(scene, chosen, np.asarray(points, dtype=float) - radii[:, None] * inward, inward, radii)
+    widths = np.array([scene.kinematics.fingers[f].width for f in chosen])
+    aim = _Targets(scene, chosen, np.asarray(points, dtype=float) - radii[:, None] * inward, inward, radii, widths)
     return aim.summary(pose)
 
 
