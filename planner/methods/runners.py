@@ -129,9 +129,10 @@ def _under_denser_hands(
 
     Each retry's model has :data:`~ogcp.planner.hands.reachability.DENSER_FACTOR` times the
     samples (:meth:`HandReachability.denser`: where some grasp of the m-contact ``contacts`` came
-    near), within what is left of ``time_limit`` [s]. The
-    search is called with the constraints and the time it may take. Without ``retry`` (a
-    checkpointed exhaustive search, whose finished chunks belong to the first model) it runs once.
+    near). Sampling a denser model takes seconds to minutes that no time limit can bound, so a
+    search with a ``time_limit`` [s] runs once, as does one without ``retry`` (a checkpointed
+    exhaustive search, whose finished chunks belong to the first model). The search is called
+    with the constraints and the time it may take.
 
     Returns:
         The result and the hand model it was found under.
@@ -139,17 +140,14 @@ def _under_denser_hands(
     Raises:
         NoGraspError: Once no denser model finds one, saying what about the hand may change that.
     """
-    started, left = time.perf_counter(), time_limit
     while True:
         try:
-            return search(constraints, left), hand
+            return search(constraints, time_limit), hand
         except NoGraspError as exc:
             if hand is None:
                 raise
-            denser = hand.denser(contacts, m) if retry else None
-            if time_limit is not None:
-                left = time_limit - (time.perf_counter() - started)
-            if denser is None or (left is not None and left <= 0):
+            denser = hand.denser(contacts, m) if retry and time_limit is None else None
+            if denser is None:
                 raise NoGraspError(f"{exc}: {hand.why_none()}") from None
             constraints = [denser if c is hand else c for c in constraints]
             hand = denser

@@ -106,8 +106,12 @@ def test_a_search_that_finds_nothing_under_a_grown_model_tries_a_denser_one(tmp_
     small.setattr(sampled_model, "AUTO_RECALL", 0.0)  # the first 1,000 samples are kept
     small.setenv("OGCP_CACHE", str(tmp_path))
     runners.hand_model.cache_clear()  # the runners keep models by hand name, whatever the cache
+    args = ["plan", "sphere", "-n", "12", "-m", "3", "--diagonal", "0.1", "--hand", "sdh", "--json"]
     try:
-        assert main(["plan", "sphere", "-n", "12", "-m", "3", "--diagonal", "0.1", "--hand", "sdh", "--json"]) == 0
+        # Under a time limit it does not try: sampling a denser model takes longer than any limit bounds.
+        assert main([*args, "--time-limit", "60"]) == 2
+        assert "reachability model (1,000 sampled configurations" in capsys.readouterr().err
+        assert main(args) == 0
     finally:
         runners.hand_model.cache_clear()
     record = json.loads(capsys.readouterr().out)
