@@ -30,6 +30,7 @@ from ogcp.planner.grasp.contact_set import ContactSet
 from ogcp.planner.grasp.quality import q1_certificate
 from ogcp.planner.hands.kinematics import HandKinematics
 from ogcp.planner.hands.reachability import HandReachability
+from ogcp.planner.hands.sampled_model import MAX_AUTO_SAMPLES
 from ogcp.sim_eval.decomposition.ladder import ContactFit
 from ogcp.sim_eval.hand.fit import HandFit, fit_hand, measure_pose
 from ogcp.sim_eval.hand.fit_scene import FitScene
@@ -88,7 +89,8 @@ class HandSetup:
         if self.model is not None:
             return self.model
         own = HandReachability(self.kinematics.descriptor, self.fingers)
-        if own.growable and self.samples is not None and self.samples > len(own.q):
+        denser = self.samples is not None and len(own.q) < self.samples <= MAX_AUTO_SAMPLES  # not a damaged record's
+        if own.growable and denser:
             return HandReachability(self.kinematics.descriptor, self.fingers, self.samples)  # the plan's, cached
         return own
 

@@ -118,6 +118,9 @@ def test_a_search_that_finds_nothing_under_a_grown_model_tries_a_denser_one(tmp_
     (constraint,) = record["config"]["constraints"]
     assert constraint["samples"] == record["hand"]["samples"] == 4_000 and record["hand"]["reachable"]
     assert plan_hand(record).reach.samples == 4_000  # the fit starts from the plan's model
+    for damaged in (10**9, -3, "many"):  # a record's size past the cap or not a size: the hand's own model
+        record["hand"]["samples"] = damaged
+        assert plan_hand(record).reach.samples == 1_000
     first = HandReachability("sdh", cache_dir=tmp_path)
     contacts = sample_contacts(resolve_object("sphere", 0.1)[0], n=12, seed=0)
     assert first.samples == 1_000 and first.growable
