@@ -361,9 +361,9 @@ class HandReachability:
             return math.inf
         if math.comb(n, m) <= NEAR_MISS_GRASPS:
             grasps = np.array(list(itertools.combinations(range(n), m)), dtype=np.intp)
-        else:
-            rng = np.random.default_rng(seed)
-            grasps = np.argsort(rng.random((NEAR_MISS_GRASPS, n)), axis=1)[:, :m]
+        else:  # rows with a repeated contact dropped (few: there are more grasps than drawn)
+            drawn = np.sort(np.random.default_rng(seed).integers(0, n, (NEAR_MISS_GRASPS, m)), axis=1)
+            grasps = drawn[np.all(np.diff(drawn, axis=1) > 0, axis=1)]
         return float(self.residuals(contacts.positions[grasps], contacts.normals[grasps]).min())
 
     def denser(self, contacts: ContactSet, m: int) -> HandReachability | None:
