@@ -46,8 +46,10 @@ SCHEMA = "ogcp.hand/1"
 MODEL_SUFFIXES = (".xml", ".urdf")
 #: How far from 1 a pad normal's length may be (a normal typed to 4 decimals passes).
 UNIT_TOLERANCE = 1e-3
-#: Largest pad rounding and pad offset accepted [m]: a hand bigger than 2 m is a unit error.
+#: Largest pad offset accepted [m]: a hand bigger than 2 m is a unit error.
 MAX_LENGTH = 2.0
+#: Largest pad rounding and pad width accepted [m]: a gripper for a 2 m crate may have jaws 0.3 m wide.
+MAX_PAD = MAX_LENGTH / 4
 _TOP_KEYS = ("schema", "name", "mjcf", "palm", "fingers", "actuation", "fetched", "reachability", "ignore_collisions")
 _REACHABILITY_KEYS = ("samples",)
 #: The most joint configurations a descriptor may ask the reachability model to sample.
@@ -222,7 +224,9 @@ def load_descriptor(path: str | Path) -> HandDescriptor:
     model_name = _text(table, "mjcf", where)
     model_path = (_model_folder(table, where, path) / model_name).resolve()
     if model_path.suffix.lower() not in MODEL_SUFFIXES:
-        raise OgcpError(f"{where}: mjcf = {model_name!r} must be an MJCF (.xml) or URDF (.urdf) file")
+        urdf = model_path.stem if model_path.stem.endswith(".urdf") else f"{model_path.stem}.urdf"
+        expand = f" (expand it first: xacro {model_name} > {urdf})" if model_path.suffix == ".xacro" else ""
+        raise OgcpError(f"{where}: mjcf = {model_name!r} must be an MJCF (.xml) or URDF (.urdf) file{expand}")
     if not model_path.is_file():
         raise OgcpError(f"{where}: mjcf = {model_name!r}: no such file {model_path}")
     fingers_raw = table.get("fingers")
@@ -315,9 +319,9 @@ def _finger(entry: object, where: str) -> FingerSpec:
         tip_body=_text(entry, "tip_body", where),
         tip_offset=offset,
         pad_normal=normal,
-        tip_radius=_number(entry, "tip_radius", where, 0.0, MAX_LENGTH / 10),
+        tip_radius=_number(entry, "tip_radius", where, 0.0, MAX_PAD),
         joints=joints,
-        pad_width=_number(entry, "pad_width", where, 0.0, MAX_LENGTH / 10) if "pad_width" in entry else 0.0,
+        pad_width=_number(entry, "pad_width", where, 0.0, MAX_PAD) if "pad_width" in entry else 0.0,
     )
 
 

@@ -20,6 +20,8 @@ from ogcp.planner.infra.errors import OgcpError
 
 #: How many folders above a URDF a ``package://`` mesh path is looked for in.
 PACKAGE_SEARCH_DEPTH = 3
+#: The mesh formats MuJoCo reads.
+MESH_FORMATS = ("STL", "OBJ", "MSH")
 
 
 def hand_spec(descriptor: HandDescriptor) -> mujoco.MjSpec:
@@ -30,11 +32,10 @@ def hand_spec(descriptor: HandDescriptor) -> mujoco.MjSpec:
             descriptor, the model file and MuJoCo's reason.
     """
     path = descriptor.model_path
+    urdf = path.suffix.lower() == ".urdf"
+    text, assets = _urdf_with_assets(path, descriptor) if urdf else ("", {})
     try:
-        if path.suffix.lower() == ".urdf":
-            text, assets = _urdf_with_assets(path, descriptor)
-            return mujoco.MjSpec.from_string(text, assets=assets)
-        return mujoco.MjSpec.from_file(str(path))
+        return mujoco.MjSpec.from_string(text, assets=assets) if urdf else mujoco.MjSpec.from_file(str(path))
     except ValueError as exc:
         raise compile_error(descriptor, exc) from exc
 
@@ -42,6 +43,8 @@ def hand_spec(descriptor: HandDescriptor) -> mujoco.MjSpec:
 def compile_error(descriptor: HandDescriptor, exc: Exception) -> OgcpError:
     """One line for a model MuJoCo refused."""
     reason = " ".join(str(exc).replace("Error:", "").split())
+    if "no decoder found for mesh" in reason:  # a COLLADA, glTF or PLY mesh, common in ROS packages
+        reason += f"; MuJoCo reads {', '.join(MESH_FORMATS)} meshes: convert it (trimesh can)"
     return OgcpError(f"{descriptor.path}: mjcf = {descriptor.model_path.name}: MuJoCo cannot compile it ({reason})")
 
 
@@ -62,6 +65,11 @@ def _urdf_with_assets(path: Path, descriptor: HandDescriptor) -> tuple[str, dict
         raise OgcpError(
             f"{descriptor.path}: mjcf = {path.name}: a URDF's root element must be <robot>, got <{root.tag}>"
         )
+    # ogcp simulates and draws collision geometry only: a visual's mesh (often COLLADA, which
+    # MuJoCo cannot read, or left out of a package) must not stop the hand from loading.
+    for link in root.iter("link"):
+        for visual in link.findall("visual"):
+            link.remove(visual)
     assets: dict[str, bytes] = {}
     for mesh in root.iter("mesh"):
         name = mesh.get("filename", "")

@@ -55,6 +55,10 @@ def test_a_good_descriptor_reads_with_its_paths_resolved_and_digests(tmp_path):
         (lambda t: t.replace('"g.xml"', '"missing.xml"'), "mjcf = 'missing.xml': no such file"),
         (lambda t: t.replace('"g.xml"', '"g.obj"'), "must be an MJCF (.xml) or URDF (.urdf) file"),
         (
+            lambda t: t.replace('"g.xml"', '"g.urdf.xacro"'),
+            "URDF (.urdf) file (expand it first: xacro g.urdf.xacro > g.urdf)",
+        ),
+        (
             lambda t: t.replace("[0.0, -1.0, 0.0]", "[0.0, -0.5, 0.0]"),
             "fingers[0]: pad_normal [0.0, -0.5, 0.0] is not a unit",
         ),
@@ -66,11 +70,11 @@ def test_a_good_descriptor_reads_with_its_paths_resolved_and_digests(tmp_path):
         (lambda t: t.replace("[0.0, -0.004, 0.06]", "[0.0, -4.0, 60.0]"), "is more than 2 m from tip_body (units?)"),
         (
             lambda t: t.replace("tip_radius = 0.004\n[[", "tip_radius = 0\n[["),
-            "fingers[0]: tip_radius = 0 is outside (0, 0.2]",
+            "fingers[0]: tip_radius = 0 is outside (0, 0.5]",
         ),
         (
             lambda t: t.replace("tip_radius = 0.004\n[[", "tip_radius = 0.004\npad_width = -0.02\n[["),
-            "fingers[0]: pad_width = -0.02 is outside (0, 0.2]",
+            "fingers[0]: pad_width = -0.02 is outside (0, 0.5]",
         ),
         (
             lambda t: t.replace("tip_radius = 0.004\n[[", 'tip_radius = 0.004\npad_width = "wide"\n[['),

@@ -193,6 +193,27 @@ def test_a_urdf_whose_mesh_is_missing_names_it(tmp_path):
         HandKinematics(load_descriptor(path))
 
 
+def test_a_urdf_is_read_without_its_visuals_and_names_a_mesh_mujoco_cannot_read(tmp_path):
+    """ROS packages often ship COLLADA visuals, or leave them out: ogcp simulates collision geometry only."""
+    path = write_urdf_gripper(tmp_path)
+    urdf = tmp_path / "urdf_gripper.urdf"
+    collision = '<collision><geometry><mesh filename="package://urdf_gripper/meshes/palm.stl"/></geometry></collision>'
+    visuals = (
+        '<visual><geometry><mesh filename="package://urdf_gripper/meshes/palm.dae"/></geometry></visual>'
+        '<visual><geometry><mesh filename="package://urdf_gripper/meshes/gone.dae"/></geometry></visual>'
+    )
+    (tmp_path / "meshes" / "palm.dae").write_text("<COLLADA/>")
+    urdf.write_text(urdf.read_text().replace(collision, visuals + collision))
+    kinematics = HandKinematics(load_descriptor(path))
+    assert kinematics.model.nmesh == 1  # the collision mesh alone
+    urdf.write_text(urdf.read_text().replace("meshes/palm.stl", "meshes/palm.dae"))
+    with pytest.raises(OgcpError) as info:
+        HandKinematics(load_descriptor(path))
+    text = str(info.value)
+    assert "palm.dae" in text and "MuJoCo reads STL, OBJ, MSH meshes" in text and "\n" not in text
+    assert text.count("MuJoCo cannot compile it") == 1
+
+
 def test_configurations_out_of_range_name_the_joint(sdh):
     with pytest.raises(OgcpError, match="joint prox_1 = 2 is outside its range"):
         sdh.check([0, 2, 0, 0, 0, 0, 0, 0])
