@@ -154,6 +154,8 @@ def boxes_within(
     pairs: NDArray[np.int64],
     scale: NDArray[np.float64],
     radius2: float,
+    spans: NDArray[np.float64],
+    span_scale: float,
     leaf_low: NDArray[np.float64],
     leaf_high: NDArray[np.float64],
     points: NDArray[np.float64],
@@ -163,18 +165,24 @@ def boxes_within(
 
     Assignment ``a`` puts super-contact ``assignments[a, f]`` under finger f; its box spans, for
     each finger pair ``pairs[k] = (f, g)``, the invariants' ranges ``bounds[x, y]`` of those
-    super-contacts, divided by ``scale`` (4 values per pair).
+    super-contacts, divided by ``scale`` (4 values per pair). The least distance of a pair's
+    interval of pad distances from that pair's span ``spans[k]`` ([m], low and high), divided by
+    ``span_scale`` [m], counts as a further dimension of the code's distance (the residual of
+    :func:`~ogcp.planner.hands.sampled_model.residuals`).
     """
     dims = 4 * pairs.shape[0]
     low = np.empty(dims)
     high = np.empty(dims)
     for a in range(assignments.shape[0]):
+        beyond2 = 0.0
         for k in range(pairs.shape[0]):
             x = assignments[a, pairs[k, 0]]
             y = assignments[a, pairs[k, 1]]
             for d in range(4):
                 low[4 * k + d] = bounds[x, y, 0, d] / scale[4 * k + d]
                 high[4 * k + d] = bounds[x, y, 1, d] / scale[4 * k + d]
-        if _box_within(low, high, radius2, leaf_low, leaf_high, points, starts):
+            g = (max(spans[k, 0] - bounds[x, y, 1, 0], 0.0) + max(bounds[x, y, 0, 0] - spans[k, 1], 0.0)) / span_scale
+            beyond2 += g * g
+        if beyond2 <= radius2 and _box_within(low, high, radius2 - beyond2, leaf_low, leaf_high, points, starts):
             return True
     return False

@@ -10,11 +10,15 @@ pairwise code ``[|p_i - p_j|, |n_i - n_j|, n_i . u_ij, n_j . u_ij]`` over the fi
 by its spread over the samples, and a k-d tree is kept. A grasp (positions, inward normals: a pad
 pushes along the inward normal, its pad normal) is reachable when, for some assignment of its
 contacts to the fingers, its code lies within ``threshold`` of a sample; the distance to the
-nearest sample is the *residual*.
+nearest sample is the *residual*. The code's distance dimension is normalised by its spread, which
+for a parallel gripper is as wide as its jaws travel: a pair of contacts farther apart (or nearer)
+than the span of its fingers' sampled pad distances, widened by the fit's tolerance and the
+sampling's uncertainty, adds how far (in millimetres) to the residual as one more dimension.
 
 What pruning guarantees: over a super-contact state every pairwise distance and normal difference
 lies in an interval, so every grasp's code lies in a box, and the state is pruned only if no
-sample lies within ``threshold`` of that box (exact point-to-box distances) under any assignment.
+sample lies within ``threshold`` of that box (exact point-to-box distances, the distance
+intervals' from the spans included) under any assignment.
 A state that holds a grasp accepted by the *sampled* model is never pruned. The model is a sample:
 a grasp the real hand reaches but no sample comes near is rejected, and more samples (``samples``)
 shrink that gap; the fit in simulation is what finally decides.
@@ -47,6 +51,7 @@ from ogcp.planner.hands.sampled_model import (
     AUTO_RECALL,
     FIRST_SAMPLES,
     MAX_AUTO_SAMPLES,
+    SPAN_SCALE,
     FingerModel,
     SampledHand,
     assignments,
@@ -92,12 +97,13 @@ class Reach:
 
 def _assignment_codes(
     grasp: Sequence[int], contacts: ContactSet, model: FingerModel
-) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
-    """Every assignment of a grasp's contacts to the fingers, shape (m!, m), and its scaled codes,
-    shape (m!, 4 C(m, 2)): one code computation for all of them."""
+) -> tuple[NDArray[np.int64], NDArray[np.float64], NDArray[np.float64]]:
+    """Every assignment of a grasp's contacts to the fingers, shape (m!, m), its scaled codes,
+    shape (m!, 4 C(m, 2)), and how far beyond the pairs' spans it puts the pads, shape (m!,)."""
     orders = assignments(len(grasp))[0]
     ordered = np.asarray(grasp, dtype=np.intp)[orders]
-    return orders, pair_code(contacts.positions[ordered], contacts.normals[ordered]) / model.scale
+    codes = pair_code(contacts.positions[ordered], contacts.normals[ordered])
+    return orders, codes / model.scale, model.beyond(codes)
 
 
 #: How many times the samples of the last model a search tries when it finds no grasp under a hand.
@@ -285,8 +291,9 @@ class HandReachability:
         """Residual of a grasp over all finger assignments, with the nearest sample."""
         m = len(grasp)
         model = self._model(m)
-        orders, codes = _assignment_codes(grasp, contacts, model)
+        orders, codes, beyond = _assignment_codes(grasp, contacts, model)
         distance, nearest = model.tree.query(codes, k=1)
+        distance = np.hypot(distance, beyond)
         best = int(np.argmin(distance))
         angles = self.sampled.angles[model.rows[nearest[best]]]
         names = tuple(self.descriptor.finger_names[f] for f in self.chosen(m))
@@ -303,10 +310,10 @@ class HandReachability:
         """
         m = len(grasp)
         model = self._model(m)
-        orders, codes = _assignment_codes(grasp, contacts, model)
+        orders, codes, beyond = _assignment_codes(grasp, contacts, model)
         k = min(count, len(model.rows))
         distance, nearest = model.tree.query(codes, k=k)
-        distance, nearest = distance.reshape(len(orders), k), nearest.reshape(len(orders), k)
+        distance, nearest = np.hypot(distance.reshape(len(orders), k), beyond[:, None]), nearest.reshape(len(orders), k)
         ranked = np.argsort(distance[:, 0], kind="stable")
         order = [int(a) * k + j for j in range(k) for a in ranked][:count]
         names = tuple(self.descriptor.finger_names[f] for f in self.chosen(m))
@@ -350,7 +357,19 @@ class HandReachability:
         boxes = model.boxes
         radius2 = self.threshold * self.threshold
         return bool(
-            boxes_within(bounds, orders, pairs, model.scale, radius2, boxes.low, boxes.high, boxes.points, boxes.starts)
+            boxes_within(
+                bounds,
+                orders,
+                pairs,
+                model.scale,
+                radius2,
+                model.spans,
+                SPAN_SCALE,
+                boxes.low,
+                boxes.high,
+                boxes.points,
+                boxes.starts,
+            )
         )
 
     def near_miss(self, contacts: ContactSet, m: int, seed: int = 0) -> float:

@@ -33,6 +33,15 @@ if TYPE_CHECKING:
 #: tolerance (threshold x spread) must still admit slightly curved surfaces.
 DISTANCE_SCALE_FLOOR = 1e-3
 NORMAL_SCALE_FLOOR = 0.02
+#: How far beyond the sampled span of a finger pair's pad distances a grasp's may lie before it
+#: counts against the grasp [m]: the fit lets each of the two pads miss its contact by 1 mm. The
+#: span is widened further by twice how much the samples' extreme moved from half the samples to
+#: all: a hand of many joints samples its extremes less closely.
+SPAN_MARGIN = 2e-3
+#: The length [m] beyond the widened span that adds 1 to the residual: a parallel gripper's
+#: distance code spreads as widely as its jaws travel (16 mm for the built-in gripper), so within
+#: the default threshold the code alone admitted a box 11 mm wider than the jaws open.
+SPAN_SCALE = 1e-3
 #: Configurations posed per progress step while sampling.
 SAMPLE_BATCH = 2_000
 #: The first samples of a growing model (and the model of a one-finger hand).
@@ -99,6 +108,8 @@ class FingerModel:
         codes: The samples' scaled codes, shape (n, 4 C(m, 2)).
         tree: k-d tree of ``codes``.
         boxes: Leaves of ``codes`` with their bounding boxes.
+        spans: Each finger pair's least and greatest pad distance over the samples, widened
+            (:data:`SPAN_MARGIN`), shape (C(m, 2), 2) [m].
     """
 
     rows: NDArray[np.intp]
@@ -106,6 +117,14 @@ class FingerModel:
     codes: NDArray[np.float64]
     tree: Any
     boxes: BoxIndex
+    spans: NDArray[np.float64]
+
+    def beyond(self, codes: NDArray[np.float64]) -> NDArray[np.float64]:
+        """How far unscaled codes (..., 4 C(m, 2)) put the pads beyond the pairs' spans, in
+        :data:`SPAN_SCALE` units (root sum of squares over the pairs), shape (...)."""
+        distance = codes[..., 0::4]
+        gap = np.maximum(self.spans[:, 0] - distance, 0.0) + np.maximum(distance - self.spans[:, 1], 0.0)
+        return np.asarray(np.linalg.norm(gap, axis=-1) / SPAN_SCALE)
 
 
 @lru_cache(maxsize=8)
@@ -135,15 +154,28 @@ def finger_model(sampled: SampledHand, chosen: Sequence[int]) -> FingerModel | N
     from scipy.spatial import cKDTree  # here, not at the top: every plan imports this module
 
     scaled = codes / scale
-    return FingerModel(rows, scale, scaled, cKDTree(scaled), BoxIndex(scaled))
+    return FingerModel(rows, scale, scaled, cKDTree(scaled), BoxIndex(scaled), _spans(codes[:, 0::4]))
+
+
+def _spans(distance: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Each pair's widened span of pad distances, shape (P, 2) [m], from the samples' (n, P)."""
+    low, high = distance.min(axis=0), distance.max(axis=0)
+    half = distance[::2]  # the samples are independent: every second one is a random half
+    low_moved, high_moved = half.min(axis=0) - low, high - half.max(axis=0)
+    return np.stack([low - SPAN_MARGIN - 2.0 * low_moved, high + SPAN_MARGIN + 2.0 * high_moved], axis=1)
 
 
 def residuals(model: FingerModel, positions: NDArray[np.float64], normals: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Normalised code distance of pad tuples (B, m, 3) to the nearest sample, best over assignments, shape (B,)."""
+    """Normalised code distance of pad tuples (B, m, 3) to the nearest sample, best over assignments, shape (B,).
+
+    A pair of contacts farther apart (or nearer) than its fingers' widened span of pad distances
+    adds how far, in :data:`SPAN_SCALE` units, as a further dimension of that distance.
+    """
     orders = assignments(positions.shape[1])[0]
     codes = pair_code(positions[:, orders], normals[:, orders])  # (B, m!, codes)
     distance, _ = model.tree.query(codes.reshape(-1, codes.shape[-1]) / model.scale, k=1)
-    return np.asarray(distance.reshape(len(positions), len(orders)).min(axis=1), dtype=float)
+    distance = np.hypot(distance.reshape(len(positions), len(orders)), model.beyond(codes))
+    return np.asarray(distance.min(axis=1), dtype=float)
 
 
 def pose_samples(kinematics: HandKinematics, angles: NDArray[np.float64], bar: tqdm) -> SampledHand:

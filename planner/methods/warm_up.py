@@ -157,7 +157,10 @@ def _run_hand_boxes(contacts: Any) -> None:
     bounds = pair_bounds(contacts.positions, contacts.normals, members, offsets)
     assignments = np.array([[0, 1, 2], [2, 1, 0]], dtype=np.int64)
     pairs = np.array([[0, 1], [0, 2], [1, 2]], dtype=np.int64)
-    boxes_within(bounds, assignments, pairs, np.ones(12), 0.25, index.low, index.high, index.points, index.starts)
+    spans = np.array([[0.0, 1.0]] * 3)
+    boxes_within(
+        bounds, assignments, pairs, np.ones(12), 0.25, spans, 1e-3, index.low, index.high, index.points, index.starts
+    )
 
 
 def _run_open_list() -> None:

@@ -11,8 +11,10 @@ import pytest
 
 from ogcp.benchmarks.cli import main
 from ogcp.planner.grasp import q1
+from ogcp.planner.grasp.contact_set import ContactSet
 from ogcp.planner.hands import HandKinematics, HandReachability, SDHReachability, load_descriptor
 from ogcp.planner.hands.reachability import pair_code
+from ogcp.planner.hands.sampled_model import SPAN_MARGIN, SPAN_SCALE
 from ogcp.planner.infra import OgcpError
 from ogcp.planner.infra.cache import CacheEntryWarning
 from ogcp.planner.search import GraspPlanner
@@ -133,7 +135,10 @@ def _admits_in_numpy(hand, super_contacts, contacts):
     )
     gap = np.maximum(low[:, None] / model.scale - model.codes[None], 0.0)
     gap += np.maximum(model.codes[None] - high[:, None] / model.scale, 0.0)
-    return bool((np.einsum("bnd,bnd->bn", gap, gap) <= hand.threshold**2).any())
+    # A pair's distances beyond its fingers' span of pad distances count as one more dimension.
+    beyond = np.maximum(model.spans[:, 0] - high[:, 0::4], 0.0) + np.maximum(low[:, 0::4] - model.spans[:, 1], 0.0)
+    beyond2 = np.sum((beyond / SPAN_SCALE) ** 2, axis=1)
+    return bool((np.einsum("bnd,bnd->bn", gap, gap) + beyond2[:, None] <= hand.threshold**2).any())
 
 
 def test_the_compiled_test_of_a_state_answers_as_numpy_did(hand, donut):
@@ -145,6 +150,33 @@ def test_the_compiled_test_of_a_state_answers_as_numpy_did(hand, donut):
         assert answer == _admits_in_numpy(hand, sets, donut)
         answers.append(answer)
     assert 0 < sum(answers) < len(answers)
+
+
+def test_a_gripper_is_not_asked_to_span_more_than_its_jaws_open(tmp_path):
+    """Two contacts farther apart than the jaws open are rejected, though the code alone admits them.
+
+    The distance code of a parallel gripper spreads as widely as its jaws travel (16 mm), so within
+    the threshold a nearest sample alone accepted a box 11 mm wider than the jaws open.
+    """
+    gripper = HandReachability("parallel_gripper", samples=4000, seed=0, cache_dir=tmp_path)
+    model = gripper._model(2)
+    widest = float(model.spans[0, 1]) - SPAN_MARGIN  # the opening (90 mm less two 4 mm jaws), sampled
+    assert widest == pytest.approx(0.082, abs=1.5e-3)
+
+    def pinch(width: float) -> ContactSet:
+        positions = np.array([[0.0, 0.5 * width, 0.0], [0.0, -0.5 * width, 0.0]])
+        normals = np.array([[0.0, -1.0, 0.0], [0.0, 1.0, 0.0]])
+        return ContactSet(positions, normals, np.zeros(3), 0.05)
+
+    widths = [0.05, widest + 0.5 * SPAN_MARGIN, widest + SPAN_MARGIN + 2e-3, 0.093]
+    sets = [pinch(w) for w in widths]
+    residuals = [float(gripper.residuals(c.positions[None], c.normals[None])[0]) for c in sets]
+    assert [gripper.accepts((0, 1), c) for c in sets] == [True, True, False, False]
+    assert [r <= gripper.threshold for r in residuals] == [True, True, False, False]
+    assert residuals[3] > residuals[2] > 1.5  # millimetres beyond the span add to the residual
+    assert not gripper.admits([np.array([0]), np.array([1])], sets[3])  # and a state of them is pruned
+    code = pair_code(sets[3].positions[None], sets[3].normals[None])[0] / model.scale
+    assert model.tree.query(code)[0] <= gripper.threshold  # what the code alone said
 
 
 def test_constrained_astar_equals_constrained_enumeration(hand, donut):
