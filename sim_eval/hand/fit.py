@@ -20,16 +20,15 @@ centre's offset along the contact's surface by :data:`FLAT_PAD_SLIDE`: it lies f
 anywhere within half its width; its residual is its face's distance from the contact's surface and
 its slide beyond that half width.
 
-A fit is *realised* when every chosen finger's residual is within :data:`RESIDUAL_TOLERANCE` and
-no link is inside the object or another link beyond :data:`LINK_TOLERANCE`; otherwise
-:attr:`HandFit.reason` names the finger and its residual, or the link and its depth.
+A fit is *realised* (:class:`~ogcp.sim_eval.hand.fit_result.HandFit`) when every chosen finger's
+residual is within :data:`RESIDUAL_TOLERANCE` and no link is inside the object or another link
+beyond :data:`LINK_TOLERANCE`, both grown with objects larger than the simulation's reference.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -38,14 +37,27 @@ from scipy.spatial.transform import Rotation
 
 from ogcp.planner.infra.errors import OgcpError
 from ogcp.sim_eval.hand.fit_jacobian import PoseJacobian, loop_gaps, loop_rows
+from ogcp.sim_eval.hand.fit_result import (
+    LINK_TOLERANCE,
+    LOOP_TOLERANCE,
+    RESIDUAL_TOLERANCE,
+    HandFit,
+    better_fit,
+    tolerance_scale,
+)
 from ogcp.sim_eval.hand.fit_scene import FitScene
 
-#: Largest pad residual of a realised fit [m].
-RESIDUAL_TOLERANCE = 1e-3
-#: Deepest a link may be inside the object or another link [m].
-LINK_TOLERANCE = 1e-3
-#: Widest a closed loop (a four-bar's connect) may stay open in a realised fit [m].
-LOOP_TOLERANCE = 1e-4
+__all__ = [
+    "LINK_TOLERANCE",
+    "LOOP_TOLERANCE",
+    "RESIDUAL_TOLERANCE",
+    "HandFit",
+    "fit_hand",
+    "measure_pose",
+    "rigid_fit",
+    "tolerance_scale",
+]
+
 #: Weight of a loop's gap, relative to a pad residual: the linkage closes before the pads reach.
 LOOP_WEIGHT = 10.0
 #: Weight of the pad-normal term, as a multiple of the pad's rounding radius [m per unit difference].
@@ -75,79 +87,6 @@ RIGID_REACH_RADII = 3.0
 #: Most residual evaluations of one solve: past a few hundred, a solve only creeps (a collision
 #: solve ran to scipy's 100 per unknown, 2,800, within 1e-6 of its cost at 400).
 MAX_EVALUATIONS = 400
-
-
-@dataclass(frozen=True, eq=False)
-class HandFit:
-    """The hand's configuration and palm placement that best realise a grasp.
-
-    Attributes:
-        joint_angles: The hand's finger joints (kinematics order), within limits, shape (J,).
-        rotation: Palm frame to world (object) frame, shape (3, 3).
-        translation: Palm origin in the world frame, shape (3,) [m].
-        fingers: The chosen fingers' indices; finger ``fingers[k]`` takes contact k.
-        residuals: Each chosen finger's pad-centre distance from its target, shape (m,) [m].
-        normal_angles: Angle between each pad normal and its contact's inward normal, shape (m,) [rad].
-        penetration: Deepest any link is inside the object [m] (0 when none is).
-        self_penetration: Deepest any link is inside another [m], the hand's designed overlaps apart.
-        worst_link: The link (geom name) of the deepest penetration, or None.
-        finger_names: The chosen fingers' names.
-        loop_gap: Widest gap of the hand's closed loops [m] (0 for an open-chain hand).
-    """
-
-    joint_angles: NDArray[np.float64]
-    rotation: NDArray[np.float64]
-    translation: NDArray[np.float64]
-    fingers: tuple[int, ...]
-    residuals: NDArray[np.float64]
-    normal_angles: NDArray[np.float64]
-    penetration: float
-    self_penetration: float
-    worst_link: str | None
-    finger_names: tuple[str, ...]
-    loop_gap: float = 0.0
-
-    @property
-    def realised(self) -> bool:
-        """Every pad within :data:`RESIDUAL_TOLERANCE`, no link beyond :data:`LINK_TOLERANCE`, every loop closed."""
-        deepest = max(self.penetration, self.self_penetration)
-        closed = self.loop_gap <= LOOP_TOLERANCE
-        return bool(self.residuals.max() <= RESIDUAL_TOLERANCE and deepest <= LINK_TOLERANCE and closed)
-
-    @property
-    def reason(self) -> str | None:
-        """Why the fit is not realised (one line), or None."""
-        worst = int(np.argmax(self.residuals))
-        if self.residuals[worst] > RESIDUAL_TOLERANCE:
-            return (
-                f"finger {self.finger_names[worst]} cannot reach its contact: {self.residuals[worst] * 1e3:.2f} mm off "
-                f"(tolerance {RESIDUAL_TOLERANCE * 1e3:g} mm)"
-            )
-        if self.penetration > LINK_TOLERANCE:
-            return f"link {self.worst_link} is {self.penetration * 1e3:.2f} mm inside the object"
-        if self.self_penetration > LINK_TOLERANCE:
-            return f"link {self.worst_link} is {self.self_penetration * 1e3:.2f} mm inside another link"
-        if self.loop_gap > LOOP_TOLERANCE:
-            return f"a closed loop of the hand stays {self.loop_gap * 1e3:.2f} mm open (tolerance {LOOP_TOLERANCE * 1e3:g} mm)"
-        return None
-
-    def to_dict(self, joint_names: Sequence[str]) -> dict[str, Any]:
-        """JSON-ready record: residuals [m] per finger, joint angles by name, palm pose, collisions."""
-        return {
-            "realised": self.realised,
-            "reason": self.reason,
-            "fingers": list(self.finger_names),
-            "fit_residuals": self.residuals.tolist(),
-            "normal_angles": self.normal_angles.tolist(),
-            "joint_names": list(joint_names),
-            "joint_angles": self.joint_angles.tolist(),
-            "palm_rotation": self.rotation.tolist(),
-            "palm_position": self.translation.tolist(),
-            "penetration": self.penetration,
-            "self_penetration": self.self_penetration,
-            "worst_link": self.worst_link,
-            "loop_gap": self.loop_gap,
-        }
 
 
 def rigid_fit(source: ArrayLike, target: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -225,6 +164,7 @@ class _Targets:
             worst_link=worst,
             finger_names=tuple(scene.kinematics.fingers[f].name for f in self.fingers),
             loop_gap=float(np.linalg.norm(gaps, axis=1).max(initial=0.0)),
+            length_scale=scene.length_scale,
         )
 
 
@@ -320,7 +260,8 @@ def fit_hand(
         ]
         if collide:
             into_object, into_hand = scene.depths()
-            parts.append(COLLISION_WEIGHT * np.maximum(np.maximum(into_object, into_hand) - 0.5 * LINK_TOLERANCE, 0.0))
+            allowed = 0.5 * LINK_TOLERANCE * scene.length_scale
+            parts.append(COLLISION_WEIGHT * np.maximum(np.maximum(into_object, into_hand) - allowed, 0.0))
         return np.concatenate(parts)
 
     def jacobian(x: NDArray[np.float64], variables: NDArray[np.intp], collide: bool) -> NDArray[np.float64]:
@@ -362,14 +303,14 @@ def fit_hand(
     x = solve(np.concatenate([q0[moving], np.zeros(pose_variables)]), moving, False)
     first = unpack(x, moving)
     fit = aim.summary(first)
-    if len(scene.object_geoms) and (fit.penetration > LINK_TOLERANCE or fit.self_penetration > LINK_TOLERANCE):
+    if len(scene.object_geoms) and max(fit.penetration, fit.self_penetration) > fit.link_tolerance:
         # Every joint and the palm again, from the first solution (the pose increment restarts at 0).
         angles, rotation, shift = first
         increment = [_matrix_rotvec(rotation @ rotation0.T), shift - shift0] if pose_variables else []
         x = np.concatenate([angles[free], *increment])
         x = solve(x, free, True)
         second = aim.summary(unpack(x, free))
-        fit = second if _better(second, fit) else fit
+        fit = second if better_fit(second, fit) else fit
     return fit
 
 
@@ -381,7 +322,7 @@ def _depth_rows(scene: FitScene, jac: PoseJacobian) -> NDArray[np.float64]:
     geom's body (the object's is still).
     """
     into_object, into_hand, which = scene.deepest()
-    active = np.maximum(into_object, into_hand) - 0.5 * LINK_TOLERANCE > 0.0
+    active = np.maximum(into_object, into_hand) - 0.5 * LINK_TOLERANCE * scene.length_scale > 0.0
     rows = np.zeros((len(which), jac.columns))
     contact = scene.data.contact
     for g in np.flatnonzero(active):
@@ -432,19 +373,3 @@ def measure_pose(
     widths = np.array([scene.kinematics.fingers[f].width for f in chosen])
     aim = _Targets(scene, chosen, np.asarray(points, dtype=float) - radii[:, None] * inward, inward, radii, widths)
     return aim.summary(pose)
-
-
-def _better(a: HandFit, b: HandFit) -> bool:
-    """Whether fit a is preferable: realised first, then the smaller worst violation."""
-    if a.realised != b.realised:
-        return a.realised
-    return _violation(a) < _violation(b)
-
-
-def _violation(fit: HandFit) -> float:
-    excess = (
-        fit.residuals.max() - RESIDUAL_TOLERANCE,
-        fit.penetration - LINK_TOLERANCE,
-        fit.self_penetration - LINK_TOLERANCE,
-    )
-    return float(max(*excess, 0.0))

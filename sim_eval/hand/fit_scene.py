@@ -25,9 +25,15 @@ class FitScene:
         kinematics: The hand.
         parts: The object's convex parts, each ``(vertices (v, 3) [m], faces (f, 3))``, in the
             world frame; none: no collision terms.
+        length_scale: The factor on the fit's tolerances (:func:`~ogcp.sim_eval.hand.fit.tolerance_scale`
+            of the object's size); 1: as declared.
     """
 
-    def __init__(self, kinematics: HandKinematics, parts: Sequence[Part] = ()) -> None:
+    def __init__(self, kinematics: HandKinematics, parts: Sequence[Part] = (), length_scale: float = 1.0) -> None:
+        if not (np.isfinite(length_scale) and length_scale > 0):
+            raise ValueError(f"length_scale must be a positive number, got {length_scale!r}")
+        #: The factor on the fit's tolerances.
+        self.length_scale = float(length_scale)
         spec = mujoco.MjSpec()
         # A free mount: MuJoCo never collides two bodies welded to the world, so a fixed palm
         # would pass through a fixed object unseen.

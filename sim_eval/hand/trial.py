@@ -32,14 +32,14 @@ from ogcp.planner.hands.kinematics import HandKinematics
 from ogcp.planner.hands.reachability import HandReachability
 from ogcp.planner.hands.sampled_model import MAX_AUTO_SAMPLES
 from ogcp.sim_eval.decomposition.ladder import ContactFit
-from ogcp.sim_eval.hand.fit import HandFit, fit_hand, measure_pose
+from ogcp.sim_eval.hand.fit import HandFit, fit_hand, measure_pose, tolerance_scale
 from ogcp.sim_eval.hand.fit_scene import FitScene
 from ogcp.sim_eval.hand.given import GIVEN_MAX_PENETRATION, GivenPose, given_scene
 from ogcp.sim_eval.hand.lean import failure_reach, lean_scene
 from ogcp.sim_eval.hand.pads import pad_gate, pad_off_contact
 from ogcp.sim_eval.hand.predict import hand_resistance, realised_contacts
 from ogcp.sim_eval.hand.scene import SQUEEZE_LADDER, HandScene, build_hand_scene, close_hand, squeezed
-from ogcp.sim_eval.hand.squeeze import balanced_grip
+from ogcp.sim_eval.hand.squeeze import balanced_grip, take_up_slack
 from ogcp.sim_eval.protocols.dexgraspbench import hold_test, physics_settings, use_object_defaults
 from ogcp.sim_eval.protocols.directions import direction_set
 from ogcp.sim_eval.protocols.gates import gate_failures, not_in_force_closure
@@ -229,12 +229,13 @@ def close_on_grasp(
     inward = np.where(placement.placed[:, None], placement.normals, normals)
     parts = fit.decomposition.parts
     started = time.perf_counter()
+    around = FitScene(kinematics, parts, tolerance_scale(body.diagonal))
     if given is None:
         check = SqueezeCheck(body.com, contacts.torque_scale, mu, settings.max_normal_force)
-        posed, order = fit_grasp(setup, FitScene(kinematics, parts), contacts, grasp, points, inward, check)
+        posed, order = fit_grasp(setup, around, contacts, grasp, points, inward, check)
     else:
         pose = (given.grasp.joint_angles, given.grasp.rotation, given.grasp.translation)
-        posed = measure_pose(FitScene(kinematics, parts), given.fingers, points, inward, pose)
+        posed = measure_pose(around, given.fingers, points, inward, pose)
         order = tuple(range(len(grasp)))
     hand: dict[str, Any] = {
         **kinematics.descriptor.to_dict(),
@@ -270,6 +271,10 @@ def close_on_grasp(
         settled = settle(closed.scene, settings)
         if settled.gates["valid"]:
             break
+    if not compat and not settled.gates["diverged"]:
+        data = _settled_data(closed, settled)
+        taken = take_up_slack(closed.scene.model, data, closed.scene.preload_ctrl)
+        closed = dataclasses.replace(closed, scene=dataclasses.replace(closed.scene, preload_ctrl=taken))
     seconds["close"] = time.perf_counter() - started - seconds["fit"]
     return ClosedGrasp(closed, settled, share, posed, order, placement, ordered_points, settings, mu, hand)
 

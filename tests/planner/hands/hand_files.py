@@ -340,3 +340,29 @@ def write_adaptive_gripper(folder: Path, elbow: str = "0 1", spring: float = -1.
     path = folder / "adaptive.toml"
     path.write_text(FOURBAR_DESCRIPTOR.replace('"fourbar"', '"adaptive"').replace('"fourbar.xml"', '"adaptive.xml"'))
     return path
+
+
+def write_scaled_gripper(folder: Path, factor: float, kp: float, force: float, pad_width: float | None = None) -> Path:
+    """The built-in parallel gripper with every length times ``factor`` (its MJCF's positions, sizes
+    and slide ranges, the pads' offsets and rounding), servos of ``kp`` [N/m] and ``force`` [N], and
+    optionally flat pads ``pad_width`` [m] wide; the descriptor's path."""
+    import re
+
+    def scaled(match: re.Match[str]) -> str:
+        values = " ".join(f"{float(v) * factor:.9g}" for v in match.group(2).split())
+        return f'{match.group(1)}="{values}"'
+
+    def edit_descriptor(text: str) -> str:
+        text = re.sub(
+            r"tip_offset = \[([^\]]+)\]",
+            lambda m: "tip_offset = [" + ", ".join(f"{float(v) * factor:.9g}" for v in m.group(1).split(",")) + "]",
+            text,
+        )
+        flat = f"\npad_width = {pad_width:g}" if pad_width else ""
+        text = re.sub(r"tip_radius = ([0-9.]+)", lambda m: f"tip_radius = {float(m.group(1)) * factor:.9g}{flat}", text)
+        text = re.sub(r"kp = [0-9.]+", f"kp = {kp:g}", text)
+        return re.sub(r"force_range = [0-9.]+", f"force_range = {force:g}", text)
+
+    return write_gripper_variant(
+        folder, lambda text: re.sub(r'\b(pos|size|range)="([^"]+)"', scaled, text), edit_descriptor
+    )

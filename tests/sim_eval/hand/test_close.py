@@ -281,3 +281,48 @@ def test_a_tendon_servo_resists_within_the_travel_what_its_stiffness_builds(trav
     assert 0 < settled < limit / 10
     expected = limit if travel is None else settled + stiffness * travel / np.sqrt(3.0)
     np.testing.assert_allclose(resisted, expected, rtol=0.02)
+
+
+@pytest.mark.parametrize("take_up", [True, False])
+def test_a_saturated_jaw_gives_no_slack_along_the_line_between_the_jaws(take_up):
+    """Pushed along y, the trailing jaw unloads as soon as the object moves once its slack is taken up.
+
+    The squeeze asks a jaw at its limit for twice that force: 1 mm of travel (F / kp) over which it
+    follows the object at F. With a failure distance of 1.5 mm the pinch then resists only half of F
+    along the line between the jaws; with the slack taken up after settling (1.1 F asked) it resists F.
+    The loads run on the protocol's scene, the palm welded.
+    """
+    import dataclasses
+
+    from ogcp.sim_eval.hand.lean import failure_reach, lean_scene
+    from ogcp.sim_eval.hand.squeeze import SLACK_SHARE, take_up_slack
+    from ogcp.sim_eval.hand.trial import _settled_data
+
+    kinematics = HandKinematics(resolve_hand("parallel_gripper"))
+    limit, kp = kinematics.descriptor.actuation.force_range, kinematics.descriptor.actuation.kp
+    settings = SimSettings(move_threshold=1.5e-3)
+    _, closed = _closed(kinematics, settings)
+    settled = settle(closed.scene, settings)
+    assert settled.gates["valid"]
+    data = _settled_data(closed, settled)
+    model = closed.scene.model
+    scene = closed.scene
+    if take_up:
+        ctrl = take_up_slack(model, data, scene.preload_ctrl)
+        asked = kp * (ctrl - data.actuator_length)
+        np.testing.assert_allclose(asked, (1 + SLACK_SHARE) * limit, rtol=1e-9)
+        unsaturated = take_up_slack(model, data, data.actuator_length + 0.5 * limit / kp)
+        np.testing.assert_allclose(unsaturated, data.actuator_length + 0.5 * limit / kp)  # below the limit: kept
+        closed = dataclasses.replace(closed, scene=dataclasses.replace(scene, preload_ctrl=ctrl))
+    reach = failure_reach(settings.move_threshold, settings.rotation_threshold, float(np.linalg.norm(BOX.extents)))
+    lean = lean_scene(closed, settled, reach, settings.creep_tolerance)
+    assert lean.summary["lean"]
+    directions = np.array([[0, 1, 0, 0, 0, 0], [0, -1, 0, 0, 0, 0]], dtype=float)
+    rate = np.full(2, 2 * limit / settings.ramp_time)
+    extent = settings.ramp_extent * settings.ramp_time
+    trials = ramp_trials(lean.scene, lean.settled, directions, rate, extent, 1.0, settings)
+    assert trials.failed.all() and not trials.diverged.any()
+    if take_up:  # F, and a little more while the object, no longer held along y, gathers speed
+        np.testing.assert_allclose(trials.failure_load, limit, rtol=0.1)
+    else:
+        assert (trials.failure_load < 0.7 * limit).all()

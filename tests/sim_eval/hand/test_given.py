@@ -62,7 +62,9 @@ def test_a_posed_pinch_is_simulated_from_its_own_stages_as_ogcps_own():
     assert plain.hand["given"] == {"pregrasp": False, "squeeze": False}
     # Both squeeze the jaws to their 20 N limit: the same grasp resists the same loads.
     assert staged.measured == pytest.approx(plain.measured, rel=0.05, abs=0.05)
-    assert np.median(staged.fidelity) < 0.8
+    # Along the line between the jaws the pinch holds past the ramp's end (censored, left out).
+    assert np.isfinite(staged.fidelity).sum() >= len(staged.fidelity) - 4
+    assert np.nanmedian(staged.fidelity) < 0.8
 
 
 def test_the_contacts_of_a_posed_grasp_are_its_pads():

@@ -1,0 +1,66 @@
+"""Hands at any scale: a gripper scaled with its object plans, fits, closes and holds from 5 cm to 1.2 m."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from ogcp.benchmarks.cli import main
+from ogcp.sim_eval.hand.fit import LINK_TOLERANCE, RESIDUAL_TOLERANCE, HandFit, tolerance_scale
+from ogcp.sim_eval.hand.fit_scene import FitScene
+from ogcp.sim_eval.settings import REFERENCE_DIAGONAL
+from tests.planner.hands.hand_files import write_scaled_gripper
+
+
+def test_the_fits_tolerances_grow_with_objects_past_the_reference_as_the_gates_do():
+    assert tolerance_scale(0.05) == tolerance_scale(REFERENCE_DIAGONAL) == 1.0
+    assert tolerance_scale(1.2) == pytest.approx(6.0)
+    fit = HandFit(
+        joint_angles=np.zeros(2),
+        rotation=np.eye(3),
+        translation=np.zeros(3),
+        fingers=(0, 1),
+        residuals=np.array([3e-3, 0.0]),
+        normal_angles=np.zeros(2),
+        penetration=2.5e-3,
+        self_penetration=0.0,
+        worst_link=None,
+        finger_names=("left", "right"),
+    )
+    assert not fit.realised and "tolerance 1 mm" in str(fit.reason)
+    large = HandFit(**{**fit.__dict__, "length_scale": tolerance_scale(1.2)})
+    assert large.realised
+    assert (large.tolerance, large.link_tolerance) == pytest.approx((6 * RESIDUAL_TOLERANCE, 6 * LINK_TOLERANCE))
+    with pytest.raises(ValueError, match="length_scale must be a positive number"):
+        FitScene(None, (), 0.0)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize(
+    ("factor", "diagonal", "force", "flat"),
+    [(0.4, 0.05, 5.0, True), (15.0, 1.2, 200.0, False)],
+    ids=["36 mm flat jaws on a 5 cm box", "1.35 m round jaws on a 1.2 m box"],
+)
+def test_a_gripper_scaled_with_its_object_plans_fits_closes_and_holds(
+    capsys, tmp_path, monkeypatch, factor, diagonal, force, flat
+):
+    """The built-in gripper scaled with its object (20,000 N/m servos): the plan's grasp spans no
+    more than the jaws open (the 5 cm box is 39 mm long where they open 33 mm), the fit realises it
+    within tolerances that grow past 0.2 m (round 1.35 m jaws tilted 1.4 degrees to opposite
+    contacts leave 2.5-4 mm), and the hand holds it."""
+    monkeypatch.setenv("OGCP_CACHE", str(tmp_path / "cache"))
+    (tmp_path / "hand").mkdir()
+    descriptor = write_scaled_gripper(
+        tmp_path / "hand", factor, kp=20000.0, force=force, pad_width=0.02 * factor if flat else None
+    )
+    plan, sim = tmp_path / "plan.json", tmp_path / "sim.json"
+    common = ["-n", "60", "-m", "2", "--diagonal", str(diagonal), "--contact-model", "soft"]
+    assert main(["plan", "box", *common, "--hand", str(descriptor), "-o", str(plan)]) == 0
+    assert main(["evaluate", str(plan), "--directions", "4", "-o", str(sim)]) == 0
+    capsys.readouterr()
+    (grasp,) = json.loads(sim.read_text())["grasps"]
+    assert grasp["hand"]["fit"]["realised"], grasp["hand"]["fit"]["reason"]
+    assert grasp["hand"]["fit"]["tolerance"] == pytest.approx(RESIDUAL_TOLERANCE * tolerance_scale(diagonal))
+    assert grasp["valid"], grasp.get("invalid_reasons")
+    assert np.nanmedian(np.asarray(grasp["fidelity"], dtype=float)) < 0.3
