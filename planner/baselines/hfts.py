@@ -354,8 +354,8 @@ class HFTS:
         wall0 = time.perf_counter()
         deadline = None if self.time_limit is None else time.time() + self.time_limit
         tree = Hierarchy(contacts, self.position_weight, self.hierarchy_seed)
-        if self.hand is not None and m != 3:
-            raise OgcpError(f"the {self.hand.name} hand has 3 fingers; got m = {m}")
+        if self.hand is not None:
+            self.hand.chosen(int(m))  # its fingers take the m contacts: as many, and no more than it has
         # Runs that start past the deadline still end on real contacts (one exact Q1 each), so
         # every run has a grasp and the seeds stay comparable.
         tasks = [

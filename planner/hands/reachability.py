@@ -405,13 +405,20 @@ class HandReachability:
         model.growable = True
         return model
 
-    def why_none(self) -> str:
-        """What may change a search's finding that no grasp satisfies this constraint (one line)."""
+    def why_none(self, m: int | None = None) -> str:
+        """What may change a search's finding that no m-grasp satisfies this constraint (one line)."""
         recall = "" if self.sampled.recall is None else f", recalling {self.sampled.recall:.0%} of its poses"
+        many = ""
+        if m is not None and m > RECALLED_FINGERS:
+            many = (
+                f"; with {m} fingers its codes have {4 * math.comb(m, 2)} dimensions, where a sample seldom comes "
+                f"within the threshold of a pose the hand takes (the Shadow hand's 10,000 recall none of its own "
+                f"4-finger poses): plan {RECALLED_FINGERS} of them (-m {RECALLED_FINGERS}, --hand-fingers)"
+            )
         return (
             f"the {self.name} hand's reachability model ({self.samples:,} sampled configurations{recall}) accepts "
             f"none of these contacts' grasps; more [reachability] samples in its descriptor, a larger "
-            f"--hand-threshold (now {self.threshold:g}) or other --hand-fingers may find one"
+            f"--hand-threshold (now {self.threshold:g}) or other --hand-fingers may find one{many}"
         )
 
     def describe(self) -> dict[str, object]:

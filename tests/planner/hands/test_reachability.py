@@ -261,6 +261,28 @@ def test_hfts_penalises_the_residual(hand, object_contacts):
     assert with_hand.config["hand"]["name"] == "sdh"
 
 
+def test_hfts_takes_any_number_of_fingers_the_hand_has(object_contacts, tmp_path):
+    """HFTS with a hand once took m = 3 only (the SDH's), and said any hand had 3 fingers."""
+    from ogcp.planner.baselines.hfts import HFTS
+
+    contacts = object_contacts("box", 60, 0)
+    gripper = HandReachability("parallel_gripper", samples=2000, seed=0, cache_dir=tmp_path)
+    pinch = HFTS(runs=2, seed=0, hand=gripper).run(contacts, 2)
+    assert len(pinch.grasp) == 2 and all(r.residual is not None for r in pinch.runs)
+    with pytest.raises(OgcpError, match="the parallel_gripper hand has 2 fingers; a grasp of m = 3 contacts"):
+        HFTS(runs=2, seed=0, hand=gripper).run(contacts, 3)
+
+
+def test_a_search_with_more_fingers_than_the_model_recalls_says_to_plan_three(hand):
+    assert "plan 3 of them (-m 3, --hand-fingers)" not in hand.why_none(3)
+    line = hand.why_none(4)
+    assert line.endswith(
+        "with 4 fingers its codes have 24 dimensions, where a sample seldom comes within the threshold "
+        "of a pose the hand takes (the Shadow hand's 10,000 recall none of its own 4-finger poses): "
+        "plan 3 of them (-m 3, --hand-fingers)"
+    )
+
+
 def test_cli_es_summary_counts_admissible_grasps(capsys, tmp_path, monkeypatch):
     monkeypatch.setenv("OGCP_CACHE", str(tmp_path))
     assert main(["plan", "donut", "-n", "16", "-m", "3", "--method", "es", "--hand", "sdh"]) == 0
