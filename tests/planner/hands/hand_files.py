@@ -366,3 +366,50 @@ def write_scaled_gripper(folder: Path, factor: float, kp: float, force: float, p
     return write_gripper_variant(
         folder, lambda text: re.sub(r'\b(pos|size|range)="([^"]+)"', scaled, text), edit_descriptor
     )
+
+
+def _spread_finger(n: int, pos: str, euler: str, spread: bool) -> str:
+    """One finger of :func:`write_spread_hand`: an optional spread hinge, then two flexion hinges."""
+    axis = "1" if n == 1 else "-1"
+    joint = f'<joint name="j{n}1" axis="0 0 {axis}" range="0 1.57"/>' if spread else ""
+    return f"""
+      <body name="f{n}_base" pos="{pos}" euler="{euler}">{joint}
+        <geom type="box" size="0.012 0.012 0.008" pos="0 0 0.008"/>
+        <body name="f{n}_prox" pos="0 0 0.016">
+          <joint name="j{n}2" axis="0 -1 0" range="-0.9 2.44"/>
+          <geom type="capsule" fromto="0 0 0.005 0 0 0.06" size="0.01"/>
+          <body name="f{n}_dist" pos="0 0 0.07">
+            <joint name="j{n}3" axis="0 -1 0" range="0 2.0"/>
+            <geom type="capsule" fromto="0 0 0.005 0 0 0.045" size="0.009"/>
+            <body name="f{n}_tip" pos="-0.009 0 0.035"/>
+          </body>
+        </body>
+      </body>"""
+
+
+def write_spread_hand(folder: Path) -> Path:
+    """A Barrett-like hand in primitives, no actuators: two fingers whose spread hinges one joint
+    equality ties, a third opposite, each with two flexion hinges; the descriptor's path."""
+    fingers = (
+        _spread_finger(1, "0.025 0.025 0.06", "0 0 0", True)
+        + _spread_finger(2, "0.025 -0.025 0.06", "0 0 0", True)
+        + _spread_finger(3, "-0.025 0 0.06", "0 0 3.14159", False)
+    )
+    (folder / "spread.xml").write_text(
+        '<mujoco model="spread"><compiler angle="radian" autolimits="true"/>'
+        '<default><joint damping="0.05" armature="0.001"/><geom density="1500"/></default>'
+        f'<worldbody><body name="palm"><geom type="cylinder" size="0.045 0.03" pos="0 0 0.03"/>{fingers}'
+        "</body></worldbody>"
+        '<equality><joint joint1="j21" joint2="j11" polycoef="0 1 0 0 0"/></equality></mujoco>'
+    )
+    entries = "".join(
+        f'[[fingers]]\nname = "f{n}"\ntip_body = "f{n}_tip"\ntip_offset = [0.0, 0.0, 0.0]\n'
+        "pad_normal = [-1.0, 0.0, 0.0]\ntip_radius = 0.009\n"
+        for n in (3, 1, 2)
+    )
+    path = folder / "spread.toml"
+    path.write_text(
+        f'schema = "ogcp.hand/1"\nname = "spread"\nmjcf = "spread.xml"\npalm = "palm"\n{entries}'
+        "[actuation]\nkp = 5.0\nforce_range = 1.5\n"
+    )
+    return path

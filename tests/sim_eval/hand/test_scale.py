@@ -1,4 +1,4 @@
-"""Hands at any scale: a gripper scaled with its object plans, fits, closes and holds from 5 cm to 1.2 m."""
+"""Hands nobody here wrote: a gripper scaled with its object from 5 cm to 1.2 m, a hand with a shared spread joint."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from ogcp.benchmarks.cli import main
 from ogcp.sim_eval.hand.fit import LINK_TOLERANCE, RESIDUAL_TOLERANCE, HandFit, tolerance_scale
 from ogcp.sim_eval.hand.fit_scene import FitScene
 from ogcp.sim_eval.settings import REFERENCE_DIAGONAL
-from tests.planner.hands.hand_files import write_scaled_gripper
+from tests.planner.hands.hand_files import write_scaled_gripper, write_spread_hand
 
 
 def test_the_fits_tolerances_grow_with_objects_past_the_reference_as_the_gates_do():
@@ -62,5 +62,22 @@ def test_a_gripper_scaled_with_its_object_plans_fits_closes_and_holds(
     (grasp,) = json.loads(sim.read_text())["grasps"]
     assert grasp["hand"]["fit"]["realised"], grasp["hand"]["fit"]["reason"]
     assert grasp["hand"]["fit"]["tolerance"] == pytest.approx(RESIDUAL_TOLERANCE * tolerance_scale(diagonal))
+    assert grasp["valid"], grasp.get("invalid_reasons")
+    assert np.nanmedian(np.asarray(grasp["fidelity"], dtype=float)) < 0.3
+
+
+def test_a_hand_whose_two_fingers_share_a_spread_joint_plans_fits_closes_and_holds(capsys, tmp_path, monkeypatch):
+    """A Barrett-like hand written from a description: one joint equality ties two fingers' spread."""
+    monkeypatch.setenv("OGCP_CACHE", str(tmp_path / "cache"))
+    descriptor = write_spread_hand(tmp_path)
+    plan, sim = tmp_path / "plan.json", tmp_path / "sim.json"
+    args = ["plan", "sphere", "-n", "40", "-m", "3", "--diagonal", "0.12", "--hand", str(descriptor), "-o", str(plan)]
+    assert main(args) == 0
+    assert main(["evaluate", str(plan), "--directions", "4", "-o", str(sim)]) == 0
+    capsys.readouterr()
+    (grasp,) = json.loads(sim.read_text())["grasps"]
+    assert grasp["hand"]["fit"]["realised"], grasp["hand"]["fit"]["reason"]
+    angles = dict(zip(grasp["hand"]["fit"]["joint_names"], grasp["hand"]["fit"]["joint_angles"], strict=True))
+    assert angles["j21"] == pytest.approx(angles["j11"], abs=1e-6)  # the equality holds in the fit
     assert grasp["valid"], grasp.get("invalid_reasons")
     assert np.nanmedian(np.asarray(grasp["fidelity"], dtype=float)) < 0.3
