@@ -46,10 +46,10 @@ from ogcp.planner.config.methods import DEFAULT_HAND_THRESHOLD
 from ogcp.planner.grasp.contact_set import ContactSet
 from ogcp.planner.hands.box_index import boxes_within, pair_bounds
 from ogcp.planner.hands.descriptor import HandDescriptor
+from ogcp.planner.hands.model_file import MODEL_FILE, read_model, save_model
 from ogcp.planner.hands.registry import resolve_hand
 from ogcp.planner.hands.sampled_model import (
     AUTO_RECALL,
-    FIRST_SAMPLES,
     MAX_AUTO_SAMPLES,
     SPAN_SCALE,
     FingerModel,
@@ -68,10 +68,6 @@ from ogcp.planner.infra.errors import OgcpError
 __all__ = ["HandReachability", "Reach", "SDHReachability", "pair_code"]
 
 MODEL_VERSION = 5
-#: The sampled model's file in its cache entry: ``joint_names`` (J,), ``angles`` (N, J),
-#: ``points`` and ``normals`` (N, F, 3) in the palm frame, ``collisions`` (N, F + 1, F + 1), and
-#: for a grown model its ``recall`` ().
-MODEL_FILE = "model.npz"
 #: Most contacts a grasp may have: the residual is a minimum over m! finger assignments.
 MAX_FINGERS = 6
 #: Fingers whose configurations a growing model must recall, when none are named: a default grasp's.
@@ -193,52 +189,16 @@ class HandReachability:
             with tqdm(total=self.samples, desc=desc, unit="pose", disable=None) as bar:
                 sampled = pose_samples(kinematics, kinematics.sample(self.samples, self.seed), bar)
 
-        def save(stage: Path) -> None:
-            arrays: dict[str, NDArray] = {
-                "joint_names": np.array(sampled.joint_names),
-                "angles": sampled.angles,
-                "points": sampled.points,
-                "normals": sampled.normals,
-                "collisions": sampled.collisions,
-            }
-            if sampled.recall is not None:
-                arrays["recall"] = np.array(sampled.recall)
-            np.savez(stage / MODEL_FILE, **arrays)  # type: ignore[arg-type]
-
         try:
-            write_entry(folder, save)
+            write_entry(folder, lambda stage: save_model(stage / MODEL_FILE, sampled))
         except OgcpError:
             pass  # a read-only cache only costs the sampling time next run
         return sampled
 
     def _read_model(self, folder: Path) -> SampledHand:
-        """The sampled model of a cache entry, checked against this hand.
-
-        Raises:
-            ValueError: For arrays of the wrong shape or with non-finite values.
-        """
-        keys = ("joint_names", "angles", "points", "normals", "collisions")
-        with np.load(folder / MODEL_FILE, allow_pickle=False) as data:
-            names, angles, points, normals, collisions = (data[k] for k in keys)
-            recall = float(data["recall"]) if "recall" in data.files else None
-        fingers = len(self.descriptor.fingers)
-        count = self.samples if self.samples is not None else len(angles)
+        """The sampled model of a cache entry, checked against this hand (:func:`read_model`)."""
         recalls = len(self._recalled()) >= 2  # a one-finger hand has no pair to recall: it keeps its first samples
-        if self.samples is None and not (
-            FIRST_SAMPLES <= count <= MAX_AUTO_SAMPLES and (recall is not None or not recalls)
-        ):
-            raise ValueError(f"a grown model of {count} configurations and recall {recall}")
-        if names.ndim != 1 or names.dtype.kind != "U" or angles.shape != (count, len(names)):
-            raise ValueError(
-                f"{len(names)} joint names and configurations of shape {angles.shape}, expected {count} rows"
-            )
-        if points.shape != (count, fingers, 3) or normals.shape != points.shape:
-            raise ValueError(f"pads of shape {points.shape} and {normals.shape}")
-        if collisions.shape != (count, fingers + 1, fingers + 1) or collisions.dtype != np.bool_:
-            raise ValueError(f"collisions of shape {collisions.shape} and type {collisions.dtype}")
-        if not all(np.isfinite(a).all() for a in (angles, points, normals)):
-            raise ValueError("non-finite values")
-        return SampledHand(tuple(str(n) for n in names), angles, points, normals, collisions, recall)
+        return read_model(folder / MODEL_FILE, len(self.descriptor.fingers), self.samples, recalls)
 
     def chosen(self, m: int) -> tuple[int, ...]:
         """Indices of the fingers that take an m-contact grasp.

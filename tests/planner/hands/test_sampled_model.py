@@ -13,6 +13,7 @@ from ogcp.planner.hands import (
     HandKinematics,
     HandReachability,
     load_descriptor,
+    model_file,
     reachability,
     resolve_hand,
     sampled_model,
@@ -27,9 +28,10 @@ from ogcp.sim_eval.evaluate import plan_hand
 @pytest.fixture
 def small(monkeypatch):
     """Growth in small steps: 1,000 samples first, at most 4,000, recall measured on 300 probes."""
-    for module in (sampled_model, reachability):
+    for module in (sampled_model, model_file):
         monkeypatch.setattr(module, "FIRST_SAMPLES", 1_000)
         monkeypatch.setattr(module, "MAX_AUTO_SAMPLES", 4_000)
+    monkeypatch.setattr(reachability, "MAX_AUTO_SAMPLES", 4_000)
     monkeypatch.setattr(sampled_model, "RECALL_PROBES", 300)
     return monkeypatch
 
