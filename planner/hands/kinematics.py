@@ -1,8 +1,9 @@
 """Any hand's kinematics from its compiled MuJoCo model: the one kinematic truth.
 
 :class:`HandKinematics` compiles a descriptor's model (:mod:`ogcp.planner.hands.loading`), checks
-what the descriptor names against it (the palm, each finger's tip body below the palm, its joints
-on the chain), and answers in the palm frame:
+what the descriptor names against it (:mod:`~ogcp.planner.hands.fingers`: the palm, each finger's
+tip body carried by joints relative to the palm, its joints on that chain), and answers in the palm
+frame:
 
 - the pads' contact points and normals of a configuration or a batch (``mj_kinematics``);
 - random configurations within the joint limits, with MuJoCo's joint equalities (a joint that
@@ -19,13 +20,13 @@ order [rad or m]; joints outside the fingers (a wrist above the palm) stay at th
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass
 
 import mujoco
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ogcp.planner.hands.descriptor import HandDescriptor
+from ogcp.planner.hands.fingers import MOVABLE, Finger, body_id, resolve_finger
 from ogcp.planner.hands.loading import compile_spec, hand_spec
 from ogcp.planner.hands.loops import (
     CLOSED_GAP,
@@ -49,32 +50,10 @@ from ogcp.planner.hands.self_collision import (
 from ogcp.planner.hands.servos import add_servos
 from ogcp.planner.infra.errors import OgcpError
 
+__all__ = ["UNLIMITED_HINGE", "Finger", "HandKinematics"]
+
 #: Range given to a hinge that has none [rad].
 UNLIMITED_HINGE = (-np.pi, np.pi)
-_MOVABLE = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
-
-
-@dataclass(frozen=True)
-class Finger:
-    """A finger resolved against the compiled model.
-
-    Attributes:
-        name: The descriptor's name.
-        body: Id of the tip body.
-        joints: Ids of the joints that move it, and of the loops it closes (model order).
-        offset: Pad contact point in the tip body's frame, shape (3,) [m].
-        normal: Unit pad normal in the tip body's frame, shape (3,).
-        radius: Pad rounding [m].
-        width: A flat pad's width [m]; 0 for a rounded pad.
-    """
-
-    name: str
-    body: int
-    joints: tuple[int, ...]
-    offset: NDArray[np.float64]
-    normal: NDArray[np.float64]
-    radius: float
-    width: float = 0.0
 
 
 class HandKinematics:
@@ -96,9 +75,9 @@ class HandKinematics:
             if not geom.name:
                 geom.name = f"ogcp_geom{k}"
         plain = compile_spec(descriptor, spec)
-        self.palm = self._body(plain, descriptor.palm, "palm")
+        self.palm = body_id(descriptor, plain, descriptor.palm, "palm")
         self.loops = find_loops(plain, attached_bodies(plain, self.palm))  # a scene holds the palm's root subtree
-        fingers = [self._finger(plain, k) for k in range(len(descriptor.fingers))]
+        fingers = [resolve_finger(descriptor, plain, self.palm, k) for k in range(len(descriptor.fingers))]
         self.fingers = tuple(dataclasses.replace(f, joints=joints_with_loops(f.joints, self.loops)) for f in fingers)
         joint_ids = sorted({j for finger in self.fingers for j in finger.joints})
         servos = add_servos(spec, plain, joint_ids, self.loops, descriptor.actuation, str(descriptor.path))
@@ -120,64 +99,16 @@ class HandKinematics:
         in_hand = np.array([self._is_below(int(b), self.root) for b in self.model.geom_bodyid], dtype=bool)
         self._collider = collision_model(self.model, in_hand)
         listed = [
-            (self._body(self.model, a, "ignore_collisions"), self._body(self.model, b, "ignore_collisions"))
+            (
+                body_id(descriptor, self.model, a, "ignore_collisions"),
+                body_id(descriptor, self.model, b, "ignore_collisions"),
+            )
             for a, b in descriptor.ignore_collisions
         ]
         samples = self.sample(OVERLAP_SAMPLES, OVERLAP_SEED)
         self.overlaps = designed_overlaps(self._collider, self._pose, self.reference(), samples, listed)
         self.palm_pose = self._palm_pose()
         warn_about_model(self)
-
-    def _body(self, model: mujoco.MjModel, name: str, field: str) -> int:
-        body = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, name)
-        if body < 0:
-            names = [model.body(i).name for i in range(1, model.nbody)]
-            raise OgcpError(
-                f"{self.descriptor.path}: {field} = {name!r} is not a body of {self.descriptor.model_path.name}; "
-                f"its bodies are {', '.join(names)}"
-            )
-        return int(body)
-
-    def _chain(self, model: mujoco.MjModel, body: int) -> list[int]:
-        """Bodies from the palm (excluded) down to ``body`` (included), or [] if not below the palm."""
-        chain = []
-        while body != self.palm:
-            if body == 0:
-                return []
-            chain.append(body)
-            body = int(model.body_parentid[body])
-        return chain[::-1]
-
-    def _finger(self, model: mujoco.MjModel, k: int) -> Finger:
-        spec = self.descriptor.fingers[k]
-        where = f"{self.descriptor.path}: fingers[{k}] ({spec.name})"
-        body = self._body(model, spec.tip_body, f"fingers[{k}].tip_body")
-        chain = self._chain(model, body)
-        if not chain:
-            raise OgcpError(f"{where}: tip_body {spec.tip_body!r} is not below the palm {self.descriptor.palm!r}")
-        on_chain = [j for b in chain for j in range(model.njnt) if model.jnt_bodyid[j] == b]
-        if spec.joints is None:
-            joints = on_chain
-        else:
-            joints = []
-            for name in spec.joints:
-                j = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, name)
-                if j < 0:
-                    raise OgcpError(f"{where}: joint {name!r} is not a joint of {self.descriptor.model_path.name}")
-                if j not in on_chain:
-                    raise OgcpError(f"{where}: joint {name!r} is not on the chain from the palm to {spec.tip_body!r}")
-                joints.append(j)
-        if not joints:
-            raise OgcpError(f"{where}: no joint moves {spec.tip_body!r} relative to the palm {self.descriptor.palm!r}")
-        for j in joints:
-            if model.jnt_type[j] not in _MOVABLE:
-                name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j)
-                raise OgcpError(
-                    f"{where}: joint {name!r} must be a hinge or a slide (ball and free joints are not fingers)"
-                )
-        return Finger(
-            spec.name, body, tuple(sorted(joints)), spec.offset(), spec.normal(), spec.tip_radius, spec.pad_width
-        )
 
     def _range(self, joint: int) -> tuple[float, float]:
         if self.model.jnt_limited[joint]:
@@ -258,7 +189,7 @@ class HandKinematics:
         idle = []
         for j in range(model.njnt):
             body = int(model.jnt_bodyid[j])
-            if j in fingers or int(model.jnt_type[j]) not in _MOVABLE or not self._is_below(body, self.root):
+            if j in fingers or int(model.jnt_type[j]) not in MOVABLE or not self._is_below(body, self.root):
                 continue
             if j not in driven or self._is_below(self.palm, body):
                 idle.append(mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j))

@@ -6,6 +6,8 @@ URDF's meshes over by name, resolving ``package://`` and relative paths against 
 and the folders above it, and keeps every body. Joints on a finger that no servo holds get a
 position servo from the descriptor's ``[actuation]`` (:mod:`~ogcp.planner.hands.servos`), as a
 user's actuator-less model must be closed somehow; the model's own servos are kept as they are.
+An MJCF whose palm and fingers sit on the world side by side is gathered below one body
+(:mod:`~ogcp.planner.hands.gather`).
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ from pathlib import Path
 import mujoco
 
 from ogcp.planner.hands.descriptor import HandDescriptor
+from ogcp.planner.hands.gather import gather_roots
 from ogcp.planner.infra.errors import OgcpError
 
 #: How many folders above a URDF a ``package://`` mesh path is looked for in.
@@ -35,9 +38,10 @@ def hand_spec(descriptor: HandDescriptor) -> mujoco.MjSpec:
     urdf = path.suffix.lower() == ".urdf"
     text, assets = _urdf_with_assets(path, descriptor) if urdf else ("", {})
     try:
-        return mujoco.MjSpec.from_string(text, assets=assets) if urdf else mujoco.MjSpec.from_file(str(path))
+        spec = mujoco.MjSpec.from_string(text, assets=assets) if urdf else mujoco.MjSpec.from_file(str(path))
     except ValueError as exc:
         raise compile_error(descriptor, exc) from exc
+    return spec if urdf else gather_roots(spec, descriptor)  # a URDF is one tree
 
 
 def compile_error(descriptor: HandDescriptor, exc: Exception) -> OgcpError:

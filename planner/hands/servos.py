@@ -8,9 +8,12 @@ actuator drives gets a position servo of the descriptor's ``[actuation]``, as a 
 actuator-less model must be closed somehow. A joint driven by an actuator that holds no pose (a
 ``<motor>``, whose force is its command; a ``<velocity>`` servo; an ``<intvelocity>``, whose
 command is a velocity its activation integrates) is closed the same way: that actuator is replaced
-by a position servo of ``[actuation]``'s stiffness within the actuator's own force limit (its ``forcerange``,
-else its command range times its gain; times its gear), and loading says so in one line.
-Actuators on tendons or sites are kept as they are.
+by a position servo of ``[actuation]``'s stiffness within the actuator's own force range (its
+``forcerange``, else its command range times its gain; through its gear; asymmetric where it is),
+and loading says so in one line. Actuators on tendons or sites are kept as they are. Where a joint
+clamps the actuator force it takes (``actuatorfrcrange``; MuJoCo turns a URDF's ``effort`` limit
+into one), its servo's force range is narrowed to that clamp, so that the range says what the
+joint gets.
 """
 
 from __future__ import annotations
@@ -52,19 +55,58 @@ def holds_pose(model: mujoco.MjModel, actuator: int) -> bool:
     return bool(affine and not integrates and model.actuator_biasprm[actuator, 1] < 0)
 
 
-def _force_limit(model: mujoco.MjModel, actuator: int, fallback: float) -> float:
-    """[N·m or N] The most an actuator pushes on its joint: its force range, else its command range
-    times its gain, else ``fallback``; times its gear."""
-    gear = abs(float(model.actuator_gear[actuator, 0]))
+def _force_range(model: mujoco.MjModel, actuator: int, fallback: float) -> tuple[float, float]:
+    """[N·m or N] The least and most an actuator pushes on its joint: its force range, else its command
+    range times its gain, else ``±fallback``; through its gear. An asymmetric range (a tendon-driven
+    finger that flexes harder than it extends) stays asymmetric."""
+    gear = float(model.actuator_gear[actuator, 0])
     if model.actuator_forcelimited[actuator]:
-        return gear * float(np.abs(model.actuator_forcerange[actuator]).max())
-    if model.actuator_ctrllimited[actuator]:
-        return (
-            gear
-            * float(np.abs(model.actuator_ctrlrange[actuator]).max())
-            * abs(float(model.actuator_gainprm[actuator, 0]))
-        )
-    return fallback
+        ends = gear * model.actuator_forcerange[actuator]
+    elif model.actuator_ctrllimited[actuator]:
+        ends = gear * float(model.actuator_gainprm[actuator, 0]) * model.actuator_ctrlrange[actuator]
+    else:
+        return -fallback, fallback
+    low, high = sorted(float(e) for e in ends)
+    return min(low, 0.0), max(high, 0.0)
+
+
+def _joint_clamp(model: mujoco.MjModel, joint: int) -> tuple[float, float] | None:
+    """[N·m or N] The joint's own clamp on the actuator force it takes (its ``actuatorfrcrange``; a
+    URDF's ``effort`` limit becomes one), or None."""
+    if not model.jnt_actfrclimited[joint]:
+        return None
+    low, high = model.jnt_actfrcrange[joint]
+    return float(low), float(high)
+
+
+def _within(ends: tuple[float, float], clamp: tuple[float, float] | None, gear: float) -> tuple[float, float]:
+    """An actuator's force range ``ends`` narrowed to what its joint's ``clamp`` lets through its ``gear``."""
+    if clamp is None or gear == 0:
+        return ends
+    low, high = sorted((clamp[0] / gear, clamp[1] / gear))
+    return max(ends[0], low), min(ends[1], high)
+
+
+def _clamp_kept(spec: mujoco.MjSpec, model: mujoco.MjModel, kept: Sequence[int]) -> None:
+    """Narrow the force range of each kept actuator that alone drives a joint with a clamp (MuJoCo
+    clamps the joint's total actuator force): the range then says what the joint gets, as the
+    squeeze and the prediction read it."""
+    on_joint = [
+        int(model.actuator_trnid[a, 0])
+        for a in range(model.nu)
+        if model.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_JOINT
+    ]
+    for a in kept:
+        if model.actuator_trntype[a] != mujoco.mjtTrn.mjTRN_JOINT:
+            continue
+        joint = int(model.actuator_trnid[a, 0])
+        clamp = _joint_clamp(model, joint)
+        if clamp is None or on_joint.count(joint) != 1:
+            continue
+        own = tuple(model.actuator_forcerange[a]) if model.actuator_forcelimited[a] else (-np.inf, np.inf)
+        element = spec.actuators[a]
+        element.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
+        element.forcerange = list(_within((float(own[0]), float(own[1])), clamp, float(model.actuator_gear[a, 0])))
 
 
 def _driven_joints(model: mujoco.MjModel, actuators: Iterable[int]) -> set[int]:
@@ -117,8 +159,9 @@ def add_servos(
         and model.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_JOINT
         and int(model.actuator_trnid[a, 0]) in finger_joints
     ]
-    limits = {int(model.actuator_trnid[a, 0]): _force_limit(model, a, actuation.force_range) for a in replaced}
+    limits = {int(model.actuator_trnid[a, 0]): _force_range(model, a, actuation.force_range) for a in replaced}
     names = tuple(mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, a) or f"actuator {a}" for a in replaced)
+    _clamp_kept(spec, model, [a for a in range(model.nu) if a not in set(replaced)])
     for element in [spec.actuators[a] for a in replaced]:
         spec.delete(element)
     driven = _driven_joints(model, (a for a in range(model.nu) if a not in set(replaced)))
@@ -133,8 +176,8 @@ def add_servos(
         act = spec.add_actuator(name=f"ogcp_servo_{name}", target=name, trntype=mujoco.mjtTrn.mjTRN_JOINT)
         act.set_to_position(kp=actuation.kp, kv=kv)
         act.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
-        limit = limits.get(j, actuation.force_range)
-        act.forcerange = [-limit, limit]
+        own = limits.get(j, (-actuation.force_range, actuation.force_range))
+        act.forcerange = list(_within(own, _joint_clamp(model, j), 1.0))
         added.append(name)
     if names:
         warnings.warn(

@@ -65,7 +65,8 @@ class Grip:
         contacts and it still presses at its limit (where its force is clamped).
         """
         u = share * self.forces
-        limit = np.abs(model.actuator_forcerange).max(axis=1)
+        # The limit on the side the servo pushes: a range may be asymmetric.
+        limit = np.where(u >= 0, model.actuator_forcerange[:, 1], -model.actuator_forcerange[:, 0])
         at_limit = model.actuator_forcelimited.astype(bool) & (np.abs(u) >= (1 - 1e-6) * limit)
         targets = servo_ctrl(model, self.length, np.where(at_limit, 2.0, 1.0) * u)
         limited = model.actuator_ctrllimited.astype(bool)

@@ -413,3 +413,28 @@ def write_spread_hand(folder: Path) -> Path:
         "[actuation]\nkp = 5.0\nforce_range = 1.5\n"
     )
     return path
+
+
+#: The built-in gripper's jaws, as its MJCF writes them (inside the palm, relative to it).
+LEFT_JAW = """<joint name="left" type="slide" axis="0 -1 0" range="0 0.04" damping="2"/>
+  <geom name="left" type="box" pos="0 0 0.035" size="0.01 0.004 0.035"/>"""
+RIGHT_JAW = LEFT_JAW.replace("left", "right").replace("0 -1 0", "0 1 0")
+PALM = '<geom name="palm" type="box" size="0.02 0.055 0.01"/>'
+#: The same gripper with its palm at (0.1, 0, 0.2) and its jaws on the world beside it: the left
+#: one directly, the right one in a frame on the world; a keyframe too.
+SIDE_BY_SIDE = f"""<mujoco><compiler angle="radian" autolimits="true"/><worldbody>
+  <body name="palm" pos="0.1 0 0.2">{PALM}</body>
+  <body name="left" pos="0.1 0.045 0.21">{LEFT_JAW}</body>
+  <frame pos="0.1 0 0.2"><body name="right" pos="0 -0.045 0.01">{RIGHT_JAW}</body></frame>
+</worldbody><keyframe><key name="k" qpos="0.01 0.02"/></keyframe></mujoco>"""
+#: The gripper as a URDF's tree would have it: a base, the palm fixed below it, the jaws beside the palm.
+ON_A_BASE = f"""<mujoco><compiler angle="radian" autolimits="true"/><worldbody><body name="base">
+  <body name="palm">{PALM}</body>
+  <body name="left" pos="0 0.045 0.01">{LEFT_JAW}</body>
+  <body name="right" pos="0 -0.045 0.01">{RIGHT_JAW}</body>
+</body></worldbody></mujoco>"""
+
+
+def write_side_by_side_gripper(folder: Path) -> Path:
+    """The built-in gripper with its palm and jaws on the world side by side (:data:`SIDE_BY_SIDE`); the descriptor's path."""
+    return write_gripper_variant(folder, lambda text: SIDE_BY_SIDE)

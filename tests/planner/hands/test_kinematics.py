@@ -155,7 +155,8 @@ MODEL = """<mujoco><worldbody><body name="palm"><geom size="0.01"/>
     <body name="tip" pos="0 0 0.05"><geom size="0.01"/></body></body>
   <body name="fixed" pos="0.05 0 0"><geom size="0.01"/></body>
   <body name="balled" pos="-0.05 0 0"><joint name="ball" type="ball"/><geom size="0.01"/></body>
-</body><body name="elsewhere" pos="1 0 0"><joint name="other" axis="0 0 1"/><geom size="0.01"/></body></worldbody></mujoco>"""
+</body><body name="elsewhere" pos="1 0 0"><freejoint/><geom size="0.01"/>
+  <body name="beyond"><joint name="other" axis="0 0 1"/><geom size="0.01"/></body></body></worldbody></mujoco>"""
 
 
 @pytest.mark.parametrize(

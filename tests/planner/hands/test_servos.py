@@ -58,3 +58,56 @@ def test_servos_are_kept_as_they_are(tmp_path, recwarn):
     )
     assert kinematics.replaced_actuators == () and kinematics.servos == ()
     assert not [w for w in recwarn if issubclass(w.category, HandActuatorWarning)]
+
+
+def test_an_asymmetric_range_stays_asymmetric_through_the_gear(tmp_path):
+    """A finger that flexes harder than it extends (Menagerie's DEX-EE: -0.35 to 1.2 N·m) keeps both
+    limits; a negative gear swaps them."""
+    actuators = (
+        '<motor name="m" joint="left" forcerange="-0.35 1.2"/>'
+        '<motor name="g" joint="right" gear="-2" ctrlrange="-1 3"/>'  # -2 x (-1 .. 3): -6 .. 2
+    )
+    with pytest.warns(HandActuatorWarning):
+        kinematics = _gripper(tmp_path, actuators)
+    ranges = {
+        joint: kinematics.model.actuator(f"ogcp_servo_{joint}").forcerange.tolist() for joint in ("left", "right")
+    }
+    assert ranges["left"] == pytest.approx([-0.35, 1.2]) and ranges["right"] == pytest.approx([-6.0, 2.0])
+
+
+def test_a_plugin_actuator_such_as_mujocos_pid_is_replaced_within_its_range(tmp_path):
+    """MuJoCo's ``mujoco.pid`` plugin actuators (Menagerie's DEX-EE) hold a target, but through their
+    own state, not a stiffness ogcp can read: they give way to servos like a motor."""
+    path = write_gripper_variant(
+        tmp_path,
+        lambda text: text.replace(
+            "<worldbody>",
+            '<extension><plugin plugin="mujoco.pid"><instance name="pid"><config key="kp" value="3"/>'
+            '<config key="ki" value="1"/><config key="imax" value="0.1"/></instance></plugin></extension>'
+            "<worldbody>",
+        ).replace(
+            "</worldbody>",
+            '</worldbody><actuator><plugin name="p" plugin="mujoco.pid" instance="pid" joint="left" actdim="1" '
+            'forcerange="-4 9"/></actuator>',
+        ),
+    )
+    with pytest.warns(HandActuatorWarning, match="actuators p hold no pose"):
+        kinematics = HandKinematics(load_descriptor(path))
+    assert kinematics.servos == ("left", "right")
+    assert kinematics.model.actuator("ogcp_servo_left").forcerange.tolist() == pytest.approx([-4.0, 9.0])
+
+
+def test_a_joints_clamp_on_its_actuator_force_narrows_the_servos_range(tmp_path):
+    """MuJoCo clamps a joint's total actuator force at its ``actuatorfrcrange`` (a URDF's effort limit
+    becomes one): the servo's range says what the joint gets, through its gear, kept or added."""
+    path = write_gripper_variant(
+        tmp_path,
+        lambda text: text.replace('range="0 0.04"', 'range="0 0.04" actuatorfrcrange="-5 3"').replace(
+            "</worldbody>",
+            '</worldbody><actuator><position name="p" joint="left" kp="500" gear="2" forcerange="-20 20"/></actuator>',
+        ),
+    )
+    kinematics = HandKinematics(load_descriptor(path))
+    assert kinematics.servos == ("right",)
+    assert kinematics.model.actuator("p").forcerange.tolist() == pytest.approx([-2.5, 1.5])  # (-5, 3) / 2
+    assert kinematics.model.actuator("ogcp_servo_right").forcerange.tolist() == pytest.approx([-5.0, 3.0])

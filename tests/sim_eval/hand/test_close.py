@@ -18,6 +18,8 @@ from ogcp.sim_eval.settings import SimSettings
 from tests.planner.hands.hand_files import write_gripper_variant, write_urdf_gripper
 
 MU = 0.5
+#: [N] A URDF slide's effort limit below the descriptor's force range.
+EFFORT = 12.0
 BOX = trimesh.creation.box(extents=(0.04, 0.03, 0.04))
 POINTS = np.array([[0.0, 0.015, 0.0], [0.0, -0.015, 0.0]])
 NORMALS = np.array([[0.0, -1.0, 0.0], [0.0, 1.0, 0.0]])
@@ -59,6 +61,13 @@ def tendon_servo(stiffness: float = 40000.0, limit: float = 40.0) -> str:
 def _pinching_hand(hand: str, folder) -> HandKinematics:
     if hand == "urdf":
         return HandKinematics(load_descriptor(write_urdf_gripper(folder)))
+    if hand == "urdf_effort":  # MuJoCo clamps each slide's actuator force at the URDF's effort limit
+        path = write_urdf_gripper(folder)
+        urdf = folder / "urdf_gripper.urdf"
+        urdf.write_text(urdf.read_text().replace('effort="20"', f'effort="{EFFORT:g}"'))
+        kinematics = HandKinematics(load_descriptor(path))
+        assert EFFORT < kinematics.descriptor.actuation.force_range
+        return kinematics
     if hand == "affine":
         actuated = write_gripper_variant(
             folder, lambda text: text.replace("</worldbody>", f"</worldbody><actuator>{AFFINE_SERVOS}</actuator>")
@@ -94,11 +103,12 @@ def _pinching_hand(hand: str, folder) -> HandKinematics:
     return HandKinematics(resolve_hand(hand))
 
 
-@pytest.mark.parametrize("hand", ["parallel_gripper", "urdf", "affine", "tendon", "motor", "filtered"])
+@pytest.mark.parametrize("hand", ["parallel_gripper", "urdf", "urdf_effort", "affine", "tendon", "motor", "filtered"])
 def test_a_pinch_resists_slip_as_two_mu_f(hand, tmp_path):
-    """Along the jaws, a pinch holds until 2 mu F, F each jaw's force: its servo's limit over a lever of 1 (slides)."""
+    """Along the jaws, a pinch holds until 2 mu F, F each jaw's force: its servo's limit over a lever of
+    1 (slides), or the joint's own clamp on it where that is lower (a URDF's effort limit)."""
     kinematics = _pinching_hand(hand, tmp_path)
-    limit = kinematics.descriptor.actuation.force_range
+    limit = EFFORT if hand == "urdf_effort" else kinematics.descriptor.actuation.force_range
     settings = SimSettings()
     opened, closed = _closed(kinematics, settings)
     assert opened.scene.start_qpos is not None and closed.scene.start_qpos is not None

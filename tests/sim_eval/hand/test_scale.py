@@ -1,4 +1,5 @@
-"""Hands nobody here wrote: a gripper scaled with its object from 5 cm to 1.2 m, a hand with a shared spread joint."""
+"""Hands nobody here wrote: a gripper scaled with its object from 5 cm to 1.2 m, a hand with a shared
+spread joint, a hand whose palm and fingers sit on the world side by side."""
 
 from __future__ import annotations
 
@@ -11,7 +12,7 @@ from ogcp.benchmarks.cli import main
 from ogcp.sim_eval.hand.fit import LINK_TOLERANCE, RESIDUAL_TOLERANCE, HandFit, tolerance_scale
 from ogcp.sim_eval.hand.fit_scene import FitScene
 from ogcp.sim_eval.settings import REFERENCE_DIAGONAL
-from tests.planner.hands.hand_files import write_scaled_gripper, write_spread_hand
+from tests.planner.hands.hand_files import write_scaled_gripper, write_side_by_side_gripper, write_spread_hand
 
 
 def test_the_fits_tolerances_grow_with_objects_past_the_reference_as_the_gates_do():
@@ -79,5 +80,22 @@ def test_a_hand_whose_two_fingers_share_a_spread_joint_plans_fits_closes_and_hol
     assert grasp["hand"]["fit"]["realised"], grasp["hand"]["fit"]["reason"]
     angles = dict(zip(grasp["hand"]["fit"]["joint_names"], grasp["hand"]["fit"]["joint_angles"], strict=True))
     assert angles["j21"] == pytest.approx(angles["j11"], abs=1e-6)  # the equality holds in the fit
+    assert grasp["valid"], grasp.get("invalid_reasons")
+    assert np.nanmedian(np.asarray(grasp["fidelity"], dtype=float)) < 0.3
+
+
+def test_a_hand_whose_palm_and_fingers_sit_on_the_world_side_by_side_plans_fits_closes_and_holds(
+    capsys, tmp_path, monkeypatch
+):
+    """Menagerie's DEX-EE is written so: its palm and fingers are gathered below one body and mounted."""
+    monkeypatch.setenv("OGCP_CACHE", str(tmp_path / "cache"))
+    descriptor = write_side_by_side_gripper(tmp_path)
+    plan, sim = tmp_path / "plan.json", tmp_path / "sim.json"
+    common = ["-n", "60", "-m", "2", "--diagonal", "0.08", "--contact-model", "soft"]
+    assert main(["plan", "box", *common, "--hand", str(descriptor), "-o", str(plan)]) == 0
+    assert main(["evaluate", str(plan), "--directions", "4", "-o", str(sim)]) == 0
+    capsys.readouterr()
+    (grasp,) = json.loads(sim.read_text())["grasps"]
+    assert grasp["hand"]["fit"]["realised"], grasp["hand"]["fit"]["reason"]
     assert grasp["valid"], grasp.get("invalid_reasons")
     assert np.nanmedian(np.asarray(grasp["fidelity"], dtype=float)) < 0.3
