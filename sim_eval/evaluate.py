@@ -145,7 +145,7 @@ class GraspEvaluator:
                         )
                     )
             except Exception as exc:  # noqa: BLE001 - one bad grasp must not sink the batch
-                reason = f"{type(exc).__name__}: {exc}"
+                reason = " ".join(f"{type(exc).__name__}: {exc}".split())  # one line (MuJoCo's errors span two)
                 results.append(failed_result(contacts, grasp, label, reason, traceback.format_exc(limit=3)))
             bar.update()
         bar.close()

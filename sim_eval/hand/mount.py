@@ -56,6 +56,7 @@ def attach_hand(spec: mujoco.MjSpec, kinematics: HandKinematics, free: bool = Fa
     # drives or reads them: the palm must be as rigidly held as the mount. So are joints elsewhere
     # that move no finger and no actuator drives.
     idle = set(kinematics.idle_joints())
+    root.mocap = False  # a teleoperated hand's palm may be a mocap body; the mount moves it now
     for body in [root, *root.find_all(mujoco.mjtObj.mjOBJ_BODY)]:
         for joint in list(body.joints):
             if joint.type == mujoco.mjtJoint.mjJNT_FREE or joint.name in idle:

@@ -341,3 +341,25 @@ def test_coacd_search_settings_have_upper_limits(name, value):
 
     with pytest.raises(OgcpError, match=f"{name}.*from 1 to"):
         DecompositionSettings(**{name: value})
+
+
+def test_a_grasp_whose_simulation_fails_is_reported_in_one_line(plan, tmp_path, monkeypatch):
+    """MuJoCo's own errors span two lines ("Element name ..."): the record and the table get one."""
+    from ogcp.sim_eval import evaluate as evaluate_module
+
+    def refuse(*args: Any, **kwargs: Any) -> None:
+        raise ValueError("Error: mocap body 'hand/palm' is not a fixed child of world\nElement name 'hand/palm', id 2")
+
+    monkeypatch.setattr(evaluate_module, "simulate_grasp", refuse)
+    target = tmp_path / "plan.json"
+    target.write_text(json.dumps(plan))
+    argv = ["evaluate", str(target), "--directions", "0", "--max-grasps", "1", "--decomposition", "convex_hull"]
+    status, out, err = _run([*argv, "-o", str(tmp_path / "sim.json")])
+    assert status == 0 and "Traceback" not in err, err
+    error = json.loads((tmp_path / "sim.json").read_text())["grasps"][0]["error"]
+    assert (
+        error
+        == "ValueError: Error: mocap body 'hand/palm' is not a fixed child of world Element name 'hand/palm', id 2"
+    )
+    (line,) = [row for row in out.splitlines() if "ERROR" in row]
+    assert line.endswith("id 2")

@@ -1,5 +1,5 @@
 """Hands nobody here wrote: a gripper scaled with its object from 5 cm to 1.2 m, a hand with a shared
-spread joint, a hand whose palm and fingers sit on the world side by side."""
+spread joint, hands laid out as other projects write them."""
 
 from __future__ import annotations
 
@@ -12,7 +12,12 @@ from ogcp.benchmarks.cli import main
 from ogcp.sim_eval.hand.fit import LINK_TOLERANCE, RESIDUAL_TOLERANCE, HandFit, tolerance_scale
 from ogcp.sim_eval.hand.fit_scene import FitScene
 from ogcp.sim_eval.settings import REFERENCE_DIAGONAL
-from tests.planner.hands.hand_files import write_scaled_gripper, write_side_by_side_gripper, write_spread_hand
+from tests.planner.hands.hand_files import (
+    write_gripper_variant,
+    write_scaled_gripper,
+    write_side_by_side_gripper,
+    write_spread_hand,
+)
 
 
 def test_the_fits_tolerances_grow_with_objects_past_the_reference_as_the_gates_do():
@@ -84,18 +89,27 @@ def test_a_hand_whose_two_fingers_share_a_spread_joint_plans_fits_closes_and_hol
     assert np.nanmedian(np.asarray(grasp["fidelity"], dtype=float)) < 0.3
 
 
-def test_a_hand_whose_palm_and_fingers_sit_on_the_world_side_by_side_plans_fits_closes_and_holds(
-    capsys, tmp_path, monkeypatch
+@pytest.mark.parametrize("layout", ["side by side", "mocap palm"])
+def test_a_hand_laid_out_as_other_projects_write_them_plans_fits_closes_and_holds(
+    capsys, tmp_path, monkeypatch, layout
 ):
-    """Menagerie's DEX-EE is written so: its palm and fingers are gathered below one body and mounted."""
+    """Menagerie's DEX-EE puts its palm and fingers on the world side by side: gathered below one body
+    and mounted. A teleoperation scene moves the palm as a mocap body: the mount moves it instead
+    (before, MuJoCo refused the scene in two lines)."""
     monkeypatch.setenv("OGCP_CACHE", str(tmp_path / "cache"))
-    descriptor = write_side_by_side_gripper(tmp_path)
+    if layout == "side by side":
+        descriptor = write_side_by_side_gripper(tmp_path)
+    else:
+        descriptor = write_gripper_variant(
+            tmp_path, lambda text: text.replace('<body name="palm">', '<body name="palm" mocap="true">')
+        )
     plan, sim = tmp_path / "plan.json", tmp_path / "sim.json"
     common = ["-n", "60", "-m", "2", "--diagonal", "0.08", "--contact-model", "soft"]
     assert main(["plan", "box", *common, "--hand", str(descriptor), "-o", str(plan)]) == 0
     assert main(["evaluate", str(plan), "--directions", "4", "-o", str(sim)]) == 0
     capsys.readouterr()
     (grasp,) = json.loads(sim.read_text())["grasps"]
+    assert grasp.get("error") is None, grasp["error"]
     assert grasp["hand"]["fit"]["realised"], grasp["hand"]["fit"]["reason"]
     assert grasp["valid"], grasp.get("invalid_reasons")
     assert np.nanmedian(np.asarray(grasp["fidelity"], dtype=float)) < 0.3
