@@ -41,7 +41,11 @@ def hand_spec(descriptor: HandDescriptor) -> mujoco.MjSpec:
         spec = mujoco.MjSpec.from_string(text, assets=assets) if urdf else mujoco.MjSpec.from_file(str(path))
     except ValueError as exc:
         raise compile_error(descriptor, exc) from exc
-    return spec if urdf else gather_roots(spec, descriptor)  # a URDF is one tree
+    if urdf:  # one tree, its meshes already in memory
+        return spec
+    spec = gather_roots(spec, descriptor)
+    _merge_obj_objects(spec, descriptor)
+    return spec
 
 
 def compile_error(descriptor: HandDescriptor, exc: Exception) -> OgcpError:
@@ -82,6 +86,8 @@ def _urdf_with_assets(path: Path, descriptor: HandDescriptor) -> tuple[str, dict
             raise OgcpError(f"{descriptor.path}: mjcf = {path.name}: mesh file {name!r} not found near {path.parent}")
         key = found.name
         data = found.read_bytes()
+        if key.lower().endswith(".obj"):
+            data = one_object_obj(data) or data
         if key in assets and assets[key] != data:
             raise OgcpError(
                 f"{descriptor.path}: mjcf = {path.name}: two different mesh files are named {key!r}; MuJoCo "
@@ -96,6 +102,49 @@ def _urdf_with_assets(path: Path, descriptor: HandDescriptor) -> tuple[str, dict
     extension = ET.SubElement(root, "mujoco")
     ET.SubElement(extension, "compiler", fusestatic="false", discardvisual="true", strippath="true")
     return ET.tostring(root, encoding="unicode"), assets
+
+
+def one_object_obj(data: bytes) -> bytes | None:
+    """An OBJ file's bytes with its objects and groups made one, or None where it has one already.
+
+    MuJoCo reads the faces of an OBJ's first object or group only. It keeps every vertex, so the
+    convex hull it collides is whole, but rays (the pads' check), drawings and the volume that gives
+    a link its mass see part of the mesh (an Inspire hand's thumb tip: 340 of 2,394 faces).
+    Dropping the ``o`` and ``g`` lines leaves one object with every face (their indices are global).
+    """
+    lines = data.split(b"\n")
+    tokens = [line.split(None, 1)[0] if line.strip() else b"" for line in lines]
+    shapes, in_shape = 0, False  # runs of faces that an object or group line starts
+    for token in tokens:
+        if token in (b"o", b"g"):
+            in_shape = False
+        elif token == b"f" and not in_shape:
+            shapes, in_shape = shapes + 1, True
+    if shapes <= 1:
+        return None
+    return b"\n".join(line for line, token in zip(lines, tokens, strict=True) if token not in (b"o", b"g"))
+
+
+def _merge_obj_objects(spec: mujoco.MjSpec, descriptor: HandDescriptor) -> None:
+    """Give MuJoCo each OBJ mesh of an MJCF with several objects as one (:func:`one_object_obj`), in memory."""
+    folder = descriptor.model_path.parent
+    meshdir = Path(spec.meshdir) if spec.meshdir else Path()
+    merged: dict[str, bytes] = {}
+    for k, mesh in enumerate(spec.meshes):
+        if not mesh.file.lower().endswith(".obj"):
+            continue
+        path = Path(mesh.file)
+        if not path.is_absolute():
+            path = (meshdir if meshdir.is_absolute() else folder / meshdir) / path
+        try:
+            data = one_object_obj(path.read_bytes())
+        except OSError:  # MuJoCo says what is missing when it compiles
+            continue
+        if data is not None:
+            mesh.file = f"ogcp_one_object_{k}_{path.name}"
+            merged[mesh.file] = data
+    if merged:
+        spec.assets = {**spec.assets, **merged}
 
 
 def _find_mesh(folder: Path, name: str) -> Path | None:

@@ -6,9 +6,11 @@ import re
 
 import numpy as np
 import pytest
+import trimesh
 
 from ogcp.planner.hands import HandKinematics, load_descriptor, resolve_hand
 from ogcp.planner.hands.kinematics import HandModelWarning
+from ogcp.planner.hands.loading import one_object_obj
 from ogcp.planner.infra import OgcpError
 
 from .hand_files import (
@@ -334,3 +336,42 @@ def test_pads_on_their_surfaces_load_without_a_word(recwarn):
             continue
         HandKinematics(descriptor)
     assert not [w for w in recwarn if "pad points" in str(w.message)]
+
+
+def _two_object_obj(path) -> int:
+    """Two boxes in one OBJ file, each its own object (as Blender and CoACD write them); the face count."""
+    lines = []
+    for k, (extents, centre) in enumerate((((0.02, 0.11, 0.01), (0, 0, 0)), ((0.02, 0.02, 0.01), (0, 0, -0.01)))):
+        box = trimesh.creation.box(extents=extents)
+        box.apply_translation(centre)
+        lines.append(f"o part{k}")
+        lines += [f"v {x:.6f} {y:.6f} {z:.6f}" for x, y, z in box.vertices]
+        base = 8 * k + 1
+        lines += [f"f {a + base} {b + base} {c + base}" for a, b, c in box.faces]
+    path.write_text("\n".join(lines) + "\n")
+    return 24
+
+
+def test_an_obj_mesh_of_several_objects_reaches_mujoco_whole(tmp_path):
+    """MuJoCo reads the first object's faces only; the loader gives it every face, MJCF and URDF alike."""
+    (tmp_path / "meshes").mkdir()
+    faces = _two_object_obj(tmp_path / "meshes" / "palm.obj")
+    assert one_object_obj(b"o a\nv 0 0 0\nf 1 1 1\n") is None  # one object: left as it is
+    assert one_object_obj((tmp_path / "meshes" / "palm.obj").read_bytes()).count(b"\nf ") == faces
+    mjcf = write_gripper_variant(
+        tmp_path,
+        lambda text: text.replace(
+            '<geom name="palm" type="box" size="0.02 0.055 0.01"',
+            '<geom name="palm" type="mesh" mesh="palm"',
+        ).replace(
+            "<worldbody>", '<compiler meshdir="meshes"/><asset><mesh name="palm" file="palm.obj"/></asset><worldbody>'
+        ),
+    )
+    kinematics = HandKinematics(load_descriptor(mjcf))
+    assert kinematics.model.mesh_facenum.tolist() == [faces]
+    urdf = write_urdf_gripper(tmp_path / "urdf")
+    (tmp_path / "urdf" / "meshes" / "palm.stl").unlink()
+    _two_object_obj(tmp_path / "urdf" / "meshes" / "palm.obj")
+    text = (tmp_path / "urdf" / "urdf_gripper.urdf").read_text()
+    (tmp_path / "urdf" / "urdf_gripper.urdf").write_text(text.replace("meshes/palm.stl", "meshes/palm.obj"))
+    assert HandKinematics(load_descriptor(urdf)).model.mesh_facenum.tolist() == [faces]
