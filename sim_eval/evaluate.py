@@ -40,7 +40,7 @@ from ogcp.sim_eval.settings import SimSettings, scaled_lengths
 
 if TYPE_CHECKING:
     from ogcp.sim_eval.hand.given import GivenPose
-    from ogcp.sim_eval.hand.trial import HandSetup
+    from ogcp.sim_eval.hand.setup import HandSetup
 
 
 class GraspEvaluator:
@@ -322,7 +322,7 @@ def plan_hand(record: dict[str, Any]) -> HandSetup | None:
     from ogcp.planner.hands.kinematics import HandKinematics
     from ogcp.planner.hands.registry import resolve_hand
     from ogcp.planner.records.plan import PlanView
-    from ogcp.sim_eval.hand.trial import HandSetup
+    from ogcp.sim_eval.hand.setup import HandSetup
 
     block = PlanView(record).hand
     if block is None:

@@ -350,7 +350,7 @@ def evaluate_grasps(
     if external.hand_spec is not None:
         from ogcp.planner.hands.kinematics import HandKinematics
         from ogcp.planner.hands.registry import resolve_hand
-        from ogcp.sim_eval.hand.trial import HandSetup
+        from ogcp.sim_eval.hand.setup import HandSetup
 
         kinematics = HandKinematics(resolve_hand(external.hand_spec))
         setup = None if tips else HandSetup.of(kinematics)

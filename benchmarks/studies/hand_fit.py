@@ -38,7 +38,7 @@ from ogcp.planner.hands import HandKinematics, HandReachability
 from ogcp.planner.infra.errors import OgcpError
 from ogcp.sim_eval.decomposition import DecompositionSettings, decompose
 from ogcp.sim_eval.evaluate import GraspEvaluator
-from ogcp.sim_eval.hand.trial import HandSetup
+from ogcp.sim_eval.hand.setup import HandSetup
 from ogcp.sim_eval.settings import SimSettings
 
 CONVEX = ("box", "sphere")

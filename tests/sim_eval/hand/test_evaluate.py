@@ -14,7 +14,7 @@ from ogcp.planner.infra import OgcpError
 from ogcp.planner.objects import builtin_mesh
 from ogcp.sim_eval.decomposition import DecompositionSettings
 from ogcp.sim_eval.evaluate import GraspEvaluator, evaluate_plan
-from ogcp.sim_eval.hand.trial import HandSetup
+from ogcp.sim_eval.hand.setup import HandSetup
 from ogcp.sim_eval.result import SimRecord
 from tests.planner.hands.hand_files import write_mesh_hand
 
