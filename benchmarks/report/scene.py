@@ -22,6 +22,7 @@ import numpy as np
 import trimesh
 from numpy.typing import NDArray
 
+from ogcp.benchmarks.report.hand_mesh import HAND_FACES, settled_hand
 from ogcp.planner.grasp.contact_set import ContactSet, sample_contacts
 from ogcp.planner.infra.errors import OgcpError
 from ogcp.planner.objects import DEFAULT_DIAGONAL, resolve_object
@@ -216,7 +217,22 @@ class Scenes:
 
     def _add_sim(self, title: str, record: SimRecord, index: int, contacts: ContactSet | None) -> None:
         for grasp in record.grasps:
-            self.grasps.append({"title": f"{title} / {grasp.label}", "set": index, **_sim_grasp(grasp, contacts)})
+            shown = {"title": f"{title} / {grasp.label}", "set": index, **_sim_grasp(grasp, contacts)}
+            if grasp.hand:
+                shown.update(self._hand(shown["title"], grasp.hand))
+            self.grasps.append(shown)
+
+    def _hand(self, title: str, block: dict[str, Any]) -> dict[str, Any]:
+        """The viewer's ``hand`` of a grasp tested with one: its settled surface, coarsened; {} without."""
+        try:
+            found = settled_hand(block)
+        except OgcpError as exc:
+            self.notes.append(f"{title}: hand not shown ({exc})")
+            return {}
+        if found is None or not len(found[1]):
+            return {}
+        vertices, faces = coarsen(trimesh.Trimesh(*found, process=False), HAND_FACES)
+        return {"hand": {"vertices": _flat(vertices), "faces": faces.ravel().tolist()}}
 
 
 def _rebuild(source: dict[str, Any]) -> tuple[trimesh.Trimesh, ContactSet]:

@@ -1,9 +1,9 @@
 """The report's 3D viewer: plain JavaScript on a 2D canvas, embedded once in each page.
 
 No library and no WebGL, so that a report opens offline in any browser and in headless ones:
-an orthographic projection of the rotated scene, the mesh's triangles drawn back to front
-(painter's algorithm) with flat shading, and the points and arrows sorted into the same
-depth order. Drag rotates, the wheel zooms, a double click resets the view. The page's data
+an orthographic projection of the rotated scene, the mesh's triangles (and a hand's, as it
+settled, in a warmer tint) drawn back to front (painter's algorithm) with flat shading, and the
+points and arrows sorted into the same depth order. Drag rotates, the wheel zooms, a double click resets the view. The page's data
 (:mod:`ogcp.benchmarks.report.scene`) is read from the ``<script id="ogcp-data">`` JSON block; the
 canvas gets ``data-drawn="1"`` after its first frame (what the headless-browser test checks).
 """
@@ -67,11 +67,12 @@ VIEWER_JS = r"""
     var items = [], i, set = g.set >= 0 ? DATA.sets[g.set] : null;
     // Depth bias of points and arrows [px]: about one triangle edge, the sorting's error.
     var bias = scale * (set ? 0.6 * (DATA.meshes[set.mesh].edge || 0.1 * b.r) : 0);
-    if (set) {
-      var mesh = DATA.meshes[set.mesh], V = mesh.vertices, F = mesh.faces, P = [];
-      for (i = 0; i < V.length; i += 3) { P.push(project(V[i], V[i + 1], V[i + 2])); }
-      for (i = 0; i < F.length; i += 3) {
-        var a = P[F[i]], c = P[F[i + 1]], d = P[F[i + 2]];
+    // A surface's triangles, flat shaded in its tint (r, g, b factors of the light).
+    function surface(V, F, tint) {
+      var P = [], k;
+      for (k = 0; k < V.length; k += 3) { P.push(project(V[k], V[k + 1], V[k + 2])); }
+      for (k = 0; k < F.length; k += 3) {
+        var a = P[F[k]], c = P[F[k + 1]], d = P[F[k + 2]];
         // Flat shading by the face normal's view-space z (two-sided: the mesh may be open);
         // screen coordinates are view space scaled (y flipped, which |nz| ignores).
         var ux = c[0] - a[0], uy = c[1] - a[1], uz = c[2] - a[2];
@@ -80,8 +81,12 @@ VIEWER_JS = r"""
         var len = Math.sqrt(nx * nx + ny * ny + nz * nz) || 1;
         // A light from the upper left of the eye (screen y points down), so that the sides differ.
         var shade = 0.3 + 0.7 * Math.abs((-0.35 * nx - 0.45 * ny + 0.82 * nz) / len);
-        items.push({ z: (a[2] + c[2] + d[2]) / 3, kind: 0, p: [a, c, d], shade: shade });
+        items.push({ z: (a[2] + c[2] + d[2]) / 3, kind: 0, p: [a, c, d], shade: shade, tint: tint });
       }
+    }
+    if (set) {
+      var mesh = DATA.meshes[set.mesh];
+      surface(mesh.vertices, mesh.faces, [0.62, 0.7, 0.82]);
       var S = set.points;
       for (i = 0; i < S.length; i += 3) {
         // Biased towards the eye: points lie on the surface, not behind it.
@@ -89,6 +94,8 @@ VIEWER_JS = r"""
         items.push({ z: q[2] + bias, kind: 1, p: q });
       }
     }
+    // The hand as it settled (a grasp tested with one), warmer than the object.
+    if (g.hand) { surface(g.hand.vertices, g.hand.faces, [0.85, 0.74, 0.62]); }
     var color = !g.simulated ? "#1f6fd1" : (g.valid ? "#1a9b3c" : "#d12a1f");
     var L = 0.35 * b.r;
     for (i = 0; i < g.points.length; i += 3) {
@@ -108,8 +115,8 @@ VIEWER_JS = r"""
     for (i = 0; i < items.length; i++) {
       var it = items[i];
       if (it.kind === 0) {
-        var s = Math.round(255 * it.shade);
-        ctx.fillStyle = "rgb(" + Math.round(s * 0.62) + "," + Math.round(s * 0.7) + "," + Math.round(s * 0.82) + ")";
+        var s = Math.round(255 * it.shade), t = it.tint;
+        ctx.fillStyle = "rgb(" + Math.round(s * t[0]) + "," + Math.round(s * t[1]) + "," + Math.round(s * t[2]) + ")";
         ctx.strokeStyle = ctx.fillStyle;
         ctx.lineWidth = 0.5;
         ctx.beginPath();
@@ -152,6 +159,7 @@ VIEWER_JS = r"""
       lines.push("simulated: " + (g.error ? "error: " + g.error : (g.valid ? "valid" : "invalid")));
       lines.push("min measured resistance: " + fmt(g.measured_min) + " N");
       if (g.weakest) { lines.push("weakest direction (orange arrow): " + g.weakest.label); }
+      if (g.hand) { lines.push("hand: drawn as it settled (its collision geometry)"); }
       for (var i = 0; i < (g.reasons || []).length; i++) { lines.push("invalid: " + g.reasons[i]); }
     } else {
       lines.push("not simulated");

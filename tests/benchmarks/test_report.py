@@ -14,6 +14,7 @@ import shutil
 import subprocess
 from pathlib import Path
 
+import numpy as np
 import pytest
 import trimesh
 
@@ -154,3 +155,71 @@ def test_report_draws_in_a_headless_browser(run: Path, tmp_path: Path) -> None:
     errors = [line for line in done.stderr.splitlines() if "Uncaught" in line or "SyntaxError" in line]
     assert not errors, errors
     assert re.search(r'<canvas[^>]*data-drawn="1"', done.stdout), done.stdout[:2000]
+
+
+@pytest.fixture(scope="module")
+def hand_sim(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A box grasp of the built-in gripper, simulated with the hand (no loads)."""
+    folder = tmp_path_factory.mktemp("hand_view")
+    plan, sim = folder / "plan.json", folder / "sim.json"
+    common = ["-n", "40", "-m", "2", "--diagonal", "0.08", "--contact-model", "soft"]
+    assert main(["plan", "box", *common, "--hand", "parallel_gripper", "-o", str(plan)]) == 0
+    assert main(["evaluate", str(plan), "--directions", "0", "--decomposition", "convex_hull", "-o", str(sim)]) == 0
+    return sim
+
+
+def test_view_draws_the_hand_as_it_settled(hand_sim: Path, tmp_path: Path) -> None:
+    """The hand's collision geometry at its settled pose, in the object's frame: its jaws' inner faces
+    lie on the contacts."""
+    shown = write_view(hand_sim, tmp_path / "hand.html")
+    (grasp,) = _data(shown.path.read_text())["grasps"]
+    vertices = np.asarray(grasp["hand"]["vertices"], dtype=float).reshape(-1, 3)
+    faces = np.asarray(grasp["hand"]["faces"]).reshape(-1, 3)
+    assert len(faces) and faces.max() < len(vertices)
+    triangles = vertices[faces]
+    points = np.asarray(grasp["points"], dtype=float).reshape(-1, 3)
+    # Each contact lies within a pad's rounding (4 mm) and the settling of the hand's surface.
+    for point in points:
+        nearest = trimesh.triangles.closest_point(triangles, np.repeat(point[None], len(triangles), axis=0))
+        assert np.linalg.norm(nearest - point, axis=1).min() < 5e-3
+    fingertips = json.loads(hand_sim.read_text())
+    del fingertips["grasps"][0]["hand"]  # a fingertip record: no hand drawn
+    (tmp_path / "tips.json").write_text(json.dumps(fingertips))
+    assert "hand" not in _data(write_view(tmp_path / "tips.json").path.read_text())["grasps"][0]
+
+
+@pytest.mark.skipif(shutil.which("node") is None, reason="no node on PATH")
+def test_the_viewer_script_draws_object_and_hand_without_error_in_node(hand_sim: Path, tmp_path: Path) -> None:
+    """The page's script run against a stub canvas: it draws, in the object's tint and the hand's."""
+    page = write_view(hand_sim, tmp_path / "hand.html").path
+    harness = tmp_path / "run.js"
+    harness.write_text(_NODE_HARNESS)
+    done = subprocess.run(["node", str(harness), str(page)], capture_output=True, text=True, timeout=60, check=False)
+    assert done.returncode == 0, done.stderr[-2000:]
+    drawn, warm, cool = (int(v) for v in done.stdout.split())
+    assert drawn == 1 and warm > 0 and cool > 0
+
+
+#: Runs the page's scripts with a stub DOM and canvas; prints whether it drew and how many distinct
+#: warm (hand) and cool (object) shades it filled.
+_NODE_HARNESS = r"""
+const fs = require('fs');
+const html = fs.readFileSync(process.argv[2], 'utf8');
+const data = html.match(/<script type="application\/json" id="ogcp-data">([\s\S]*?)<\/script>/)[1];
+const scripts = [...html.matchAll(/<script>([\s\S]*?)<\/script>/g)].map(m => m[1]);
+const fills = new Set();
+function element() {
+  return { appendChild() {}, addEventListener() {}, scrollIntoView() {}, setAttribute(k, v) { this[k] = v; },
+           set textContent(v) {}, get textContent() { return data; } };
+}
+const context = { fillRect() {}, beginPath() {}, moveTo() {}, lineTo() {}, closePath() {}, stroke() {}, arc() {},
+                  fill() { fills.add(this.fillStyle); }, fillStyle: '', strokeStyle: '', lineWidth: 1 };
+const canvas = Object.assign(element(), { width: 400, height: 300, getContext() { return context; } });
+global.document = { getElementById(id) { return id === 'ogcp-canvas' ? canvas : (id === 'ogcp-select' ? null : element()); },
+                    createElement() { return element(); }, querySelectorAll() { return []; } };
+global.window = { addEventListener() {} };
+for (const script of scripts) { eval(script); }
+const rgb = [...fills].filter(c => c.startsWith('rgb')).map(c => c.slice(4, -1).split(',').map(Number));
+const warm = rgb.filter(([r, g, b]) => r > b + 5).length, cool = rgb.filter(([r, g, b]) => b > r + 5).length;
+console.log(canvas['data-drawn'] === '1' ? 1 : 0, warm, cool);
+"""
