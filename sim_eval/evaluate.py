@@ -39,6 +39,7 @@ from ogcp.sim_eval.scene.body import object_inertia
 from ogcp.sim_eval.settings import SimSettings, scaled_lengths
 
 if TYPE_CHECKING:
+    from ogcp.sim_eval.hand.fit_result import HandFit
     from ogcp.sim_eval.hand.given import GivenPose
     from ogcp.sim_eval.hand.setup import HandSetup
 
@@ -68,6 +69,42 @@ class GraspEvaluator:
         self.cache = None if cache is None else Path(cache)
         self.progress = progress
         self.hand = hand
+
+    def _object(
+        self, mesh: trimesh.Trimesh, settings: SimSettings, parts: Decomposition | None
+    ) -> tuple[ObjectBody, DecompositionLadder, Decomposition]:
+        """The simulated object's body, the ladder of its decompositions and its first one."""
+        diagonal = object_diagonal(mesh)
+        decomposition = self.decomposition or DecompositionSettings()
+        if parts is None:
+            parts = decompose(mesh, decomposition, cache=self.cache, progress=self.progress)
+        com, inertia = object_inertia(mesh, settings.body_mass)
+        radius = tip_radius(mesh, settings)
+        ladder = DecompositionLadder(mesh, decomposition, diagonal, radius, self.cache, self.progress, first=parts)
+        return ObjectBody(com, inertia, radius, diagonal), ladder, parts
+
+    def fit_hand(
+        self, mesh: trimesh.Trimesh, contacts: ContactSet, grasp: Sequence[int], parts: Decomposition | None = None
+    ) -> HandFit:
+        """The hand fitted to one grasp as :meth:`evaluate` fits it before closing it: against the
+        object's convex parts, from the nearest samples, where its servos can press (nothing simulated).
+
+        Raises:
+            OgcpError: Without a hand, or for a grasp that is not one of ``contacts``.
+        """
+        if self.hand is None:
+            raise OgcpError("fitting a hand needs a hand (GraspEvaluator(hand=...))")
+        chosen = tuple(int(i) for i in grasp)
+        if len(chosen) < 2 or min(chosen) < 0 or max(chosen) >= len(contacts) or len(set(chosen)) != len(chosen):
+            raise OgcpError(f"grasp {list(chosen)} must hold >= 2 distinct indices in 0..{len(contacts) - 1}")
+        from ogcp.sim_eval.hand.trial import fit_to_contacts
+
+        settings = (self.settings or SimSettings()).scaled(object_diagonal(mesh))
+        body, ladder, _ = self._object(mesh, settings, parts)
+        idx = np.asarray(chosen, dtype=np.intp)
+        fit = ladder.fit(contacts.positions[idx], contacts.normals[idx])
+        mu = settings.mu if settings.mu is not None else contacts.mu
+        return fit_to_contacts(contacts, chosen, fit, body, settings, self.hand, mu)[0]
 
     def evaluate(
         self,
@@ -112,13 +149,8 @@ class GraspEvaluator:
         for g in chosen:
             if len(g) < 2 or min(g) < 0 or max(g) >= len(contacts) or len(set(g)) != len(g):
                 raise OgcpError(f"grasp {list(g)} must hold >= 2 distinct indices in 0..{len(contacts) - 1}")
-        decomposition = self.decomposition or DecompositionSettings()
-        if parts is None:
-            parts = decompose(mesh, decomposition, cache=self.cache, progress=self.progress)
-        com, inertia = object_inertia(mesh, settings.body_mass)
-        radius = tip_radius(mesh, settings)
-        body = ObjectBody(com, inertia, radius, diagonal)
-        ladder = DecompositionLadder(mesh, decomposition, diagonal, radius, self.cache, self.progress, first=parts)
+        body, ladder, parts = self._object(mesh, settings, parts)
+        radius = body.tip_radius
         # A hand's fit decides what it reaches; the fingertip's own check is for spheres.
         unreachable = _unreachable_contacts(mesh, contacts, chosen, radius) if self.hand is None else set()
         results = []
@@ -160,7 +192,7 @@ class GraspEvaluator:
                 "length_scale": scale,
                 "object_diagonal": diagonal,
                 "scaled_lengths": scaled_lengths(settings),
-                "decomposition": decomposition.to_dict(),
+                "decomposition": (self.decomposition or DecompositionSettings()).to_dict(),
                 # What the simulation and the prediction used: Q1 keeps the contact set's own model.
                 "contact_model": contact_model_record(contacts, settings),
                 **({"hand": self.hand.kinematics.describe()} if self.hand is not None else {}),

@@ -30,6 +30,7 @@ from ogcp.benchmarks.cli.options import (
     typed,
     valid,
 )
+from ogcp.benchmarks.cli.realise import add_realise_option, realise
 from ogcp.planner.config.methods import DEFAULT_FINGERS, DEFAULT_METHOD, DEFAULT_SEED
 from ogcp.planner.config.options import JOBS, MEMORY_LIMIT, TIME_LIMIT
 from ogcp.planner.grasp.defaults import (
@@ -220,6 +221,7 @@ def register(commands: Any) -> None:
     hfts.add_argument(
         "--no-optimum", action="store_true", help="skip the A* run that reports the optimum next to the HFTS spread"
     )
+    add_realise_option(plan)
     plan.add_argument("--json", action="store_true", help="print one JSON object (schema ogcp.plan/1)")
     plan.add_argument("-o", "--output", type=Path, default=None, help="also write the JSON result to this file")
     plan.set_defaults(handler=run_plan)
@@ -364,11 +366,17 @@ def run_plan(args: argparse.Namespace) -> int:
     if note is not None:
         print(f"ogcp: {note}", file=sys.stderr, flush=True)
     compile_kernels([spec.name])  # first use: kept out of the time limit and the reported times
-    if spec.name in SEARCH_METHODS:  # the searches: Ctrl-C returns their best grasp
-        with stop_on_interrupt() as stop:
-            run = spec.run(config, contacts, args.fingers, dataclasses.replace(options, stop=stop))
+
+    def run_once(given: Any) -> Any:
+        if spec.name in SEARCH_METHODS:  # the searches: Ctrl-C returns their best grasp
+            with stop_on_interrupt() as stop:
+                return spec.run(config, contacts, args.fingers, dataclasses.replace(given, stop=stop))
+        return spec.run(config, contacts, args.fingers, given)
+
+    if args.realise is None:
+        run = run_once(options)
     else:
-        run = spec.run(config, contacts, args.fingers, options)
+        run = realise(spec.name, getattr(config, "hand", None), options, args.realise, run_once)
     if args.output is not None:
         from ogcp.planner.records.plan import add_plan_path
 

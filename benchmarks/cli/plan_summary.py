@@ -30,7 +30,22 @@ def describe(run: MethodRun, contacts: ContactSet) -> str:
         text = hfts_summary(run.result, contacts) + _optimum_text(run.result, plan.optimum)
     else:
         text = search_summary(run.result, contacts) + _hand_text(plan.hand)
-    return text + _closure_note(run.result.q1, len(run.result.grasp), contacts, plan.hand is not None)
+    return (
+        text
+        + _realise_text(run.record.get("realise"))
+        + _closure_note(run.result.q1, len(run.result.grasp), contacts, plan.hand is not None)
+    )
+
+
+def _realise_text(block: object) -> str:
+    """A line on ``--realise``: which plan the hand's fit realised, and how many it rejected."""
+    if not isinstance(block, dict):
+        return ""
+    rejected = block.get("rejected") or []
+    verdict = "realised by the hand's fit" if block.get("realised") else "NOT realised by the hand's fit either"
+    return f"\nrealise: plan {block.get('attempts')} {verdict}; {len(rejected)} grasp(s) rejected before it" + (
+        "" if not rejected else f" (first: {rejected[0].get('grasp')}, {rejected[0].get('reason')})"
+    )
 
 
 def _closure_note(q1: float, m: int, contacts: ContactSet, hand: bool) -> str:

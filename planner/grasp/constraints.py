@@ -128,3 +128,31 @@ class MaxFingerSpread:
     def describe(self) -> dict[str, object]:
         """JSON-ready description."""
         return {"name": self.name, "spread": self.spread}
+
+
+class ExcludedGrasps:
+    """Every grasp but the listed ones (as sets of contacts): a plan made again without the grasps a
+    hand could not realise (``ogcp plan --realise``)."""
+
+    name = "excluded"
+
+    def __init__(self, grasps: Sequence[Sequence[int]]) -> None:
+        self.grasps = tuple(tuple(sorted(int(i) for i in grasp)) for grasp in grasps)
+        self._excluded = frozenset(self.grasps)
+
+    def accepts(self, grasp: Sequence[int], contacts: ContactSet) -> bool:
+        """True unless the grasp's contacts are one of the excluded sets."""
+        return tuple(sorted(int(i) for i in grasp)) not in self._excluded
+
+    def accepts_many(self, grasps: NDArray[np.intp], contacts: ContactSet) -> NDArray[np.bool_]:
+        """P(g) for many grasps (B, m) at once."""
+        ordered = np.sort(np.asarray(grasps, dtype=np.intp), axis=1)
+        return np.array([tuple(row) not in self._excluded for row in ordered.tolist()], dtype=bool)
+
+    def admits(self, super_contacts: Sequence[Indices], contacts: ContactSet) -> bool:
+        """Always: a state holds other grasps than the few excluded (sound, never prunes)."""
+        return True
+
+    def describe(self) -> dict[str, object]:
+        """JSON-ready description."""
+        return {"name": self.name, "grasps": [list(g) for g in self.grasps]}

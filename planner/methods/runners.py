@@ -27,7 +27,7 @@ from ogcp.planner.config.methods import (
     HFTSConfig,
 )
 from ogcp.planner.config.options import MEMORY_LIMIT, MethodConfig, options_of
-from ogcp.planner.grasp.constraints import Constraint, MaxFingerSpread
+from ogcp.planner.grasp.constraints import Constraint, ExcludedGrasps, MaxFingerSpread
 from ogcp.planner.grasp.contact_set import ContactSet
 from ogcp.planner.hands.reachability import HandReachability
 from ogcp.planner.infra.errors import NoGraspError, SearchTimeout
@@ -65,6 +65,8 @@ class RunOptions:
             grasp with status ``interrupted``.
         lines: Where a method sends a progress line at least every 30 s (off a terminal, where
             no bar shows); None: none.
+        exclude: Grasps (sets of contact indices) A*, WA*, Dijkstra and exhaustive search may not
+            return: those a hand could not realise (``ogcp plan --realise``).
     """
 
     time_limit: float | None = None
@@ -78,6 +80,7 @@ class RunOptions:
     contact_seed: int | None = None
     stop: threading.Event | None = None
     lines: Callable[[str], None] | None = None
+    exclude: tuple[tuple[int, ...], ...] = ()
 
 
 @dataclass(frozen=True, eq=False)
@@ -114,6 +117,14 @@ def constraints_of(config: HandOptions, m: int) -> tuple[list[Constraint], HandR
     hand = hand_model(config.hand, config.hand_fingers, config.hand_threshold)
     hand.chosen(m)
     return [*constraints, hand], hand
+
+
+def _constraints(config: HandOptions, m: int, options: RunOptions) -> tuple[list[Constraint], HandReachability | None]:
+    """:func:`constraints_of`, and the grasps ``options`` exclude."""
+    constraints, hand = constraints_of(config, m)
+    if options.exclude:
+        constraints.append(ExcludedGrasps(options.exclude))
+    return constraints, hand
 
 
 def _under_denser_hands(
@@ -180,7 +191,7 @@ def run_search(config: AStarConfig, contacts: ContactSet, m: int, options: RunOp
         )
         return planner.plan(contacts, m, progress=options.progress, stop=options.stop, lines=options.lines)
 
-    result, hand = _under_denser_hands(search, contacts, m, *constraints_of(config, m), options.time_limit)
+    result, hand = _under_denser_hands(search, contacts, m, *_constraints(config, m, options), options.time_limit)
     return MethodRun(result, add_hand(result.to_dict(contact_set_record(contacts)), hand, contacts))
 
 
@@ -207,7 +218,9 @@ def run_exhaustive(config: ESConfig | ESPrunedConfig, contacts: ContactSet, m: i
         ).run(contacts, m)
 
     retry = options.checkpoint is None  # a checkpoint's chunks belong to the first model
-    result, hand = _under_denser_hands(search, contacts, m, *constraints_of(config, m), options.time_limit, retry)
+    result, hand = _under_denser_hands(
+        search, contacts, m, *_constraints(config, m, options), options.time_limit, retry
+    )
     record = result.to_dict(contact_set_record(contacts))
     if options.contact_seed is not None:
         record["config"]["seed"] = options.contact_seed

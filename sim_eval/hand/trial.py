@@ -109,19 +109,13 @@ def close_on_grasp(
     if compat:  # their step, solver and hand contacts; their friction unless one was asked for
         settings = physics_settings(settings)
         mu = settings.mu if settings.mu is not None else float(DEXGRASPBENCH["mu"])
-    idx = np.asarray(grasp, dtype=np.intp)
-    positions, normals = contacts.positions[idx], contacts.normals[idx]
-    radius = max(f.radius for f in kinematics.fingers)
-    placement = place_tips(fit.surface, positions, normals, radius, max_inward=radius)
-    points = np.where(placement.placed[:, None], placement.points, positions)
-    inward = np.where(placement.placed[:, None], placement.normals, normals)
-    parts = fit.decomposition.parts
     started = time.perf_counter()
-    around = FitScene(kinematics, parts, tolerance_scale(body.diagonal))
+    placement, points, inward = _targets(contacts, grasp, fit, setup)
+    parts = fit.decomposition.parts
     if given is None:
-        check = SqueezeCheck(body.com, contacts.torque_scale, mu, settings.max_normal_force)
-        posed, order = fit_grasp(setup, around, contacts, grasp, points, inward, check)
+        posed, order = fit_to_contacts(contacts, grasp, fit, body, settings, setup, mu)
     else:
+        around = FitScene(kinematics, parts, tolerance_scale(body.diagonal))
         pose = (given.grasp.joint_angles, given.grasp.rotation, given.grasp.translation)
         posed = measure_pose(around, given.fingers, points, inward, pose)
         order = tuple(range(len(grasp)))
@@ -165,6 +159,36 @@ def close_on_grasp(
         closed = dataclasses.replace(closed, scene=dataclasses.replace(closed.scene, preload_ctrl=taken))
     seconds["close"] = time.perf_counter() - started - seconds["fit"]
     return ClosedGrasp(closed, settled, share, posed, order, placement, ordered_points, settings, mu, hand)
+
+
+def _targets(
+    contacts: ContactSet, grasp: tuple[int, ...], fit: ContactFit, setup: HandSetup
+) -> tuple[TipPlacement, NDArray[np.float64], NDArray[np.float64]]:
+    """Where pads of the hand's rounding touch the simulated parts, and the pads' targets, (m, 3) each."""
+    idx = np.asarray(grasp, dtype=np.intp)
+    positions, normals = contacts.positions[idx], contacts.normals[idx]
+    radius = max(f.radius for f in setup.kinematics.fingers)
+    placement = place_tips(fit.surface, positions, normals, radius, max_inward=radius)
+    points = np.where(placement.placed[:, None], placement.points, positions)
+    inward = np.where(placement.placed[:, None], placement.normals, normals)
+    return placement, points, inward
+
+
+def fit_to_contacts(
+    contacts: ContactSet,
+    grasp: tuple[int, ...],
+    fit: ContactFit,
+    body: ObjectBody,
+    settings: SimSettings,
+    setup: HandSetup,
+    mu: float,
+) -> tuple[HandFit, tuple[int, ...]]:
+    """The hand fitted to one grasp as its trial fits it (:func:`close_on_grasp`), and the order in
+    which the fingers take its contacts; nothing closed, nothing loaded."""
+    _, points, inward = _targets(contacts, grasp, fit, setup)
+    around = FitScene(setup.kinematics, fit.decomposition.parts, tolerance_scale(body.diagonal))
+    check = SqueezeCheck(body.com, contacts.torque_scale, mu, settings.max_normal_force)
+    return fit_grasp(setup, around, contacts, grasp, points, inward, check)
 
 
 def simulate_hand_grasp(

@@ -9,6 +9,7 @@ import pytest
 
 from ogcp.planner import builtin_mesh
 from ogcp.planner.grasp import ContactSet, DistinctContacts, MaxFingerSpread, q1, sample_contacts
+from ogcp.planner.grasp.constraints import ExcludedGrasps
 from ogcp.planner.infra import OgcpError
 from ogcp.planner.search import GraspPlanner
 
@@ -157,3 +158,26 @@ def test_constrained_plan_matches_brute_force(box16, box16_q1, spread):
 def test_constrained_plan_without_feasible_grasp(box16):
     with pytest.raises(OgcpError, match="no grasp satisfies the constraints"):
         GraspPlanner(constraints=[MaxFingerSpread(1e-6)]).plan(box16, 3)
+
+
+def test_excluded_grasps_are_sets_of_contacts_in_any_order(box16):
+    excluded = ExcludedGrasps([(3, 1, 2), [7, 5, 6]])
+    assert not excluded.accepts((2, 3, 1), box16) and excluded.accepts((1, 2, 4), box16)
+    many = excluded.accepts_many(np.array([[1, 2, 3], [6, 7, 5], [1, 2, 4]]), box16)
+    assert many.tolist() == [False, False, True]
+    assert excluded.admits([np.arange(16)] * 3, box16)  # never prunes a state
+    assert excluded.describe() == {"name": "excluded", "grasps": [[1, 2, 3], [5, 6, 7]]}
+
+
+def test_a_plan_without_its_best_grasps_returns_the_next_best(box16, box16_q1):
+    """What ``ogcp plan --realise`` does when the hand cannot realise a grasp: A* excludes it and
+    proves the best of the others, as brute force finds it."""
+    ranked = sorted(box16_q1, key=lambda g: -box16_q1[g])
+    first = GraspPlanner().plan(box16, 3)
+    assert tuple(sorted(first.grasp)) == ranked[0] or abs(first.q1 - box16_q1[ranked[0]]) < 1e-9
+    excluded = [tuple(sorted(first.grasp))]
+    for _ in range(3):
+        result = GraspPlanner(constraints=[ExcludedGrasps(excluded)]).plan(box16, 3)
+        best_left = max(q for g, q in box16_q1.items() if g not in excluded)
+        assert abs(result.q1 - best_left) < 1e-9 and tuple(sorted(result.grasp)) not in excluded
+        excluded.append(tuple(sorted(result.grasp)))
