@@ -53,7 +53,7 @@ if TYPE_CHECKING:
     import trimesh
 
     from ogcp.planner.grasp.contact_set import ContactSet
-    from ogcp.planner.methods.runners import RunOptions
+    from ogcp.planner.methods.runners import MethodRun, RunOptions
 
 #: Run-time flags (destination -> flag); each applies to the methods whose spec lists it.
 RUN_FLAGS = {
@@ -367,7 +367,7 @@ def run_plan(args: argparse.Namespace) -> int:
         print(f"ogcp: {note}", file=sys.stderr, flush=True)
     compile_kernels([spec.name])  # first use: kept out of the time limit and the reported times
 
-    def run_once(given: Any) -> Any:
+    def run_once(given: RunOptions) -> MethodRun:
         if spec.name in SEARCH_METHODS:  # the searches: Ctrl-C returns their best grasp
             with stop_on_interrupt() as stop:
                 return spec.run(config, contacts, args.fingers, dataclasses.replace(given, stop=stop))

@@ -15,10 +15,13 @@ import argparse
 import dataclasses
 import sys
 from collections.abc import Callable
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from ogcp.benchmarks.cli.options import positive_int
 from ogcp.planner.infra.errors import OgcpError
+
+if TYPE_CHECKING:
+    from ogcp.planner.methods.runners import MethodRun, RunOptions
 
 #: Methods that take grasp constraints, so that a grasp can be excluded.
 REALISING_METHODS = ("astar", "wastar", "dijkstra", "es", "es-pruned")
@@ -42,10 +45,10 @@ def add_realise_option(parser: argparse.ArgumentParser) -> None:
 def realise(
     method: str,
     hand: str | None,
-    options: Any,
+    options: RunOptions,
     attempts: int,
-    run_once: Callable[[Any], Any],
-) -> Any:
+    run_once: Callable[[RunOptions], MethodRun],
+) -> MethodRun:
     """Plan, fit and plan again without the grasps the hand cannot realise.
 
     Args:

@@ -32,30 +32,28 @@ def gather_roots(spec: mujoco.MjSpec, descriptor: HandDescriptor) -> mujoco.MjSp
         descriptor: The hand; its palm and tip bodies say which of the world's bodies belong to it.
 
     Returns:
-        ``spec`` itself when the palm's root already holds every tip body, when a name is unknown or
-        the model does not compile (the checks that follow say why), or when nothing can be gathered.
+        ``spec`` itself when the palm's root already holds every tip body, when a name is unknown
+        (the checks that follow say why), or when nothing can be gathered.
     """
-    try:
-        model = spec.compile()
-    except ValueError:
+    palm = spec.body(descriptor.palm)
+    tips = [spec.body(f.tip_body) for f in descriptor.fingers]
+    if palm is None or any(t is None for t in tips):
         return spec
-    palm = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, descriptor.palm)
-    tips = [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, f.tip_body) for f in descriptor.fingers]
-    if palm <= 0 or min(tips, default=-1) <= 0:
+    path = _path_to_world(spec, palm)
+    if any(len(body.joints) for body in path):  # the palm moves: a sibling would not follow it
         return spec
-    path = _path_to_world(model, palm)
-    if any(model.body_jntnum[b] for b in path):  # the palm moves: a sibling would not follow it
-        return spec
-    free = {int(model.jnt_bodyid[j]) for j in range(model.njnt) if model.jnt_type[j] == mujoco.mjtJoint.mjJNT_FREE}
-    roots = sorted({_path_to_world(model, t)[-1] for t in tips} - free - {path[-1]})
+    roots: list[mujoco.MjsBody] = []
+    for tip in tips:
+        root = _path_to_world(spec, tip)[-1]
+        floating = any(j.type == mujoco.mjtJoint.mjJNT_FREE for j in root.joints)
+        if not floating and all(root != known for known in [path[-1], *roots]):
+            roots.append(root)
     if not roots:
         return spec
-    roots.insert(0, path[-1])
-    for k, body in enumerate(spec.bodies):  # the copy finds the roots by name
+    for k, body in enumerate([path[-1], *roots]):  # the copy finds the roots by name
         if not body.name:
-            body.name = f"ogcp_body{k}"
-    named = spec.compile()  # naming keeps every id
-    names = {mujoco.mj_id2name(named, mujoco.mjtObj.mjOBJ_BODY, r) for r in roots}
+            body.name = f"ogcp_root{k}"
+    names = {body.name for body in [path[-1], *roots]}
     try:
         tree = ET.fromstring(spec.to_xml())
     except (ValueError, ET.ParseError):
@@ -82,11 +80,11 @@ def gather_roots(spec: mujoco.MjSpec, descriptor: HandDescriptor) -> mujoco.MjSp
     return copy
 
 
-def _path_to_world(model: mujoco.MjModel, body: int) -> list[int]:
+def _path_to_world(spec: mujoco.MjSpec, body: mujoco.MjsBody) -> list[mujoco.MjsBody]:
     """``body`` and its ancestors below the world, last the world's child."""
     path = [body]
-    while model.body_parentid[path[-1]] != 0:
-        path.append(int(model.body_parentid[path[-1]]))
+    while path[-1].parent is not None and path[-1].parent != spec.worldbody:
+        path.append(path[-1].parent)
     return path
 
 
