@@ -30,7 +30,6 @@ from ogcp.benchmarks.cli.options import (
     typed,
     valid,
 )
-from ogcp.benchmarks.cli.realise import add_realise_option, realise
 from ogcp.planner.config.methods import DEFAULT_FINGERS, DEFAULT_METHOD, DEFAULT_SEED
 from ogcp.planner.config.options import JOBS, MEMORY_LIMIT, TIME_LIMIT
 from ogcp.planner.grasp.defaults import (
@@ -221,7 +220,6 @@ def register(commands: Any) -> None:
     hfts.add_argument(
         "--no-optimum", action="store_true", help="skip the A* run that reports the optimum next to the HFTS spread"
     )
-    add_realise_option(plan)
     plan.add_argument("--json", action="store_true", help="print one JSON object (schema ogcp.plan/1)")
     plan.add_argument("-o", "--output", type=Path, default=None, help="also write the JSON result to this file")
     plan.set_defaults(handler=run_plan)
@@ -373,10 +371,13 @@ def run_plan(args: argparse.Namespace) -> int:
                 return spec.run(config, contacts, args.fingers, dataclasses.replace(given, stop=stop))
         return spec.run(config, contacts, args.fingers, given)
 
-    if args.realise is None:
+    attempts = getattr(config, "realise", None)
+    if attempts is None:
         run = run_once(options)
     else:
-        run = realise(spec.name, getattr(config, "hand", None), options, args.realise, run_once)
+        from ogcp.sim_eval.realise import realise
+
+        run = realise(attempts, options, run_once, lambda text: print(f"ogcp: {text}", file=sys.stderr, flush=True))
     if args.output is not None:
         from ogcp.planner.records.plan import add_plan_path
 

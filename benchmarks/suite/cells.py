@@ -140,7 +140,13 @@ def plan_record(
     """
     spec = method_spec(cell.method)
     options = RunOptions(time_limit=time_limit, memory_limit=memory_limit, contact_seed=cell.contact_seed)
-    return spec.run(spec.config(**dict(cell.variant)), contacts, cell.m, options).record
+    config = spec.config(**dict(cell.variant))
+    attempts = getattr(config, "realise", None)
+    if attempts is None:
+        return spec.run(config, contacts, cell.m, options).record
+    from ogcp.sim_eval.realise import realise  # the hand's fit: MuJoCo, only for such cells
+
+    return realise(attempts, options, lambda given: spec.run(config, contacts, cell.m, given)).record
 
 
 def external_grasps(cell: Cell) -> ExternalGrasps:

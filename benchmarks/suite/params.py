@@ -35,7 +35,7 @@ TITLES = {name: spec.title for name, spec in METHODS.items()}
 #: Parameters left out of default labels: they vary within one plotted series.
 UNLABELLED = ("seed", "record_tree")
 #: Options added after cell ids were first recorded: left out of a variant while unset.
-ADDED_UNSET = ("hand_fingers",)
+ADDED_UNSET = ("hand_fingers", "realise")
 #: Most seeds of one ``{start, count}`` range: repeats for statistics, where 10^4 is plenty;
 #: 10^12 asked for terabytes before the suite's size was known.
 MAX_SEED_COUNT = 10_000

@@ -105,9 +105,29 @@ class HandOptions(MethodConfig):
             object.__setattr__(self, "hand_threshold", DEFAULT_HAND_THRESHOLD)
 
 
+#: Most plans ``realise`` may ask for: each is a full search and a fit.
+MAX_REALISE = 50
+
+
 @dataclass(frozen=True, kw_only=True)
 class ConstraintOptions(HandOptions, SpreadOption):
-    """Every grasp constraint: finger spread and hand (fields in that order)."""
+    """Every grasp constraint: finger spread and hand (fields in that order), and how many plans may
+    be made to find a grasp the hand realises (:mod:`ogcp.sim_eval.realise`)."""
+
+    realise: int | None = option(
+        "int",
+        None,
+        "with a hand: fit it to the planned grasp as ogcp evaluate does (against the object's convex parts) and, "
+        "where it cannot realise it, plan again without it, up to N plans; the record lists the grasps rejected",
+        minimum=1,
+        maximum=MAX_REALISE,
+        metavar="N",
+    )
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.realise is not None and self.hand is None:
+            raise ConfigError("realise", "applies only with a hand (hand = NAME or FILE.toml): it fits that hand")
 
 
 @dataclass(frozen=True, kw_only=True)

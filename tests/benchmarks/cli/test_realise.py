@@ -19,20 +19,18 @@ GRIPPER = ["box", "-n", "40", "-m", "2", "--diagonal", "0.08", "--contact-model"
 def _run(argv: list[str]) -> tuple[int, str, str]:
     out, err = io.StringIO(), io.StringIO()
     with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        try:
-            status = main(argv)
-        except SystemExit as exit_:  # argparse's own refusals (a count below 1)
-            status = int(exit_.code or 0)
+        status = main(argv)
     return status, out.getvalue(), err.getvalue()
 
 
 @pytest.mark.parametrize(
     ("argv", "message"),
     [
-        (["plan", "box", "-n", "20", "--realise", "2"], "--realise needs --hand"),
-        (["plan", *GRIPPER, "--method", "hfts", "--realise", "2"], "--realise applies to astar, wastar, dijkstra, es"),
-        (["plan", *GRIPPER, "--realise", "51"], "--realise takes at most 50 plans"),
-        (["plan", *GRIPPER, "--realise", "0"], "expected an integer >= 1"),
+        (["plan", "box", "-n", "20", "--realise", "2"], "realise: applies only with a hand"),
+        (["plan", *GRIPPER, "--method", "hfts", "--realise", "2"], "--realise applies to methods astar, dijkstra"),
+        (["plan", *GRIPPER, "--realise", "51"], "realise: expected an integer <= 50, got 51"),
+        (["plan", *GRIPPER, "--realise", "0"], "realise: expected an integer >= 1, got 0"),
+        (["plan", *GRIPPER, "--method", "es", "--checkpoint", "ck", "--realise", "2"], "a checkpoint holds one run"),
     ],
 )
 def test_realise_is_refused_in_one_line_where_it_cannot_apply(argv, message):
@@ -75,3 +73,43 @@ def test_a_grasp_realised_at_once_needs_one_plan(tmp_path):
     block = json.loads(path.read_text())["realise"]
     assert block == {"attempts": 1, "realised": True, "rejected": []}
     assert np.isfinite(json.loads(path.read_text())["q1"])
+
+
+def test_a_suite_method_table_takes_realise(tmp_path):
+    """``realise = N`` in a suite's method table: part of the cell's parameters (and id), and the
+    cell's plan carries the ``realise`` block; a table without it keeps the id it had."""
+    from ogcp.benchmarks.suite.parse import parse_suite
+    from ogcp.benchmarks.suite.runner import SuiteRunner
+    from ogcp.benchmarks.suite.store import RESULTS
+
+    text = """schema_version = 1
+name = "realise"
+objects = ["box"]
+contacts = 40
+m = [2]
+diagonal = 0.08
+contact_model = "soft"
+
+[[methods]]
+method = "astar"
+hand = "parallel_gripper"
+label = "A* gripper"
+
+[[methods]]
+method = "astar"
+hand = "parallel_gripper"
+realise = 3
+label = "A* gripper, realised"
+"""
+    suite = parse_suite(text)
+    plain, realised = suite.cells
+    assert "realise" not in plain.canonical()["variant"] and realised.canonical()["variant"]["realise"] == 3
+    assert plain.id != realised.id
+    summary = SuiteRunner(suite, tmp_path / "run").run()
+    assert summary.ran == 2 and summary.errors == 0
+    records = {
+        json.loads(line)["params"]["label"]: json.loads(line)
+        for line in (tmp_path / "run" / RESULTS).read_text().splitlines()
+    }
+    assert "realise" not in records["A* gripper"]["plan"]
+    assert records["A* gripper, realised"]["plan"]["realise"]["attempts"] == 1
