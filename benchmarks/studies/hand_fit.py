@@ -2,10 +2,12 @@
 
 Run: ``python -m ogcp.benchmarks.studies.hand_fit [--cases sdh:box:3,sdh:donut:3,parallel_gripper:box:2]
 [--contacts 100] [--seeds 6] [--diagonal 0.2] [--directions 16] [--plan-time-limit S]
-[--torsional-friction METRES] [--out DIR]``.
+[--torsional-friction METRES] [--realise N] [--out DIR]``.
 
 Per case (hand, object, m) and contact seed: sample the contacts, plan the A* optimum under the hand
-(``--hand``; with ``--plan-time-limit``, the best grasp A* finds within it), fit the hand to it against the object's convex parts (the CoACD decomposition,
+(``--hand``; with ``--plan-time-limit``, the best grasp A* finds within it; with ``--realise N``,
+planned again without each grasp the hand's fit cannot realise, up to N plans, the rows
+counting the grasps ``rejected``), fit the hand to it against the object's convex parts (the CoACD decomposition,
 cached; one hull for the box and the sphere) from its nearest samples until a fit is realised, and
 close the hand on the realised ones and test them (:mod:`ogcp.sim_eval.hand.trial`, ``--directions``
 random directions plus the axes); the same grasp is also tested with fingertip spheres. Printed
@@ -34,6 +36,7 @@ from typing import Any
 import numpy as np
 
 from ogcp.planner import GraspPlanner, resolve_object, sample_contacts
+from ogcp.planner.grasp.constraints import ExcludedGrasps
 from ogcp.planner.hands import HandKinematics, HandReachability
 from ogcp.planner.infra.errors import OgcpError
 from ogcp.sim_eval.decomposition import DecompositionSettings, decompose
@@ -72,8 +75,15 @@ def run_case(hand: str, name: str, m: int, args: argparse.Namespace) -> dict[str
     rows = []
     for seed in range(args.seeds):
         contacts = sample_contacts(mesh, n=args.contacts, seed=seed, torsional_friction=soft)
+        rejected: list[tuple[int, ...]] = []
         try:
-            grasp = tuple(GraspPlanner(constraints=[model], time_limit=args.plan_time_limit).plan(contacts, m).grasp)
+            for _ in range(args.realise or 1):  # with --realise: plan again without what the fit leaves short
+                excluded = [ExcludedGrasps(rejected)] if rejected else []
+                planner = GraspPlanner(constraints=[model, *excluded], time_limit=args.plan_time_limit)
+                grasp = tuple(planner.plan(contacts, m).grasp)
+                if not args.realise or with_hand.fit_hand(mesh, contacts, grasp, parts=parts).realised:
+                    break
+                rejected.append(grasp)
         except OgcpError as exc:  # no grasp the hand reaches: recorded, and the other seeds go on
             rows.append({"seed": seed, **_UNPLANNED, "error": str(exc)})
             continue
@@ -105,6 +115,7 @@ def run_case(hand: str, name: str, m: int, args: argparse.Namespace) -> dict[str
                 "tips_censored": _censored(tips),
                 "tips_seconds": tips_seconds,
                 "hand_phase_seconds": held.hand.get("seconds", {}),
+                "rejected": len(rejected),
             }
         )
     return {"hand": hand, "object": name, "m": m, "accepted": accepted, "rows": rows}
@@ -127,6 +138,7 @@ _UNPLANNED: dict[str, Any] = {
     "tips_censored": None,
     "tips_seconds": None,
     "hand_phase_seconds": {},
+    "rejected": 0,
 }
 
 
@@ -210,6 +222,13 @@ def main(argv: list[str] | None = None) -> None:
         default=0.0,
         metavar="METRES",
         help="soft-finger contacts with this torsional friction [m] (0: hard point contacts)",
+    )
+    parser.add_argument(
+        "--realise",
+        type=int,
+        default=None,
+        metavar="N",
+        help="plan again without each grasp the hand's fit cannot realise, up to N plans (as ogcp plan --realise)",
     )
     parser.add_argument("--out", type=Path, default=None, help="write hand_fit.json and the tips-versus-hand figure")
     args = parser.parse_args(argv)

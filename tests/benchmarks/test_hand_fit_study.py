@@ -34,3 +34,28 @@ def test_a_seed_without_a_grasp_the_hand_reaches_is_recorded_and_the_study_goes_
     assert "| sdh, box, 3 | 0.00% | 0 of 1 (1 without a grasp) |" in capsys.readouterr().out
     (row,) = json.loads((out / "hand_fit.json").read_text())["cases"][0]["rows"]
     assert row["planned"] is False and "no grasp satisfies the constraints" in row["error"]
+
+
+def test_with_realise_a_grasp_the_fit_leaves_short_is_planned_again(tmp_path, capsys, monkeypatch):
+    """The first fit is made to fail: the row's grasp is the next plan's, and it counts one rejected."""
+    import dataclasses
+
+    from ogcp.benchmarks.studies import hand_fit
+    from ogcp.sim_eval.evaluate import GraspEvaluator
+
+    real, calls = GraspEvaluator.fit_hand, []
+
+    def first_fails(self, mesh, contacts, grasp, parts=None):
+        fit = real(self, mesh, contacts, grasp, parts)
+        calls.append(tuple(grasp))
+        return dataclasses.replace(fit, residuals=fit.residuals + 0.01) if len(calls) == 1 else fit
+
+    monkeypatch.setattr(GraspEvaluator, "fit_hand", first_fails)
+    monkeypatch.setenv("OGCP_CACHE", str(tmp_path / "cache"))
+    out = tmp_path / "out"
+    args = ["--cases", "sdh:box:3", "--contacts", "24", "--seeds", "1", "--directions", "0", "--realise", "3"]
+    hand_fit.main([*args, "--out", str(out)])
+    capsys.readouterr()
+    (row,) = json.loads((out / "hand_fit.json").read_text())["cases"][0]["rows"]
+    assert row["rejected"] == 1 and len(calls) == 2 and tuple(row["grasp"]) == calls[1] != calls[0]
+    assert row["realised"]
