@@ -84,7 +84,8 @@ def _within(ends: tuple[float, float], clamp: tuple[float, float] | None, gear: 
     if clamp is None or gear == 0:
         return ends
     low, high = sorted((clamp[0] / gear, clamp[1] / gear))
-    return max(ends[0], low), min(ends[1], high)
+    narrowed = max(ends[0], low), min(ends[1], high)
+    return narrowed if narrowed[0] <= narrowed[1] else ends  # ranges that do not meet: the actuator's own
 
 
 def _clamp_kept(spec: mujoco.MjSpec, model: mujoco.MjModel, kept: Sequence[int]) -> None:

@@ -111,3 +111,12 @@ def test_a_joints_clamp_on_its_actuator_force_narrows_the_servos_range(tmp_path)
     assert kinematics.servos == ("right",)
     assert kinematics.model.actuator("p").forcerange.tolist() == pytest.approx([-2.5, 1.5])  # (-5, 3) / 2
     assert kinematics.model.actuator("ogcp_servo_right").forcerange.tolist() == pytest.approx([-5.0, 3.0])
+
+
+def test_a_clamp_that_does_not_meet_the_range_leaves_the_actuators_own():
+    """MuJoCo would refuse a range whose low end passed its high end."""
+    from ogcp.planner.hands.servos import _within
+
+    assert _within((2.0, 5.0), (-1.0, 1.0), 1.0) == (2.0, 5.0)
+    assert _within((-4.0, 9.0), (-1.0, 3.0), 2.0) == (-0.5, 1.5)
+    assert _within((-4.0, 9.0), None, 2.0) == (-4.0, 9.0)
