@@ -95,8 +95,7 @@ class GraspEvaluator:
         if self.hand is None:
             raise OgcpError("fitting a hand needs a hand (GraspEvaluator(hand=...))")
         chosen = tuple(int(i) for i in grasp)
-        if len(chosen) < 2 or min(chosen) < 0 or max(chosen) >= len(contacts) or len(set(chosen)) != len(chosen):
-            raise OgcpError(f"grasp {list(chosen)} must hold >= 2 distinct indices in 0..{len(contacts) - 1}")
+        _check_grasp(chosen, contacts)
         from ogcp.sim_eval.hand.trial import fit_to_contacts
 
         settings = (self.settings or SimSettings()).scaled(object_diagonal(mesh))
@@ -147,8 +146,7 @@ class GraspEvaluator:
         if len(given_poses) != len(chosen) or (self.hand is None and any(p is not None for p in given_poses)):
             raise OgcpError(f"got {len(given_poses)} hand poses for {len(chosen)} grasps (poses need a hand)")
         for g in chosen:
-            if len(g) < 2 or min(g) < 0 or max(g) >= len(contacts) or len(set(g)) != len(g):
-                raise OgcpError(f"grasp {list(g)} must hold >= 2 distinct indices in 0..{len(contacts) - 1}")
+            _check_grasp(g, contacts)
         body, ladder, parts = self._object(mesh, settings, parts)
         radius = body.tip_radius
         # A hand's fit decides what it reaches; the fingertip's own check is for spheres.
@@ -343,6 +341,12 @@ def evaluate_plan(
     hand = None if tips else plan_hand(record)
     evaluator = GraspEvaluator(settings, decomposition, progress=progress, hand=hand)
     return evaluator.evaluate(plan.mesh, plan.contacts, grasps, labels)
+
+
+def _check_grasp(grasp: tuple[int, ...], contacts: ContactSet) -> None:
+    """One line for a grasp that is not m >= 2 distinct contacts of ``contacts``."""
+    if len(grasp) < 2 or min(grasp) < 0 or max(grasp) >= len(contacts) or len(set(grasp)) != len(grasp):
+        raise OgcpError(f"grasp {list(grasp)} must hold >= 2 distinct indices in 0..{len(contacts) - 1}")
 
 
 def plan_hand(record: dict[str, Any]) -> HandSetup | None:

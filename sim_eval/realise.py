@@ -47,25 +47,28 @@ def realise(
     """
     if options.checkpoint is not None:
         raise OgcpError("realise plans again with other constraints; a checkpoint holds one run's chunks: drop one")
+    from ogcp.sim_eval.decomposition.decompose import Decomposition, decompose
     from ogcp.sim_eval.evaluate import GraspEvaluator, plan_hand
     from ogcp.sim_eval.inputs.plan_input import plan_input
 
     rejected: list[dict[str, Any]] = []
-    evaluator: GraspEvaluator | None = None
+    problem: tuple[GraspEvaluator, Any, Any, Decomposition] | None = None  # the same every plan
     for attempt in range(1, attempts + 1):
         run = run_once(dataclasses.replace(options, exclude=tuple(tuple(r["grasp"]) for r in rejected)))
         record = run.record
-        planned = plan_input(record)
-        if evaluator is None:
+        if problem is None:
             hand = plan_hand(record)
             if hand is None:
                 raise OgcpError("realise needs a hand: it fits that hand to each planned grasp")
-            evaluator = GraspEvaluator(hand=hand)
-        fit = evaluator.fit_hand(planned.mesh, planned.contacts, planned.grasps[0])
+            planned = plan_input(record)
+            problem = (GraspEvaluator(hand=hand), planned.mesh, planned.contacts, decompose(planned.mesh))
+        evaluator, mesh, contacts, parts = problem
+        grasp = tuple(int(i) for i in record["grasp"])
+        fit = evaluator.fit_hand(mesh, contacts, grasp, parts=parts)
         if fit.realised or attempt == attempts or record.get("status") in UNFINISHED:
             record["realise"] = {"attempts": attempt, "realised": bool(fit.realised), "rejected": rejected}
             return run
-        rejected.append({"grasp": sorted(int(i) for i in planned.grasps[0]), "reason": str(fit.reason)})
+        rejected.append({"grasp": sorted(grasp), "reason": str(fit.reason)})
         if tell is not None:
             tell(
                 f"plan {attempt} of {attempts}: the hand cannot realise grasp {rejected[-1]['grasp']} "
