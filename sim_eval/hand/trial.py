@@ -113,7 +113,7 @@ def close_on_grasp(
     placement, points, inward = _targets(contacts, grasp, fit, setup)
     parts = fit.decomposition.parts
     if given is None:
-        posed, order = _fit(contacts, grasp, fit, body, settings, setup, mu, points, inward)
+        posed, order = fit_to_contacts(contacts, grasp, fit, body, settings, setup, mu, (points, inward))
     else:
         around = FitScene(kinematics, parts, tolerance_scale(body.diagonal))
         pose = (given.grasp.joint_angles, given.grasp.rotation, given.grasp.translation)
@@ -182,25 +182,12 @@ def fit_to_contacts(
     settings: SimSettings,
     setup: HandSetup,
     mu: float,
+    targets: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None,
 ) -> tuple[HandFit, tuple[int, ...]]:
     """The hand fitted to one grasp as its trial fits it (:func:`close_on_grasp`), and the order in
-    which the fingers take its contacts; nothing closed, nothing loaded."""
-    _, points, inward = _targets(contacts, grasp, fit, setup)
-    return _fit(contacts, grasp, fit, body, settings, setup, mu, points, inward)
-
-
-def _fit(
-    contacts: ContactSet,
-    grasp: tuple[int, ...],
-    fit: ContactFit,
-    body: ObjectBody,
-    settings: SimSettings,
-    setup: HandSetup,
-    mu: float,
-    points: NDArray[np.float64],
-    inward: NDArray[np.float64],
-) -> tuple[HandFit, tuple[int, ...]]:
-    """:func:`fit_to_contacts` with the pads' targets (m, 3) placed already."""
+    which the fingers take its contacts; nothing closed, nothing loaded. ``targets``: the pads'
+    points and inward normals (m, 3) each where they are placed already; None: placed here."""
+    points, inward = targets if targets is not None else _targets(contacts, grasp, fit, setup)[1:]
     around = FitScene(setup.kinematics, fit.decomposition.parts, tolerance_scale(body.diagonal))
     check = SqueezeCheck(body.com, contacts.torque_scale, mu, settings.max_normal_force)
     return fit_grasp(setup, around, contacts, grasp, points, inward, check)
