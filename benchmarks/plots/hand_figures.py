@@ -1,7 +1,9 @@
 """Fig. 10: each plan's hand on its best reachable grasp, for any hand: as it settled in simulation, else fitted.
 
 A cell simulated with its hand (a suite with ``simulate``) records the hand as it settled on the
-object (``hand.settled_joint_angles`` and the palm pose): the figure draws that. Otherwise the plan
+object (``hand.settled_joint_angles`` and the palm pose): the figure draws that. Where the
+simulation's fit, which keeps the hand's links out of the object, found the grasp unreachable, the
+figure draws that fit's pose (``hand.fit``) and says so. Otherwise the plan
 record's ``hand`` block holds the reachability model's nearest sampled configuration and
 the contact each finger takes (:class:`ogcp.planner.records.plan.PlanHand`); it holds no palm pose,
 since the model matches the pads' rigid invariants, not their place. The figure fits the hand to
@@ -18,7 +20,7 @@ from __future__ import annotations
 
 import dataclasses
 import time
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -28,6 +30,7 @@ from ogcp.planner.hands.registry import resolve_hand
 from ogcp.planner.infra.errors import OgcpError
 from ogcp.planner.records.plan import PlanHand
 from ogcp.sim_eval.hand.fit import HandFit, fit_hand, measure_pose
+from ogcp.sim_eval.hand.fit_result import LINK_TOLERANCE, RESIDUAL_TOLERANCE
 from ogcp.sim_eval.hand.fit_scene import FitScene
 from ogcp.sim_eval.hand.geometry import posed_triangles
 from ogcp.sim_eval.inputs.plan_input import PlanInput
@@ -55,12 +58,20 @@ class PanelFit:
     Attributes:
         title: The panel's problem and cell.
         fit: The pose that is drawn; its ``residuals`` are per chosen finger [m].
-        settled: Whether the pose is the one the hand settled in, in simulation (else fitted).
+        how: ``settled`` (as the hand settled in simulation), ``unreachable`` (the simulation's fit
+            of a grasp it found unreachable) or ``fitted`` (fitted here, the object left out).
+        inside: How deep the simulation's fit put a link inside the object [m] (``unreachable``).
     """
 
     title: str
     fit: HandFit
-    settled: bool = False
+    how: str = "fitted"
+    inside: float = 0.0
+
+    @property
+    def settled(self) -> bool:
+        """Whether the pose is the one the hand settled in, in simulation."""
+        return self.how == "settled"
 
 
 #: The hand fits of the last figure's panels, in panel order.
@@ -143,7 +154,7 @@ def fig10_hand_grasps(data: RunData, notes: list[str] | None = None) -> Figure:
     HAND_FITS.clear()
     for ax, (cell, hand, rebuilt, kinematics) in zip(axes, hands, strict=True):
         started = time.perf_counter()
-        settled = settled_pose(cell, hand)
+        settled = simulated_pose(cell, hand)
         posed = draw_hand(ax, rebuilt, hand, kinematics, method_colour(cell.method), pixels, settled)
         RENDER_SECONDS.append(time.perf_counter() - started)
         HAND_FITS.append(dataclasses.replace(posed, title=f"{names[cell.problem]}: {cell.label}"))
@@ -153,48 +164,66 @@ def fig10_hand_grasps(data: RunData, notes: list[str] | None = None) -> Figure:
 
 
 def fit_caption(posed: PanelFit) -> str:
-    """One short line on the drawn pose: settled or fitted, the largest pad distance from its contact, collisions."""
+    """One short line on the drawn pose: settled, unreachable or fitted, the largest pad distance
+    from its contact, collisions."""
     clash = ", links touch" if posed.fit.self_penetration > 0 else ""
-    how = "settled" if posed.settled else "fitted"
+    if posed.inside > 0:
+        clash = f", a link {posed.inside * 1e3:.1f} mm in the object{clash}"
+    how = {"unreachable": "unreachable in simulation"}.get(posed.how, posed.how)
     return f"{how}, pads within {posed.fit.residuals.max() * 1e3:.1f} mm{clash}"
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
 class SettledHand:
-    """The hand as it settled in simulation.
+    """The hand as the simulation left it: settled, or fitted to a grasp it found unreachable.
 
     Attributes:
         pose: Joint angles (J,), palm rotation (3, 3) and palm position (3,) [m].
         finger_contacts: The contact each chosen finger took, in the fingers' order.
+        how: ``settled`` or ``unreachable``.
+        inside: How deep the simulation's fit put a link inside the object [m] (0 when settled).
     """
 
     pose: tuple[np.ndarray, np.ndarray, np.ndarray]
     finger_contacts: tuple[int, ...]
+    how: str = "settled"
+    inside: float = 0.0
 
 
-def settled_pose(cell: CellData, hand: PlanHand) -> SettledHand | None:
-    """The hand as it settled on the cell's grasp in simulation, or None when the cell was not
-    simulated with its hand (or its record lacks the pose)."""
+def simulated_pose(cell: CellData, hand: PlanHand) -> SettledHand | None:
+    """The hand as the simulation left the cell's grasp: as it settled, or, for a grasp it found
+    unreachable, as its fit (with the object) posed it; None when the cell was not simulated with
+    its hand (or its record lacks the pose)."""
     if cell.simulation is None:
         return None
     wanted = sorted(int(i) for i in hand.finger_contacts)
     for grasp in cell.simulation.grasps:
         block = grasp.hand or {}
-        if grasp.grasp is None or sorted(grasp.grasp) != wanted or "settled_joint_angles" not in block:
+        if grasp.grasp is None or sorted(grasp.grasp) != wanted:
+            continue
+        recorded = block.get("fit")
+        fit: dict[str, Any] = recorded if isinstance(recorded, dict) else {}
+        if "settled_joint_angles" in block:
+            keys, source, how = ("settled_joint_angles", "palm_rotation", "palm_position"), dict(block), "settled"
+        elif fit.get("realised") is False and "joint_angles" in fit:
+            keys, source, how = ("joint_angles", "palm_rotation", "palm_position"), fit, "unreachable"
+        else:
             continue
         try:
-            angles, rotation, position = (
-                np.asarray(block[k], dtype=float) for k in ("settled_joint_angles", "palm_rotation", "palm_position")
-            )
+            angles, rotation, position = (np.asarray(source[k], dtype=float) for k in keys)
             order = tuple(int(i) for i in block.get("finger_contacts") or hand.finger_contacts)
+            inside = float(fit.get("penetration") or 0.0) if how == "unreachable" else 0.0
         except (KeyError, TypeError, ValueError):
             return None
+        tolerance = fit.get("tolerance")
+        if isinstance(tolerance, (int, float)) and inside <= LINK_TOLERANCE * tolerance / RESIDUAL_TOLERANCE:
+            inside = 0.0  # within the fit's link tolerance: not what made it unreachable
         if (
             rotation.shape == (3, 3)
             and position.shape == (3,)
-            and np.isfinite(np.concatenate([angles, position])).all()
+            and np.isfinite(np.concatenate([angles, position, [inside]])).all()
         ):
-            return SettledHand((angles, rotation, position), order)
+            return SettledHand((angles, rotation, position), order, how, inside)
     return None
 
 
@@ -241,7 +270,7 @@ def draw_hand(
         kinematics: The hand, compiled.
         colour: Colour of the grasp's contacts.
         pixels: Side of the square rendered image [px].
-        settled: The hand as it settled in simulation (:func:`settled_pose`); None: fitted here.
+        settled: The hand as the simulation left it (:func:`simulated_pose`); None: fitted here.
 
     Returns:
         The drawn pose (title left empty).
@@ -273,4 +302,6 @@ def draw_hand(
     ax.set_ylim(pixels, 0)
     ax.set_aspect("equal")
     ax.axis("off")
-    return PanelFit("", fit, settled is not None)
+    if settled is None:
+        return PanelFit("", fit)
+    return PanelFit("", fit, settled.how, settled.inside)

@@ -169,6 +169,21 @@ def test_fig10_draws_the_hand_as_it_settled_when_the_cell_was_simulated(tmp_path
     assert posed.settled and figure.axes[0].get_title().split("\n")[1].startswith("settled, pads within")
     assert posed.fit.joint_angles == pytest.approx(simulated.hand["settled_joint_angles"])
     assert posed.fit.translation == pytest.approx(simulated.hand["palm_position"])
+    # A grasp the simulation found unreachable is drawn as its fit (made with the object) left the
+    # hand and says so, not fitted again here without the object as if it were fine.
+    angles = np.asarray(simulated.hand["settled_joint_angles"]) + 0.05
+    fit = {**simulated.hand["fit"], "realised": False, "joint_angles": angles.tolist(), "penetration": 0.004}
+    block = {k: v for k, v in simulated.hand.items() if k != "settled_joint_angles"} | {"fit": fit}
+    grasps = (dataclasses.replace(simulated, hand=block),)
+    unreachable = dataclasses.replace(cell, simulation=dataclasses.replace(cell.simulation, grasps=grasps))
+    cells = tuple(unreachable if c is cell else c for c in data.cells)
+    figure = fig10_hand_grasps(plots.RunData(data.directory, cells, (), None))
+    [posed] = HAND_FITS
+    caption = figure.axes[0].get_title().split("\n")[1]
+    assert posed.how == "unreachable" and not posed.settled
+    assert caption.startswith("unreachable in simulation, pads within") and "a link 4.0 mm in the object" in caption
+    assert posed.fit.joint_angles == pytest.approx(angles)
+    assert posed.fit.translation == pytest.approx(fit["palm_position"])
 
 
 def test_the_tips_versus_hand_figure_has_one_bar_group_per_case(tmp_path):
