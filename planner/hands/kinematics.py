@@ -25,6 +25,7 @@ import mujoco
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ogcp.planner.hands.couplings import joint_couplings, narrowed_drivers
 from ogcp.planner.hands.descriptor import HandDescriptor
 from ogcp.planner.hands.fingers import MOVABLE, Finger, body_id, resolve_finger
 from ogcp.planner.hands.loading import compile_spec, hand_spec
@@ -90,7 +91,12 @@ class HandKinematics:
         self.qpos_index = self.model.jnt_qposadr[self.joint_ids]
         self.limits = np.array([self._range(j) for j in joint_ids])
         self.reference_qpos = self._reference_qpos()
-        self._couplings = self._joint_couplings()
+        self._couplings = joint_couplings(self.model, joint_ids)
+        self.limits = narrowed_drivers(
+            self.model, self.joint_names, joint_ids, self.limits, self._couplings, descriptor.path
+        )
+        self.reference_qpos = self._reference_qpos()
+        self.reference_qpos[self.qpos_index] = self.complete(self.reference_qpos[self.qpos_index])
         self.independent = np.array(
             [k for k, j in enumerate(joint_ids) if j not in {dep for dep, _, _ in self._couplings}], dtype=np.intp
         )
@@ -123,18 +129,6 @@ class HandKinematics:
         qpos = self.model.qpos0.copy()
         qpos[self.qpos_index] = np.clip(qpos[self.qpos_index], self.limits[:, 0], self.limits[:, 1])
         return qpos
-
-    def _joint_couplings(self) -> list[tuple[int, int, NDArray[np.float64]]]:
-        """(dependent joint, driving joint or -1, polynomial coefficients) of active joint equalities."""
-        found = []
-        ids = set(self.joint_ids.tolist())
-        for e in range(self.model.neq):
-            if self.model.eq_type[e] != mujoco.mjtEq.mjEQ_JOINT or not self.model.eq_active0[e]:
-                continue
-            dependent, driver = int(self.model.eq_obj1id[e]), int(self.model.eq_obj2id[e])
-            if dependent in ids and (driver < 0 or driver in ids):
-                found.append((dependent, driver, self.model.eq_data[e, :5].copy()))
-        return found
 
     def _body_groups(self) -> NDArray[np.intp]:
         """Each body's finger index, or len(fingers) for the palm and bodies no single finger owns."""
@@ -222,11 +216,11 @@ class HandKinematics:
         q = np.array(angles, dtype=float)
         position = {int(j): k for k, j in enumerate(self.joint_ids)}
         for dependent, driver, poly in self._couplings:
-            base = self.reference_qpos[self.model.jnt_qposadr[dependent]]
+            base = self.model.qpos0[self.model.jnt_qposadr[dependent]]  # MuJoCo's equality is about qpos0
             if driver < 0:
                 q[..., position[dependent]] = base + poly[0]
                 continue
-            x = q[..., position[driver]] - self.reference_qpos[self.model.jnt_qposadr[driver]]
+            x = q[..., position[driver]] - self.model.qpos0[self.model.jnt_qposadr[driver]]
             q[..., position[dependent]] = base + sum(c * x**p for p, c in enumerate(poly))
         return q
 
@@ -238,7 +232,7 @@ class HandKinematics:
         for dependent, driver, poly in self._couplings:
             derivative[position[dependent]] = 0.0
             if driver >= 0:
-                x = q[position[driver]] - self.reference_qpos[self.model.jnt_qposadr[driver]]
+                x = q[position[driver]] - self.model.qpos0[self.model.jnt_qposadr[driver]]
                 slope = sum(p * c * x ** (p - 1) for p, c in enumerate(poly) if p)
                 derivative[position[dependent], position[driver]] = slope
         return derivative

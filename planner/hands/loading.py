@@ -12,10 +12,13 @@ An MJCF whose palm and fingers sit on the world side by side is gathered below o
 
 from __future__ import annotations
 
+import math
+import warnings
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import mujoco
+import numpy as np
 
 from ogcp.planner.hands.descriptor import HandDescriptor
 from ogcp.planner.hands.gather import gather_roots
@@ -23,8 +26,16 @@ from ogcp.planner.infra.errors import OgcpError
 
 #: How many folders above a URDF a ``package://`` mesh path is looked for in.
 PACKAGE_SEARCH_DEPTH = 3
+#: MuJoCo's refusal of a body inertia that breaks the triangle inequality.
+_UNBALANCED = "inertia must satisfy A + B >= C"
+#: Compiler attributes of a URDF's ``<mujoco>`` extension that ogcp replaces (its meshes come in memory).
+_URDF_FOLDERS = frozenset({"meshdir", "assetdir", "texturedir"})
 #: The mesh formats MuJoCo reads.
 MESH_FORMATS = ("STL", "OBJ", "MSH")
+
+
+class HandLoadWarning(UserWarning):
+    """Something in a hand's model file that ogcp repaired to load it (said once, one line)."""
 
 
 def hand_spec(descriptor: HandDescriptor) -> mujoco.MjSpec:
@@ -57,11 +68,62 @@ def compile_error(descriptor: HandDescriptor, exc: Exception) -> OgcpError:
 
 
 def compile_spec(descriptor: HandDescriptor, spec: mujoco.MjSpec) -> mujoco.MjModel:
-    """Compile, with MuJoCo's refusal as one line naming the descriptor."""
+    """Compile, with MuJoCo's refusal as one line naming the descriptor.
+
+    A body whose inertia breaks the triangle inequality (A + B >= C), common in URDFs exported
+    from CAD (the Schunk SVH's of dex-urdf), is balanced as MuJoCo's ``balanceinertia`` does, in
+    the spec, so that every scene the hand is copied into compiles too; a warning names the bodies.
+    """
     try:
         return spec.compile()
     except ValueError as exc:
+        if _UNBALANCED not in str(exc):
+            raise compile_error(descriptor, exc) from exc
+        _balance_inertias(descriptor, spec)
+        try:
+            return spec.compile()
+        except ValueError as again:
+            raise compile_error(descriptor, again) from again
+
+
+def _balance_inertias(descriptor: HandDescriptor, spec: mujoco.MjSpec) -> None:
+    """Write MuJoCo's balanced inertias (its ``balanceinertia``) into the spec's bodies whose own break
+    the triangle inequality, and warn once naming them."""
+    before = spec.compiler.balanceinertia
+    spec.compiler.balanceinertia = True
+    try:
+        balanced = spec.compile()
+    except ValueError as exc:
         raise compile_error(descriptor, exc) from exc
+    finally:
+        spec.compiler.balanceinertia = before
+    changed = []
+    for body in spec.bodies:
+        if body.name and _unbalanced(body):
+            index = mujoco.mj_name2id(balanced, mujoco.mjtObj.mjOBJ_BODY, body.name)
+            body.fullinertia = [math.nan] * 6
+            body.ipos, body.iquat = balanced.body_ipos[index].copy(), balanced.body_iquat[index].copy()
+            body.inertia = balanced.body_inertia[index].copy()
+            body.explicitinertial = True
+            changed.append(body.name)
+    warnings.warn(
+        f"{descriptor.path}: mjcf = {descriptor.model_path.name}: the inertia of {', '.join(changed) or 'a body'} breaks "
+        "the triangle inequality (A + B >= C); balanced as MuJoCo's balanceinertia does (their principal moments set to their mean)",
+        HandLoadWarning,
+        stacklevel=3,
+    )
+
+
+def _unbalanced(body: mujoco.MjsBody) -> bool:
+    """Whether a body's explicit inertia (full or diagonal) breaks the triangle inequality."""
+    full = np.asarray(body.fullinertia, dtype=float)
+    if np.isfinite(full).all():
+        matrix = np.array([[full[0], full[3], full[4]], [full[3], full[1], full[5]], [full[4], full[5], full[2]]])
+        moments = np.linalg.eigvalsh(matrix)
+    else:
+        moments = np.asarray(body.inertia, dtype=float)
+    a, b, c = np.sort(moments)
+    return bool(body.mass > 0 and a + b < c * (1.0 - 1e-9))
 
 
 def _urdf_with_assets(path: Path, descriptor: HandDescriptor) -> tuple[str, dict[str, bytes]]:
@@ -95,12 +157,16 @@ def _urdf_with_assets(path: Path, descriptor: HandDescriptor) -> tuple[str, dict
             )
         assets[key] = data
         mesh.set("filename", key)
+    # The file's own compiler settings stay (balanceinertia, boundmass, ...), but for the folders
+    # (the meshes are in memory, by name) and what ogcp needs: every body kept (a pad's link is
+    # often fixed to the last joint's link), collision geometry only, meshes by name.
+    kept: dict[str, str] = {}
     for old in root.findall("mujoco"):
+        for compiler in old.findall("compiler"):
+            kept.update({k: v for k, v in compiler.attrib.items() if k not in _URDF_FOLDERS})
         root.remove(old)
-    # Keep every body (a pad's link is often fixed to the last joint's link) and the collision
-    # geometry; meshes come from the assets above, by name.
     extension = ET.SubElement(root, "mujoco")
-    ET.SubElement(extension, "compiler", fusestatic="false", discardvisual="true", strippath="true")
+    ET.SubElement(extension, "compiler", {**kept, "fusestatic": "false", "discardvisual": "true", "strippath": "true"})
     return ET.tostring(root, encoding="unicode"), assets
 
 

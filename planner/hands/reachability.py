@@ -67,7 +67,7 @@ from ogcp.planner.infra.errors import OgcpError
 
 __all__ = ["HandReachability", "Reach", "SDHReachability", "pair_code"]
 
-MODEL_VERSION = 5
+MODEL_VERSION = 6  # 6: a coupled joint's driver sampled only where the coupled joint stays in its range
 #: Most contacts a grasp may have: the residual is a minimum over m! finger assignments.
 MAX_FINGERS = 6
 #: Fingers whose configurations a growing model must recall, when none are named: a default grasp's.

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import re
+import warnings
 
 import numpy as np
 import pytest
@@ -375,3 +376,58 @@ def test_an_obj_mesh_of_several_objects_reaches_mujoco_whole(tmp_path):
     text = (tmp_path / "urdf" / "urdf_gripper.urdf").read_text()
     (tmp_path / "urdf" / "urdf_gripper.urdf").write_text(text.replace("meshes/palm.stl", "meshes/palm.obj"))
     assert HandKinematics(load_descriptor(urdf)).model.mesh_facenum.tolist() == [faces]
+
+
+def test_a_urdf_link_whose_inertia_breaks_the_triangle_inequality_is_balanced_with_a_warning(tmp_path):
+    """CAD exports often do (dex-urdf's Schunk SVH): MuJoCo refuses them unless told to balance."""
+    from ogcp.planner.hands.loading import HandLoadWarning
+    from ogcp.sim_eval.hand.fit_scene import FitScene
+
+    path = write_urdf_gripper(tmp_path)
+    urdf = tmp_path / "urdf_gripper.urdf"
+    unbalanced = '<inertia ixx="1e-6" iyy="1e-6" izz="5e-6" ixy="0" ixz="0" iyz="0"/>'
+    text = urdf.read_text()
+    first = text.index('<link name="left">')
+    start = text.index("<inertia ", first)
+    end = text.index("/>", start) + 2
+    urdf.write_text(text[:start] + unbalanced + text[end:])
+    with pytest.warns(HandLoadWarning, match=r"the inertia of left breaks the triangle inequality") as caught:
+        kinematics = HandKinematics(load_descriptor(path))
+    assert all("\n" not in str(w.message) for w in caught)
+    left = kinematics.model.body("left").id
+    np.testing.assert_allclose(kinematics.model.body_inertia[left], [7e-6 / 3] * 3, rtol=1e-9)  # their mean
+    assert kinematics.model.body_inertia[kinematics.model.body("right").id] == pytest.approx([1e-6] * 3)
+    FitScene(kinematics)  # a scene the hand is copied into compiles too
+    # The file's own MuJoCo compiler settings are kept (its folders aside: the meshes come in memory).
+    own = '<mujoco><compiler balanceinertia="true" meshdir="nowhere/"/></mujoco></robot>'
+    urdf.write_text(urdf.read_text().replace("</robot>", own))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", HandLoadWarning)
+        balanced = HandKinematics(load_descriptor(path))
+    np.testing.assert_allclose(balanced.model.body_inertia[left], [7e-6 / 3] * 3, rtol=1e-9)
+    FitScene(balanced)
+
+
+COUPLED = """<mujoco><compiler angle="radian"/><worldbody><body name="palm"><geom size="0.01"/>
+  <body name="link"><joint name="driver" axis="0 1 0" range="0 1.5"/><geom size="0.01"/>
+    <body name="distal" pos="0 0 0.05"><joint name="follower" axis="0 1 0" range="RANGE"/><geom size="0.01"/>
+      <body name="tip" pos="0 0 0.03"><geom size="0.01"/></body></body></body>
+</body></worldbody>
+<equality><joint joint1="follower" joint2="driver" polycoef="0 1.2 0 0 0"/></equality></mujoco>"""
+
+
+def test_a_coupled_joints_driver_is_narrowed_to_keep_the_coupled_joint_in_its_range(tmp_path):
+    """A mimic joint whose range is narrower than its driver's times the ratio (the Schunk SVH's distal
+    joints, 1.045 x the driver with the same range): samples and fits stay where MuJoCo's limits allow."""
+    kinematics = HandKinematics(_descriptor(tmp_path, COUPLED.replace("RANGE", "0 1.2"), tip_offset="[0.01, 0, 0]"))
+    driver, follower = kinematics.joint_names.index("driver"), kinematics.joint_names.index("follower")
+    assert kinematics.limits[driver] == pytest.approx([0.0, 1.0], abs=1e-3)
+    assert kinematics.limits[driver][1] <= 1.0  # on the allowed side of the boundary
+    samples = kinematics.sample(500, 0)
+    assert samples[:, follower] == pytest.approx(1.2 * samples[:, driver])
+    for q in samples:
+        kinematics.check(q)
+    assert samples[:, driver].max() > 0.95
+    with pytest.raises(OgcpError, match="joint 'follower' follows 'driver' outside its range") as info:
+        HandKinematics(_descriptor(tmp_path, COUPLED.replace("RANGE", "2 3"), tip_offset="[0.01, 0, 0]"))
+    assert "\n" not in str(info.value)
