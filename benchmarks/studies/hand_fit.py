@@ -105,6 +105,7 @@ def run_case(hand: str, name: str, m: int, args: argparse.Namespace) -> dict[str
                 "q1": held.q1,
                 "realised": bool(fit.get("realised")),
                 "worst_residual": max(held.hand["fit_residuals"]) if fit.get("realised") else None,
+                "unrealised_because": fit.get("reason"),  # the fit's one line where it is not realised
                 "hand_valid": bool(held.valid),
                 "hand_fidelity": _fidelity(held),
                 "hand_censored": _censored(held),
@@ -128,6 +129,7 @@ _UNPLANNED: dict[str, Any] = {
     "q1": None,
     "realised": False,
     "worst_residual": None,
+    "unrealised_because": None,
     "hand_valid": False,
     "hand_fidelity": None,
     "hand_censored": None,
