@@ -4,7 +4,8 @@ A file is planned on only if all of it was read and it bounds a solid: trimesh p
 and the checks around the parse refuse what trimesh would silently drop or misread
 (a file cut short, counts that disagree, faces pointing at missing vertices, non-finite
 coordinates, flat or open surfaces). The only changes made to a mesh are re-orientations
-with a single right answer, each announced by a :class:`MeshOrientationWarning`.
+with a single right answer and the removal of faces that name a vertex twice (no area, no
+orientation), each announced by a :class:`MeshOrientationWarning`.
 """
 
 from __future__ import annotations
@@ -59,15 +60,34 @@ def load_mesh(path: str | Path, solid: bool = True) -> trimesh.Trimesh:
     mesh.process()
     if mesh.area <= 0:
         raise OgcpError(f"{path}: mesh has zero surface area")
-    if not solid:
+    if not solid:  # the caller repairs it (repair_mesh drops such faces too)
         return mesh
+    dropped = _drop_collapsed_faces(mesh)
     try:
         mesh, steps = require_solid(mesh)
     except OgcpError as exc:
         raise OgcpError(f"{path}: {exc}") from None
+    steps = (*dropped, *steps)
     if steps:
         warnings.warn(f"{path}: {'; '.join(steps)}", MeshOrientationWarning, stacklevel=2)
     return mesh
+
+
+def _drop_collapsed_faces(mesh: trimesh.Trimesh) -> tuple[str, ...]:
+    """Drop the faces that name one vertex twice (in place), and say how many.
+
+    CAD and scan exports often hold slivers whose corners merge into one vertex: such a face has
+    no area and no orientation, and its zero-length edge would make a closed mesh look open.
+    Faces of three distinct collinear vertices stay (their edges are their neighbours').
+    """
+    faces = np.asarray(mesh.faces)
+    collapsed = (faces[:, 0] == faces[:, 1]) | (faces[:, 1] == faces[:, 2]) | (faces[:, 0] == faces[:, 2])
+    if not collapsed.any():
+        return ()
+    mesh.update_faces(~collapsed)
+    mesh.remove_unreferenced_vertices()
+    count = int(collapsed.sum())
+    return (f"dropped {count} degenerate face{'s' if count > 1 else ''} (a vertex named twice: no area)",)
 
 
 def _check_arrays(path: Path, vertices: np.ndarray, faces: np.ndarray) -> None:

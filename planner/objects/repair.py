@@ -182,12 +182,18 @@ def require_solid(mesh: trimesh.Trimesh) -> tuple[trimesh.Trimesh, tuple[str, ..
     if spread[-1] <= TOL.rank * spread[0]:
         raise _refusal(f"mesh is flat (all {len(vertices)} vertices lie in one plane, so it encloses no volume)")
     edges, counts = np.unique(mesh.edges_sorted, axis=0, return_counts=True)
-    for problem, bad in (("border only one face", counts == 1), ("are shared by more than two faces", counts > 2)):
+    for kind, bad in (("open", counts == 1), ("not a closed surface", counts > 2)):
         if bad.any():
             first = edges[np.argmax(bad)]
+            many = int(bad.sum())
+            if kind == "open":
+                problem = "edges border only one face" if many > 1 else "edge borders only one face"
+            else:
+                problem = (
+                    "edges are shared by more than two faces" if many > 1 else "edge is shared by more than two faces"
+                )
             where = f"the first from {_point(vertices[first[0]])} to {_point(vertices[first[1]])}"
-            kind = "open" if problem.startswith("border") else "not a closed surface"
-            raise _refusal(f"mesh is {kind} ({int(bad.sum())} edges {problem}, {where})")
+            raise _refusal(f"mesh is {kind} ({many} {problem}, {where})")
     steps: list[str] = []
     out = mesh
     if not out.is_winding_consistent:

@@ -264,3 +264,22 @@ def test_cli_refuses_a_truncated_off_in_one_line(tmp_path):
     assert run.returncode == 2, run.stderr
     assert run.stderr == f"ogcp: error: {path}: header says 162 vertices, file has 40\n"
     assert "Traceback" not in run.stderr and not (tmp_path / "c.json").exists()
+
+
+def test_faces_that_name_a_vertex_twice_are_dropped_with_a_warning(tmp_path):
+    """CAD exports hold slivers whose corners merge into one vertex: no area, and a zero-length edge
+    that made a closed box look open ("2 edges border only one face, from [..] to the same point")."""
+    from ogcp.planner.objects.loading import load_mesh
+    from ogcp.planner.objects.repair import MeshOrientationWarning
+
+    path = tmp_path / "slivers.obj"
+    extra = np.vstack([BOX.vertices[:1] + 1e-12, BOX.vertices])  # vertex 0 again, merged on loading
+    faces = np.vstack([BOX.faces + 1, [[0, 1, 2], [2, 3, 3]]])  # a sliver on the copy, one naming 3 twice
+    text = "".join(f"v {x:.17g} {y:.17g} {z:.17g}\n" for x, y, z in extra) + "".join(
+        f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in faces
+    )
+    path.write_text(text)
+    with pytest.warns(MeshOrientationWarning, match="dropped 2 degenerate faces"):
+        mesh = load_mesh(path)
+    assert mesh.is_watertight and len(mesh.faces) == len(BOX.faces)
+    assert mesh.volume == pytest.approx(BOX.volume)
