@@ -182,7 +182,9 @@ def _warn_if_pads_off_surface(kin: _CompiledHand) -> None:
             faults.append(f"{finger.name} (no geometry of {body} under it)")
         elif abs(offset) > PAD_SURFACE_TOLERANCE:
             where = f"inside {body}" if offset > 0 else f"off {body}'s surface"
-            faults.append(f"{finger.name} ({abs(offset) * 1e3:.2f} mm {where})")
+            # Where the surface is along the normal: what a descriptor written blind most often needs.
+            onto = ", ".join(f"{x:.4g}" for x in np.asarray(finger.offset) + offset * np.asarray(finger.normal))
+            faults.append(f"{finger.name} ({abs(offset) * 1e3:.2f} mm {where}; tip_offset = [{onto}] is on it)")
     if faults:
         warnings.warn(
             f"{kin.descriptor.path}: pad points not on their tips' surfaces along pad_normal: {', '.join(faults)}; "

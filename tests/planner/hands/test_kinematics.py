@@ -77,7 +77,9 @@ def test_mujoco_forward_kinematics_equals_the_old_sdh_figures(tmp_path):
         resolve_hand("sdh").path.read_text().replace("tip_offset = [0.009, 0.0, 0.0595]", "tip_offset = [0, 0, 0.0685]")
     )
     (tmp_path / "old.toml").write_text(text.replace('mjcf = "sdh.xml"', f'mjcf = "{resolve_hand("sdh").model_path}"'))
-    with pytest.warns(HandModelWarning, match=r"finger_1 \(9.00 mm inside distal_1\)"):  # the end, not the pad
+    with pytest.warns(
+        HandModelWarning, match=r"finger_1 \(9.00 mm inside distal_1; tip_offset = \[0.009, 0, 0.0685\] is on it\)"
+    ):  # the end, not the pad
         kinematics = HandKinematics(load_descriptor(tmp_path / "old.toml"))
     assert kinematics.joint_names == ("base_1", "prox_1", "dist_1", "base_2", "prox_2", "dist_2", "prox_3", "dist_3")
     for old, tips, normals in zip(OLD_CONFIGURATIONS, OLD_TIPS, OLD_NORMALS, strict=True):
@@ -313,9 +315,9 @@ def test_a_finger_whose_joints_share_one_servo_gets_a_one_line_warning(tmp_path,
     [
         (
             "[0.0, -0.0025, 0.06]",
-            r"left \(1.50 mm inside left\)",
+            r"left \(1.50 mm inside left; tip_offset = \[0, -0.004, 0.06\] is on it\)",
         ),  # 1.5 mm into the jaw, as the Franka hand's pad box is behind its bumps
-        ("[0.0, -0.005, 0.06]", r"left \(1.00 mm off left's surface\)"),
+        ("[0.0, -0.005, 0.06]", r"left \(1.00 mm off left's surface; tip_offset = \[0, -0.004, 0.06\] is on it\)"),
         ("[0.0, -0.004, 0.5]", r"left \(no geometry of left under it\)"),
     ],
 )
