@@ -28,6 +28,12 @@ import numpy as np
 from ogcp.planner.hands.descriptor import Actuation
 from ogcp.planner.hands.loops import Loop
 
+#: Poses besides the reference in which a transmission's moment arms are read.
+PROBE_POSES = 3
+PROBE_SEED = 0
+#: A moment arm below this fraction of an actuator's largest one moves no joint (round-off).
+MOMENT_FLOOR = 1e-9
+
 
 class HandActuatorWarning(UserWarning):
     """A hand's actuators were changed so that the hand can close (one line, naming them)."""
@@ -111,18 +117,45 @@ def _clamp_kept(spec: mujoco.MjSpec, model: mujoco.MjModel, kept: Sequence[int])
 
 
 def _driven_joints(model: mujoco.MjModel, actuators: Iterable[int]) -> set[int]:
-    """The joints the actuators move, directly or through a fixed tendon."""
-    driven = set()
-    for a in actuators:
-        if model.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_JOINT:
-            driven.add(int(model.actuator_trnid[a, 0]))
-        elif model.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_TENDON:
-            tendon = int(model.actuator_trnid[a, 0])
-            start, count = model.tendon_adr[tendon], model.tendon_num[tendon]
-            for w in range(start, start + count):
-                if model.wrap_type[w] == mujoco.mjtWrap.mjWRAP_JOINT:
-                    driven.add(int(model.wrap_objid[w]))
+    """The joints the actuators move: directly, or through any transmission with a moment arm on
+    them (a fixed tendon; a spatial tendon routed over sites and wrapping geoms, as the Tetheria
+    Aero hand's flexor tendons; a site), read from MuJoCo's moment arms in a few poses, since a
+    spatial tendon's arm on a joint may vanish in one."""
+    chosen = list(actuators)
+    driven = {int(model.actuator_trnid[a, 0]) for a in chosen if model.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_JOINT}
+    others = [a for a in chosen if model.actuator_trntype[a] != mujoco.mjtTrn.mjTRN_JOINT]
+    if not others:
+        return driven
+    data = mujoco.MjData(model)
+    moments = np.zeros((model.nu, model.nv))
+    for qpos in _probe_poses(model):
+        data.qpos[:] = qpos
+        mujoco.mj_fwdPosition(model, data)
+        mujoco.mju_sparse2dense(
+            moments, data.actuator_moment, data.moment_rownnz, data.moment_rowadr, data.moment_colind
+        )
+        for a in others:
+            arms = np.abs(moments[a])
+            dofs = np.flatnonzero(arms > MOMENT_FLOOR * max(float(arms.max(initial=0.0)), 1e-300))
+            driven.update(int(model.dof_jntid[d]) for d in dofs)
     return driven
+
+
+def _probe_poses(model: mujoco.MjModel) -> list[np.ndarray]:
+    """The model's reference pose and :data:`PROBE_POSES` others, hinges and slides uniform within
+    their ranges (unlimited hinges over a turn), seeded: where moment arms are read."""
+    rng = np.random.default_rng(PROBE_SEED)
+    poses = [model.qpos0.copy()]
+    movable = [
+        j for j in range(model.njnt) if model.jnt_type[j] in (mujoco.mjtJoint.mjJNT_HINGE, mujoco.mjtJoint.mjJNT_SLIDE)
+    ]
+    for _ in range(PROBE_POSES):
+        qpos = model.qpos0.copy()
+        for j in movable:
+            low, high = model.jnt_range[j] if model.jnt_limited[j] else (-np.pi, np.pi)
+            qpos[model.jnt_qposadr[j]] = rng.uniform(low, high)
+        poses.append(qpos)
+    return poses
 
 
 def follows(model: mujoco.MjModel, joint: int, drivers: set[int]) -> bool:

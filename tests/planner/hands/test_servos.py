@@ -120,3 +120,25 @@ def test_a_clamp_that_does_not_meet_the_range_leaves_the_actuators_own():
     assert _within((2.0, 5.0), (-1.0, 1.0), 1.0) == (2.0, 5.0)
     assert _within((-4.0, 9.0), (-1.0, 3.0), 2.0) == (-0.5, 1.5)
     assert _within((-4.0, 9.0), None, 2.0) == (-4.0, 9.0)
+
+
+def test_joints_a_spatial_tendon_or_a_site_drives_get_no_servo_of_their_own(tmp_path, recwarn):
+    """The Tetheria Aero hand flexes its fingers through spatial tendons routed over sites: ogcp read
+    only fixed tendons' joints as driven and gave every finger joint a servo of [actuation] too,
+    a stronger hand than the model."""
+
+    def edit(text: str) -> str:
+        text = text.replace('<geom name="palm"', '<site name="anchor" pos="0 0 0"/><geom name="palm"', 1)
+        text = text.replace('<geom name="left"', '<site name="left_end" pos="0 0 0.035"/><geom name="left"', 1)
+        text = text.replace('<geom name="right"', '<site name="right_end" pos="0 0 0.035"/><geom name="right"', 1)
+        return text.replace(
+            "</worldbody>",
+            '</worldbody><tendon><spatial name="pull"><site site="anchor"/><site site="left_end"/></spatial></tendon>'
+            '<actuator><position name="t" tendon="pull" kp="500" ctrlrange="0 0.1"/>'
+            '<position name="s" site="right_end" gear="0 1 0 0 0 0" kp="500"/></actuator>',
+        )
+
+    kinematics = HandKinematics(load_descriptor(write_gripper_variant(tmp_path, edit)))
+    assert kinematics.servos == () and kinematics.replaced_actuators == ()
+    assert kinematics.model.nu == 2
+    assert not [w for w in recwarn if issubclass(w.category, HandActuatorWarning)]
