@@ -8,7 +8,8 @@ so sampled and fitted configurations keep the driver where the coupled joint sta
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import functools
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import mujoco
@@ -46,7 +47,8 @@ def narrowed_drivers(
     where: Path | str,
 ) -> NDArray[np.float64]:
     """The joints' limits (J, 2) with each driver narrowed to the angles that keep the joint it
-    drives within its own range (the longest such run, on a grid of :data:`COUPLING_GRID` angles).
+    drives within its own range (the longest such run on a grid of :data:`COUPLING_GRID` angles,
+    its ends bisected to where the driven joint meets its limit).
 
     Args:
         model: The compiled hand.
@@ -65,11 +67,11 @@ def narrowed_drivers(
         if driver < 0:
             continue
         d, k = position[driver], position[dependent]
-        grid = np.linspace(limits[d, 0], limits[d, 1], COUPLING_GRID)
-        x = grid - model.qpos0[model.jnt_qposadr[driver]]
-        y = model.qpos0[model.jnt_qposadr[dependent]] + sum(c * x**p for p, c in enumerate(poly))
+        origin = (float(model.qpos0[model.jnt_qposadr[driver]]), float(model.qpos0[model.jnt_qposadr[dependent]]))
         low, high = limits[k]
-        inside = (y >= low - 1e-9) & (y <= high + 1e-9)
+        within = functools.partial(_within, origin=origin, poly=poly, low=float(low), high=float(high))
+        grid = np.linspace(limits[d, 0], limits[d, 1], COUPLING_GRID)
+        inside = within(grid)
         if inside.all():
             continue
         if not inside.any():
@@ -81,5 +83,30 @@ def narrowed_drivers(
         edges = np.flatnonzero(np.diff(np.concatenate([[0], inside.astype(np.int8), [0]])))
         starts, ends = edges[::2], edges[1::2] - 1
         longest = int(np.argmax(ends - starts))
-        limits[d] = grid[starts[longest]], grid[ends[longest]]
+        first, last = int(starts[longest]), int(ends[longest])
+        # Each end bisected to where the coupled joint meets its limit, between the grid's points.
+        lower = grid[first] if first == 0 else _boundary(within, grid[first], grid[first - 1])
+        upper = grid[last] if last == len(grid) - 1 else _boundary(within, grid[last], grid[last + 1])
+        limits[d] = lower, upper
     return limits
+
+
+def _within(
+    angles: NDArray[np.float64], origin: tuple[float, float], poly: NDArray[np.float64], low: float, high: float
+) -> NDArray[np.bool_]:
+    """Whether the coupled joint, following driver ``angles`` by ``poly`` about ``origin`` (the two
+    joints' qpos0), stays within [low, high]."""
+    x = angles - origin[0]
+    y = origin[1] + sum(c * x**p for p, c in enumerate(poly))
+    return np.asarray((y >= low - 1e-9) & (y <= high + 1e-9))
+
+
+def _boundary(within: Callable[[NDArray[np.float64]], NDArray[np.bool_]], inside: float, outside: float) -> float:
+    """The last angle from ``inside`` toward ``outside`` that ``within`` allows (60 bisections)."""
+    for _ in range(60):
+        middle = 0.5 * (inside + outside)
+        if within(np.array([middle]))[0]:
+            inside = middle
+        else:
+            outside = middle
+    return inside

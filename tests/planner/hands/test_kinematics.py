@@ -423,8 +423,8 @@ def test_a_coupled_joints_driver_is_narrowed_to_keep_the_coupled_joint_in_its_ra
     joints, 1.045 x the driver with the same range): samples and fits stay where MuJoCo's limits allow."""
     kinematics = HandKinematics(_descriptor(tmp_path, COUPLED.replace("RANGE", "0 1.2"), tip_offset="[0.01, 0, 0]"))
     driver, follower = kinematics.joint_names.index("driver"), kinematics.joint_names.index("follower")
-    assert kinematics.limits[driver] == pytest.approx([0.0, 1.0], abs=1e-3)
-    assert kinematics.limits[driver][1] <= 1.0  # on the allowed side of the boundary
+    assert kinematics.limits[driver] == pytest.approx([0.0, 1.0], abs=1e-8)  # bisected to the limit
+    assert 1.2 * kinematics.limits[driver][1] <= 1.2 + 1e-9  # on the allowed side of the boundary
     samples = kinematics.sample(500, 0)
     assert samples[:, follower] == pytest.approx(1.2 * samples[:, driver])
     for q in samples:
