@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import contextlib
-import io
 import itertools
 import json
 import subprocess
@@ -15,6 +13,7 @@ import pytest
 from ogcp.benchmarks.cli import main
 from ogcp.planner import builtin_mesh
 from ogcp.planner.grasp import ContactSet, q1, sample_contacts
+from tests.cli_run import run_cli
 
 STATS_KEYS = {
     "created",
@@ -29,13 +28,6 @@ STATS_KEYS = {
 }
 
 
-def _run(argv: list[str]) -> tuple[int, str, str]:
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        status = main(argv)
-    return status, out.getvalue(), err.getvalue()
-
-
 @pytest.fixture(scope="module")
 def box24_best() -> float:
     """Brute-force optimal Q1 over all 3-subsets of the CLI's default box set (n=24, seed 0)."""
@@ -47,7 +39,7 @@ def box24_best() -> float:
 def plan_run(tmp_path_factory):
     """One ``plan box -n 24 -m 3 --json -o FILE`` run: (status, stdout, stderr, output path)."""
     path = tmp_path_factory.mktemp("plan") / "out.json"
-    status, out, err = _run(["plan", "box", "-n", "24", "-m", "3", "--json", "-o", str(path)])
+    status, out, err = run_cli(["plan", "box", "-n", "24", "-m", "3", "--json", "-o", str(path)])
     return status, out, err, path
 
 
@@ -97,8 +89,8 @@ def test_output_file_equals_printed_json(plan_run):
 
 def test_plan_from_contact_file_matches_plan_from_object(tmp_path, plan_run):
     path = tmp_path / "box24.json"
-    assert _run(["contacts", "box", "-n", "24", "--seed", "0", "-o", str(path)])[0] == 0
-    status, out, _ = _run(["plan", str(path), "-m", "3", "--json"])
+    assert run_cli(["contacts", "box", "-n", "24", "--seed", "0", "-o", str(path)])[0] == 0
+    status, out, _ = run_cli(["plan", str(path), "-m", "3", "--json"])
     assert status == 0
     from_file, from_object = json.loads(out), json.loads(plan_run[1])
     assert abs(from_file["q1"] - from_object["q1"]) < 1e-12

@@ -2,26 +2,17 @@
 
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 
 import numpy as np
 import pytest
 
-from ogcp.benchmarks.cli import main
 from ogcp.planner import builtin_mesh, resolve_object
 from ogcp.planner.grasp import ContactSet
 from ogcp.planner.infra.errors import OgcpError
 from ogcp.planner.records.plan import contact_sampling
 from ogcp.sim_eval.inputs.plan_input import plan_input
-
-
-def _run(argv: list[str]) -> tuple[int, str, str]:
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        status = main(argv)
-    return status, out.getvalue(), err.getvalue()
+from tests.cli_run import run_cli
 
 
 @pytest.fixture
@@ -53,8 +44,8 @@ def test_a_mesh_file_keeps_its_size_unless_a_diagonal_is_given(box_mm):
 
 def test_a_millimetre_mesh_at_diagonal_0_2_gives_the_built_in_box_contacts(tmp_path, box_mm):
     mine, builtin = tmp_path / "mine.json", tmp_path / "builtin.json"
-    assert _run(["contacts", str(box_mm), "-n", "60", "--diagonal", "0.2", "-o", str(mine)])[0] == 0
-    assert _run(["contacts", "box", "-n", "60", "-o", str(builtin)])[0] == 0
+    assert run_cli(["contacts", str(box_mm), "-n", "60", "--diagonal", "0.2", "-o", str(mine)])[0] == 0
+    assert run_cli(["contacts", "box", "-n", "60", "-o", str(builtin)])[0] == 0
     a, b = ContactSet.load(mine), ContactSet.load(builtin)
     assert np.allclose(a.positions, b.positions, atol=1e-9, rtol=0.0)
     assert np.allclose(a.normals, b.normals, atol=1e-9, rtol=0.0)
@@ -62,20 +53,20 @@ def test_a_millimetre_mesh_at_diagonal_0_2_gives_the_built_in_box_contacts(tmp_p
 
 
 def test_a_plan_on_a_scaled_mesh_file_rebuilds_in_evaluate(box_mm):
-    status, out, err = _run(["plan", str(box_mm), "-n", "40", "-m", "3", "--diagonal", "0.2", "--json"])
+    status, out, err = run_cli(["plan", str(box_mm), "-n", "40", "-m", "3", "--diagonal", "0.2", "--json"])
     assert status == 0, err
     record = json.loads(out)
     assert contact_sampling(record).object["diagonal"] == 0.2
     rebuilt = plan_input(record)
-    builtin = plan_input(json.loads(_run(["plan", "box", "-n", "40", "-m", "3", "--json"])[1]))
+    builtin = plan_input(json.loads(run_cli(["plan", "box", "-n", "40", "-m", "3", "--json"])[1]))
     assert np.allclose(rebuilt.contacts.positions, builtin.contacts.positions, atol=1e-9, rtol=0.0)
     assert rebuilt.grasps[0] == builtin.grasps[0]
 
 
 def test_diagonal_does_not_apply_to_a_contact_file(tmp_path):
     path = tmp_path / "c.json"
-    assert _run(["contacts", "box", "-n", "10", "-o", str(path)])[0] == 0
-    status, out, err = _run(["plan", str(path), "--diagonal", "0.1"])
+    assert run_cli(["contacts", "box", "-n", "10", "-o", str(path)])[0] == 0
+    status, out, err = run_cli(["plan", str(path), "--diagonal", "0.1"])
     assert status == 2 and out == ""
     assert err.strip() == "ogcp: error: --diagonal does not apply to a contact file (its contacts are fixed)"
 

@@ -3,19 +3,18 @@
 from __future__ import annotations
 
 import argparse
-import contextlib
-import io
 import json
 import textwrap
 
 import pytest
 
-from ogcp.benchmarks.cli import build_parser, main
+from ogcp.benchmarks.cli import build_parser
 from ogcp.benchmarks.cli.method_options import config_from_args, declared_options, flag
 from ogcp.benchmarks.suite.cells import contact_set, plan_record
 from ogcp.benchmarks.suite.parse import parse_suite
 from ogcp.planner.config.methods import DEFAULT_FINGERS, DEFAULT_METHOD
 from ogcp.planner.methods import METHODS, method_spec
+from tests.cli_run import run_cli
 
 
 def _plan_args(*argv: str):
@@ -48,13 +47,6 @@ def test_plan_defaults_and_help_come_from_the_configurations():
     assert _help("--eps").endswith("(default 0.4 for wastar)")
 
 
-def _run(argv: list[str]) -> tuple[int, str, str]:
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        status = main(argv)
-    return status, out.getvalue(), err.getvalue()
-
-
 @pytest.mark.parametrize(
     "argv, message",
     [
@@ -69,7 +61,7 @@ def _run(argv: list[str]) -> tuple[int, str, str]:
     ],
 )
 def test_flags_are_checked_against_the_method(argv, message):
-    status, out, err = _run(["plan", "box", "-n", "8", *argv])
+    status, out, err = run_cli(["plan", "box", "-n", "8", *argv])
     assert status == 2 and out == ""
     assert err.startswith("ogcp: error: ") and message in err and len(err.splitlines()) == 1
 
@@ -115,7 +107,7 @@ def test_cli_and_suite_cell_write_the_same_plan_record(method, params, flags):
     )
     (cell,) = suite.cells
     from_suite = plan_record(cell, contact_set(cell))
-    status, out, _ = _run(
+    status, out, _ = run_cli(
         ["plan", "box", "-n", "14", "-m", "3", "--method", method, "--seed", str(contact_seed), "--json", *flags]
     )
     assert status == 0
@@ -131,6 +123,6 @@ def test_cli_and_suite_cell_agree_with_a_hand(tmp_path, monkeypatch):
     )
     (cell,) = suite.cells
     from_suite = plan_record(cell, contact_set(cell))
-    status, out, _ = _run(["plan", "donut", "-n", "20", "--hand", "sdh", "--json"])
+    status, out, _ = run_cli(["plan", "donut", "-n", "20", "--hand", "sdh", "--json"])
     assert status == 0 and "hand" in from_suite
     assert _comparable(json.loads(out)) == _comparable(json.loads(json.dumps(from_suite)))

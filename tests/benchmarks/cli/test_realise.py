@@ -2,25 +2,16 @@
 
 from __future__ import annotations
 
-import contextlib
 import dataclasses
-import io
 import json
 
 import numpy as np
 import pytest
 
-from ogcp.benchmarks.cli import main
 from ogcp.sim_eval.evaluate import GraspEvaluator
+from tests.cli_run import run_cli
 
 GRIPPER = ["box", "-n", "40", "-m", "2", "--diagonal", "0.08", "--contact-model", "soft", "--hand", "parallel_gripper"]
-
-
-def _run(argv: list[str]) -> tuple[int, str, str]:
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        status = main(argv)
-    return status, out.getvalue(), err.getvalue()
 
 
 @pytest.mark.parametrize(
@@ -34,7 +25,7 @@ def _run(argv: list[str]) -> tuple[int, str, str]:
     ],
 )
 def test_realise_is_refused_in_one_line_where_it_cannot_apply(argv, message):
-    status, _, err = _run(argv)
+    status, _, err = run_cli(argv)
     assert status == 2 and message in err and err.count("\n") == 1, err
 
 
@@ -51,8 +42,8 @@ def test_a_grasp_the_hand_cannot_realise_is_excluded_and_the_plan_made_again(tmp
 
     monkeypatch.setattr(GraspEvaluator, "fit_hand", first_fails)
     once, again = tmp_path / "once.json", tmp_path / "again.json"
-    assert _run(["plan", *GRIPPER, "-o", str(once)])[0] == 0
-    status, out, err = _run(["plan", *GRIPPER, "--realise", "3", "-o", str(again)])
+    assert run_cli(["plan", *GRIPPER, "-o", str(once)])[0] == 0
+    status, out, err = run_cli(["plan", *GRIPPER, "--realise", "3", "-o", str(again)])
     assert status == 0, err
     first, record = json.loads(once.read_text()), json.loads(again.read_text())
     block = record["realise"]
@@ -62,13 +53,13 @@ def test_a_grasp_the_hand_cannot_realise_is_excluded_and_the_plan_made_again(tmp
     assert sorted(record["grasp"]) != rejected["grasp"] and record["q1"] <= first["q1"] + 1e-12
     assert "planning again without it" in err and "realise: plan 2 realised by the hand's fit" in out
     # The plan it returns is simulated like any other.
-    status, _, err = _run(["evaluate", str(again), "--directions", "0", "--decomposition", "convex_hull"])
+    status, _, err = run_cli(["evaluate", str(again), "--directions", "0", "--decomposition", "convex_hull"])
     assert status == 0, err
 
 
 def test_a_grasp_realised_at_once_needs_one_plan(tmp_path):
     path = tmp_path / "p.json"
-    status, _, err = _run(["plan", *GRIPPER, "--realise", "3", "-o", str(path)])
+    status, _, err = run_cli(["plan", *GRIPPER, "--realise", "3", "-o", str(path)])
     assert status == 0, err
     block = json.loads(path.read_text())["realise"]
     assert block == {"attempts": 1, "realised": True, "rejected": []}

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 
 import numpy as np
@@ -15,13 +13,7 @@ from ogcp.planner.grasp import ContactSet, sample_contacts
 from ogcp.planner.grasp.reach import DEFAULT_TIP_RADIUS_RATIO, REACH_TOLERANCE, default_tip_radius
 from ogcp.planner.records.plan import contact_sampling
 from ogcp.sim_eval.inputs.plan_input import plan_input
-
-
-def _run(argv: list[str]) -> tuple[int, str, str]:
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        status = main(argv)
-    return status, out.getvalue(), err.getvalue()
+from tests.cli_run import run_cli
 
 
 @pytest.mark.parametrize("value", ["-0.01", "inf", "nan", "abc"])
@@ -40,8 +32,8 @@ def test_a_bad_tip_radius_is_one_error_line(capsys, tmp_path, command, value):
 
 def test_tip_radius_does_not_apply_to_a_contact_file(tmp_path):
     path = tmp_path / "c.json"
-    assert _run(["contacts", "box", "-n", "10", "-o", str(path)])[0] == 0
-    status, out, err = _run(["plan", str(path), "--tip-radius", "0.01"])
+    assert run_cli(["contacts", "box", "-n", "10", "-o", str(path)])[0] == 0
+    status, out, err = run_cli(["plan", str(path), "--tip-radius", "0.01"])
     assert status == 2 and out == ""
     assert err.strip() == "ogcp: error: --tip-radius does not apply to a contact file (its contacts are fixed)"
 
@@ -51,9 +43,9 @@ def test_contacts_default_to_the_simulation_fingertip_and_zero_is_plain_sampling
     tip = default_tip_radius(mesh)
     assert tip == pytest.approx(DEFAULT_TIP_RADIUS_RATIO * np.linalg.norm(np.ptp(mesh.vertices, axis=0)))
     default, plain, given = tmp_path / "d.json", tmp_path / "p.json", tmp_path / "g.json"
-    assert _run(["contacts", "amphora", "-n", "60", "-o", str(default)])[0] == 0
-    assert _run(["contacts", "amphora", "-n", "60", "--tip-radius", "0", "-o", str(plain)])[0] == 0
-    assert _run(["contacts", "amphora", "-n", "60", "--tip-radius", repr(tip), "-o", str(given)])[0] == 0
+    assert run_cli(["contacts", "amphora", "-n", "60", "-o", str(default)])[0] == 0
+    assert run_cli(["contacts", "amphora", "-n", "60", "--tip-radius", "0", "-o", str(plain)])[0] == 0
+    assert run_cli(["contacts", "amphora", "-n", "60", "--tip-radius", repr(tip), "-o", str(given)])[0] == 0
     assert default.read_bytes() == given.read_bytes()
     default_set, plain_set = ContactSet.load(default), ContactSet.load(plain)
     assert default_set.source["tip_radius"] == tip
@@ -64,9 +56,9 @@ def test_contacts_default_to_the_simulation_fingertip_and_zero_is_plain_sampling
 
 
 def test_the_plan_summary_shows_the_tip_radius_only_for_reach_aware_contacts():
-    status, out, _ = _run(["plan", "box", "-n", "20", "--tip-radius", "0.005"])
+    status, out, _ = run_cli(["plan", "box", "-n", "20", "--tip-radius", "0.005"])
     assert status == 0 and out.splitlines()[0].startswith("object: box   |C| = 20   tip r = 0.005 m   mu = 0.5")
-    status, out, _ = _run(["plan", "box", "-n", "20", "--tip-radius", "0"])
+    status, out, _ = run_cli(["plan", "box", "-n", "20", "--tip-radius", "0"])
     assert status == 0 and "tip r" not in out
 
 
@@ -78,10 +70,10 @@ def amphora_plans(tmp_path_factory):
     for name, extra in (("default", []), ("plain", ["--tip-radius", "0"])):
         plan, contacts = folder / f"{name}-plan.json", folder / f"{name}-contacts.json"
         common = ["amphora", "-n", "150", "--seed", "2", *extra]
-        status, out, err = _run(["plan", *common, "-m", "3", "--json"])
+        status, out, err = run_cli(["plan", *common, "-m", "3", "--json"])
         assert status == 0, err
         plan.write_text(out)
-        assert _run(["contacts", *common, "-o", str(contacts)])[0] == 0
+        assert run_cli(["contacts", *common, "-o", str(contacts)])[0] == 0
         plans[name] = (json.loads(plan.read_text()), ContactSet.load(contacts))
     return plans
 
