@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Iterable
 from dataclasses import dataclass
 
 import mujoco
@@ -33,6 +32,7 @@ from numpy.typing import NDArray
 
 from ogcp.sim_eval.hand.mount import in_subtree
 from ogcp.sim_eval.hand.scene import HandScene
+from ogcp.sim_eval.hand.ties import UnknownTie, actuator_bodies, equality_bodies, tendon_bodies, tied_bodies
 from ogcp.sim_eval.protocols.phases import CREEP_WINDOW, FULL_STATE, Settled, settle_further, unloaded_drift
 from ogcp.sim_eval.scene.grasp_scene import GraspScene
 
@@ -133,7 +133,7 @@ def lean_scene(closed: HandScene, settled: Settled, reach: float, creep: float |
                         f"the lean scene moves the settled object {moved * 1e6:.1f} um in {CREEP_WINDOW:g} s even "
                         f"after settling again for {RESETTLE_TIME:g} s (the full scene {limit * 1e6:.1f} um at most)"
                     )
-    except _NotLean as reason:
+    except (_NotLean, UnknownTie) as reason:
         return dataclasses.replace(full, summary={**full.summary, "reason": str(reason)})
     names = [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j) or f"joint {j}" for j in range(model.njnt)]
     kept = set(joints)
@@ -188,7 +188,7 @@ def _uncoupled(model: mujoco.MjModel, welded: set[int], mount: int) -> set[int]:
     changed = True
     while changed:
         changed = False
-        for involved in _couplings(model):
+        for involved in tied_bodies(model):
             moving = {b for b in involved if b not in welded and model.body_jntnum[b] > 0}
             if moving and involved & welded:
                 before = len(welded)
@@ -198,64 +198,6 @@ def _uncoupled(model: mujoco.MjModel, welded: set[int], mount: int) -> set[int]:
                         body = int(model.body_parentid[body])
                 changed = changed or len(welded) < before
     return welded
-
-
-def _couplings(model: mujoco.MjModel) -> Iterable[set[int]]:
-    """The joint bodies (``body_weldid``) each actuator, tendon and equality acts on."""
-    for tendon in range(model.ntendon):
-        yield _tendon_bodies(model, tendon)
-    for actuator in range(model.nu):
-        yield _actuator_bodies(model, actuator)
-    for equality in range(model.neq):
-        yield _equality_bodies(model, equality)
-
-
-def _root(model: mujoco.MjModel, body: int) -> int:
-    return int(model.body_weldid[body])
-
-
-def _tendon_bodies(model: mujoco.MjModel, tendon: int) -> set[int]:
-    bodies = set()
-    first = int(model.tendon_adr[tendon])
-    for wrap in range(first, first + int(model.tendon_num[tendon])):
-        kind, target = int(model.wrap_type[wrap]), int(model.wrap_objid[wrap])
-        if kind == mujoco.mjtWrap.mjWRAP_JOINT:
-            bodies.add(_root(model, int(model.jnt_bodyid[target])))
-        elif kind == mujoco.mjtWrap.mjWRAP_SITE:
-            bodies.add(_root(model, int(model.site_bodyid[target])))
-        elif kind in (mujoco.mjtWrap.mjWRAP_SPHERE, mujoco.mjtWrap.mjWRAP_CYLINDER):
-            bodies.add(_root(model, int(model.geom_bodyid[target])))
-    return bodies
-
-
-def _actuator_bodies(model: mujoco.MjModel, actuator: int) -> set[int]:
-    kind = int(model.actuator_trntype[actuator])
-    target = int(model.actuator_trnid[actuator, 0])
-    if kind in (mujoco.mjtTrn.mjTRN_JOINT, mujoco.mjtTrn.mjTRN_JOINTINPARENT):
-        return {_root(model, int(model.jnt_bodyid[target]))}
-    if kind == mujoco.mjtTrn.mjTRN_TENDON:
-        return _tendon_bodies(model, target)
-    if kind == mujoco.mjtTrn.mjTRN_BODY:
-        return {_root(model, target)}
-    if kind in (mujoco.mjtTrn.mjTRN_SITE, mujoco.mjtTrn.mjTRN_SLIDERCRANK):
-        sites = [s for s in model.actuator_trnid[actuator] if s >= 0]
-        return {_root(model, int(model.site_bodyid[s])) for s in sites}
-    raise _NotLean(f"actuator {actuator}'s transmission ({kind}) is not one the lean scene knows")
-
-
-def _equality_bodies(model: mujoco.MjModel, equality: int) -> set[int]:
-    kind = int(model.eq_type[equality])
-    first, second = int(model.eq_obj1id[equality]), int(model.eq_obj2id[equality])
-    if kind == mujoco.mjtEq.mjEQ_JOINT:
-        joints = [first] + ([second] if second >= 0 else [])
-        return {_root(model, int(model.jnt_bodyid[j])) for j in joints}
-    if kind == mujoco.mjtEq.mjEQ_TENDON:
-        return _tendon_bodies(model, first) | (_tendon_bodies(model, second) if second >= 0 else set())
-    if kind in (mujoco.mjtEq.mjEQ_CONNECT, mujoco.mjtEq.mjEQ_WELD):
-        if model.eq_objtype[equality] == mujoco.mjtObj.mjOBJ_SITE:
-            first, second = int(model.site_bodyid[first]), int(model.site_bodyid[second])
-        return {_root(model, first), _root(model, max(second, 0))}
-    raise _NotLean(f"equality {equality} ({kind}) is not one the lean scene knows")
 
 
 def _recompile(closed: HandScene, data: mujoco.MjData, welded: set[int]) -> tuple[mujoco.MjModel, list[int], list[int]]:
@@ -268,15 +210,15 @@ def _recompile(closed: HandScene, data: mujoco.MjData, welded: set[int]) -> tupl
     dead_joints = {j for j in range(model.njnt) if int(model.jnt_bodyid[j]) in welded}
     dead_actuators = set()
     for actuator in range(model.nu):
-        if _actuator_bodies(model, actuator) <= welded | {0}:
+        if actuator_bodies(model, actuator) <= welded | {0}:
             dead_actuators.add(actuator)
-    dead_tendons = {t for t in range(model.ntendon) if _tendon_bodies(model, t) <= welded | {0}}
+    dead_tendons = {t for t in range(model.ntendon) if tendon_bodies(model, t) <= welded | {0}}
     dead_tendons -= {
         int(model.actuator_trnid[a, 0])
         for a in range(model.nu)
         if a not in dead_actuators and model.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_TENDON
     }
-    dead_equalities = {e for e in range(model.neq) if _equality_bodies(model, e) <= welded | {0} | _static(model)}
+    dead_equalities = {e for e in range(model.neq) if equality_bodies(model, e) <= welded | {0} | _static(model)}
     for collection, dead in (
         (spec.actuators, dead_actuators),
         (spec.sensors, set(range(model.nsensor))),
