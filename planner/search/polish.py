@@ -16,6 +16,7 @@ a search's tree, expansions and finished result are the same with it or without 
 from __future__ import annotations
 
 import itertools
+import math
 import time
 
 import numpy as np
@@ -86,7 +87,9 @@ class Polisher:
         self._candidates: NDArray[np.int64] | None = None
         self._barren = 0  # sets of random grasps in a row without a valid one in force closure
 
-    def climb(self, start: tuple[Grasp, float] | None, deadline: float) -> tuple[Grasp, float, bool]:
+    def climb(
+        self, start: tuple[Grasp, float] | None, deadline: float, chunks: int | None = None
+    ) -> tuple[Grasp, float, bool]:
         """Climb while the clock allows: from ``start`` while moves raise Q1, then from the
         best of fresh random grasps, again and again (random restarts).
 
@@ -95,6 +98,8 @@ class Polisher:
                 climb restarts from it when it beats the best grasp reached so far. None:
                 go on where the last call stopped.
             deadline: ``time.perf_counter()`` reading after which no new chunk starts [s].
+            chunks: Most chunks of :data:`CHUNK` candidates to evaluate in this call, or None:
+                as many as the deadline allows. A count makes the climb the same on any machine.
 
         Returns:
             (grasp, Q1 [-], done): the best grasp reached so far, sorted, with the exact value
@@ -109,7 +114,8 @@ class Polisher:
             self._restart(grasp, start[1])
             self._barren = 0
         try:
-            while time.perf_counter() < deadline and self._barren < BARREN:
+            left = math.inf if chunks is None else chunks
+            while time.perf_counter() < deadline and self._barren < BARREN and left > 0:
                 if self._candidates is None:
                     self._candidates = self._moves()
                 if self._cursor >= len(self._candidates):
@@ -123,6 +129,7 @@ class Polisher:
                     continue
                 chunk = self._candidates[self._cursor : self._cursor + CHUNK]
                 self._cursor += CHUNK
+                left -= 1
                 found = self._best_of(chunk)
                 if found is not None:
                     self._barren = 0

@@ -210,3 +210,20 @@ def test_a_state_forgotten_or_purged_leaves_no_waiting_record(object_contacts, h
         search.lower_cutoff(0.0)
         search.purge(open_list, 1e9)
     assert len(open_list) == 0 and len(search._pending) == 0 and search._pending.nbytes == 0
+
+
+def test_a_memory_stop_climbs_as_far_on_a_slow_machine(sphere40, monkeypatch):
+    """The local search a memory stop runs counts its work, not the clock: a machine ten times
+    slower (its clock run ten times fast for the climb) returns the same grasp."""
+    import time
+
+    from ogcp.planner.search import polish
+
+    contacts, _ = sphere40
+    fast = _search(contacts, 4, limit=24 * 1024).run()
+    real = time.perf_counter
+    start = real()
+    monkeypatch.setattr(polish.time, "perf_counter", lambda: start + 10.0 * (real() - start))
+    slow = _search(contacts, 4, limit=24 * 1024).run()
+    assert fast.status == slow.status == "memory"
+    assert fast.grasp == slow.grasp and fast.q1 == slow.q1
