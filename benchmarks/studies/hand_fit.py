@@ -198,6 +198,15 @@ def censored_line(case: dict[str, Any]) -> str:
     )
 
 
+def unrealised_line(case: dict[str, Any]) -> str | None:
+    """Why the fit left the case's planned grasps unrealised, one reason per grasp, or None when it
+    realised every planned one."""
+    reasons = [r["unrealised_because"] for r in case["rows"] if r.get("unrealised_because")]
+    if not reasons:
+        return None
+    return f"{case['hand']}, {case['object']}: not realised: {'; '.join(reasons)}"
+
+
 HEADER = (
     "| hand, object, m | accepted (seed 0) | planned grasps realised | median worst residual [mm] | valid when closed "
     "| median fidelity | invalid because | s per grasp | valid with tips | of those: realised, held "
@@ -244,6 +253,9 @@ def main(argv: list[str] | None = None) -> None:
         print(phase_line(case))
     for case in cases:
         print(censored_line(case))
+    for case in cases:
+        if (line := unrealised_line(case)) is not None:
+            print(line)
     if args.out is not None:
         from ogcp.benchmarks.plots.style import save_figure
         from ogcp.benchmarks.plots.tips_hand import fig_tips_vs_hand

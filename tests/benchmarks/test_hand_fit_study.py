@@ -18,6 +18,7 @@ def test_the_study_writes_rows_with_each_phases_seconds(tmp_path, capsys, monkey
     assert "sdh, box: censored ramps (held past their end, left out of the fidelity), median share" in text
     (row,) = json.loads((out / "hand_fit.json").read_text())["cases"][0]["rows"]
     assert row["realised"] and set(row["hand_phase_seconds"]) == {"fit", "close", "protocol"}
+    assert row["unrealised_because"] is None and "not realised:" not in text
     for side in ("hand", "tips"):  # a share where the grasp is valid, else none
         assert (row[f"{side}_censored"] is None) != row[f"{side}_valid"]
         assert row[f"{side}_censored"] is None or 0.0 <= row[f"{side}_censored"] <= 1.0
@@ -59,3 +60,17 @@ def test_with_realise_a_grasp_the_fit_leaves_short_is_planned_again(tmp_path, ca
     (row,) = json.loads((out / "hand_fit.json").read_text())["cases"][0]["rows"]
     assert row["rejected"] == 1 and len(calls) == 2 and tuple(row["grasp"]) == calls[1] != calls[0]
     assert row["realised"]
+
+
+def test_the_study_says_why_the_fit_left_grasps_unrealised():
+    from ogcp.benchmarks.studies.hand_fit import unrealised_line
+
+    reason = "finger index cannot reach its contact: 3.27 mm off (tolerance 1 mm)"
+    rows = [
+        {"unrealised_because": None},
+        {"unrealised_because": reason},
+        {"planned": False, "unrealised_because": None},
+    ]
+    case = {"hand": "ability", "object": "box", "rows": rows}
+    assert unrealised_line(case) == f"ability, box: not realised: {reason}"
+    assert unrealised_line({**case, "rows": rows[:1]}) is None
