@@ -215,20 +215,17 @@ class Search(Expansion):
         elapsed = now - self._clock[0]
         if polisher is None or self._barren or (elapsed < POLISH_AFTER and not stopping):
             return
-        if chunks is not None:
-            start = None if inc is None or inc.state is None else (self.grasp_of(inc), inc.q)
-            grasp, q, self._barren = polisher.climb(start, math.inf, chunks)
-            if grasp and (inc is None or q > inc.q):
-                self.take(Incumbent(q, None, None, -1, grasp))
-            return
-        budget = min(POLISH_SECONDS, POLISH_SHARE * elapsed)
-        if stopping and self.incumbent is None:
-            budget = max(budget, polisher.seconds + STOP_POLISH_SECONDS)  # a grasp is owed, if any is found
-        allowance = min(POLISH_SLICE, budget - polisher.seconds)
-        if allowance <= 0:
-            return
+        deadline = math.inf
+        if chunks is None:
+            budget = min(POLISH_SECONDS, POLISH_SHARE * elapsed)
+            if stopping and self.incumbent is None:
+                budget = max(budget, polisher.seconds + STOP_POLISH_SECONDS)  # a grasp is owed, if any is found
+            allowance = min(POLISH_SLICE, budget - polisher.seconds)
+            if allowance <= 0:
+                return
+            deadline = now + allowance
         start = None if inc is None or inc.state is None else (self.grasp_of(inc), inc.q)
-        grasp, q, self._barren = polisher.climb(start, now + allowance)
+        grasp, q, self._barren = polisher.climb(start, deadline, chunks)
         if grasp and (inc is None or q > inc.q):
             self.take(Incumbent(q, None, None, -1, grasp))
 
