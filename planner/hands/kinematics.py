@@ -90,7 +90,6 @@ class HandKinematics:
         self.joint_names = tuple(mujoco.mj_id2name(self.model, mujoco.mjtObj.mjOBJ_JOINT, j) for j in joint_ids)
         self.qpos_index = self.model.jnt_qposadr[self.joint_ids]
         self.limits = np.array([self._range(j) for j in joint_ids])
-        self.reference_qpos = self._reference_qpos()
         self._couplings = joint_couplings(self.model, joint_ids)
         self.limits = narrowed_drivers(
             self.model, self.joint_names, joint_ids, self.limits, self._couplings, descriptor.path
