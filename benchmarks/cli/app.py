@@ -46,6 +46,10 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+#: Set (to anything) to let an unexpected exception print its traceback instead of one line.
+TRACEBACK_VARIABLE = "OGCP_TRACEBACK"
+
+
 def _one_line_warning(message: Warning | str, category: type[Warning], *_: object, **__: object) -> str:
     # A warning is a notice to the user (a cache entry rebuilt, a mesh not watertight): one line,
     # like errors, not Python's file:line and source line.
@@ -69,6 +73,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("ogcp: interrupted", file=sys.stderr)
         return 130
+    except Exception as exc:  # a bug in ogcp: one line still, and the way to see where
+        if os.environ.get(TRACEBACK_VARIABLE):
+            raise
+        said = (str(exc).strip().splitlines() or [""])[0]
+        print(
+            f"ogcp: error: internal error ({type(exc).__name__}: {said}), a bug in ogcp: please report it with the "
+            f"command; {TRACEBACK_VARIABLE}=1 shows where",
+            file=sys.stderr,
+        )
+        return 2
 
 
 if __name__ == "__main__":

@@ -172,13 +172,23 @@ def table_row(case: dict[str, Any]) -> str:
 def phase_line(case: dict[str, Any]) -> str:
     """Where the hand trials of a case spent their time: median seconds of each phase, and of the tips' trial."""
     rows = [r for r in case["rows"] if r["hand_valid"] and r["tips_valid"]]
-    phases = ("fit", "close", "protocol")
+    phases = ("fit", "close", "protocol", "ramps")
     times = {
         p: [r["hand_phase_seconds"].get(p) for r in rows if r.get("hand_phase_seconds", {}).get(p) is not None]
         for p in phases
     }
     parts = ", ".join(f"{p} {_median(times[p], 1)}" for p in phases)
-    return f"{case['hand']}, {case['object']}: median s of the grasps valid with both: {parts}; tips {_median([r['tips_seconds'] for r in rows], 1)}"
+    # The hand's ramps alone against the whole fingertip trial: a floor under the hand / tips ratio
+    # that no faster fit or closing lowers.
+    floor = [
+        r["hand_phase_seconds"]["ramps"] / r["tips_seconds"]
+        for r in rows
+        if r.get("hand_phase_seconds", {}).get("ramps") is not None and r["tips_seconds"]
+    ]
+    return (
+        f"{case['hand']}, {case['object']}: median s of the grasps valid with both: {parts}; "
+        f"tips {_median([r['tips_seconds'] for r in rows], 1)}; the hand's ramps alone / tips trial {_median(floor, 1)}"
+    )
 
 
 def censored_line(case: dict[str, Any]) -> str:

@@ -365,9 +365,12 @@ class HandReachability:
         model.growable = True
         return model
 
-    def why_none(self, m: int | None = None) -> str:
-        """What may change a search's finding that no m-grasp satisfies this constraint (one line)."""
+    def why_none(self, m: int | None = None, contacts: ContactSet | None = None) -> str:
+        """What may change a search's finding that no m-grasp of ``contacts`` satisfies this constraint (one line)."""
         recall = "" if self.sampled.recall is None else f", recalling {self.sampled.recall:.0%} of its poses"
+        mismatch = self._model(m).size_mismatch(contacts.positions) if m and contacts is not None else None
+        if mismatch is not None:  # no sample, threshold or choice of fingers changes that
+            return f"the {self.name} hand's reach accepts none of these contacts' grasps: {mismatch}; scale it (--diagonal)"
         many = ""
         if m is not None and m > RECALLED_FINGERS:
             many = (

@@ -126,6 +126,30 @@ class FingerModel:
         gap = np.maximum(self.spans[:, 0] - distance, 0.0) + np.maximum(distance - self.spans[:, 1], 0.0)
         return np.asarray(np.linalg.norm(gap, axis=-1) / SPAN_SCALE)
 
+    def size_mismatch(self, positions: NDArray[np.float64]) -> str | None:
+        """Why no grasp of these contact points (n, 3) [m] can meet the fingers' pads whatever the
+        samples: every two contacts lie farther apart than any two pads ever come (an object too
+        large for the hand), or all nearer than they ever come (too small); None where neither holds."""
+        points = np.asarray(positions, dtype=float).reshape(-1, 3)
+        if len(points) < 2:
+            return None
+        from scipy.spatial import cKDTree  # here, as in finger_model: every plan imports this module
+
+        widest, narrowest = float(self.spans[:, 1].max()), float(self.spans[:, 0].min())
+        closest = float(cKDTree(points).query(points, k=2)[0][:, 1].min())
+        across = float(np.linalg.norm(np.ptp(points, axis=0)))  # no two points are farther apart
+        if closest > widest:
+            return (
+                f"no two contacts are nearer than {closest:.3g} m, and no two of its pads are ever farther apart "
+                f"than {widest:.3g} m: the object is too large for the hand"
+            )
+        if across < narrowest:
+            return (
+                f"all contacts lie within {across:.3g} m of each other, and no two of its pads ever come nearer "
+                f"than {narrowest:.3g} m: the object is too small for the hand"
+            )
+        return None
+
 
 @lru_cache(maxsize=8)
 def assignments(m: int) -> tuple[NDArray[np.int64], NDArray[np.int64]]:

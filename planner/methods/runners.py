@@ -159,7 +159,7 @@ def _under_denser_hands(
                 raise
             denser = hand.denser(contacts, m) if retry and time_limit is None else None
             if denser is None:
-                raise NoGraspError(f"{exc}: {hand.why_none(m)}") from None
+                raise NoGraspError(f"{exc}: {hand.why_none(m, contacts)}") from None
             constraints = [denser if c is hand else c for c in constraints]
             hand = denser
 

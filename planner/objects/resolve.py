@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -13,6 +14,14 @@ from ogcp.planner.objects.builtin import BUILTIN_OBJECTS, DEFAULT_DIAGONAL, buil
 from ogcp.planner.objects.fetch import load_fetched
 from ogcp.planner.objects.fetchable import FETCHABLE_OBJECTS
 from ogcp.planner.objects.loading import load_mesh
+
+#: Diagonals [m] of mesh files read at their own size beyond which the file's units are probably not
+#: metres (CAD exports in millimetres): ogcp's objects span 5 cm to 2 m.
+PLAUSIBLE_DIAGONAL = (0.005, 5.0)
+
+
+class MeshScaleWarning(UserWarning):
+    """A mesh file read at its own size is so large or so small that its units are probably not metres."""
 
 
 def resolve_object(spec: str, diagonal: float | None = None) -> tuple[trimesh.Trimesh, dict[str, object]]:
@@ -56,4 +65,20 @@ def resolve_object(spec: str, diagonal: float | None = None) -> tuple[trimesh.Tr
         # Recorded only when given, so that records of mesh files at their own size are unchanged.
         mesh = normalise_scale(mesh, diagonal)
         source["diagonal"] = diagonal
+    else:
+        _check_units(path, float(np.linalg.norm(mesh.extents)))
     return mesh, source
+
+
+def _check_units(path: Path, size: float) -> None:
+    """Warn (one line) where a mesh read in metres is implausibly large or small for a grasped object."""
+    low, high = PLAUSIBLE_DIAGONAL
+    if low <= size <= high:
+        return
+    units = f"; in millimetres it would be {size / 1000:.4g} m" if size > high else ""
+    warnings.warn(
+        f"{path}: the mesh is {size:.4g} m across (its bounding-box diagonal, read in metres){units}: "
+        f"give --diagonal with its size in metres, or scale the file",
+        MeshScaleWarning,
+        stacklevel=3,
+    )

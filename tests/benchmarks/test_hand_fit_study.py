@@ -15,9 +15,10 @@ def test_the_study_writes_rows_with_each_phases_seconds(tmp_path, capsys, monkey
     text = capsys.readouterr().out
     assert "| sdh, box, 3 |" in text
     assert "sdh, box: median s of the grasps valid with both: fit " in text and ", protocol " in text
+    assert ", ramps " in text and "the hand's ramps alone / tips trial " in text
     assert "sdh, box: censored ramps (held past their end, left out of the fidelity), median share" in text
     (row,) = json.loads((out / "hand_fit.json").read_text())["cases"][0]["rows"]
-    assert row["realised"] and set(row["hand_phase_seconds"]) == {"fit", "close", "protocol"}
+    assert row["realised"] and set(row["hand_phase_seconds"]) == {"fit", "close", "protocol", "ramps"}
     assert row["unrealised_because"] is None and "not realised:" not in text
     for side in ("hand", "tips"):  # a share where the grasp is valid, else none
         assert (row[f"{side}_censored"] is None) != row[f"{side}_valid"]

@@ -302,3 +302,23 @@ def test_contacts_for_a_hand_are_sampled_for_its_pads(capsys, tmp_path, monkeypa
     assert json.loads(out.read_text())["source"]["tip_radius"] == 0.004
     assert main(["contacts", "donut", "-n", "20", "--hand", "nope", "-o", str(out)]) == 2
     assert "unknown hand 'nope'" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    ("diagonal", "said"),
+    [
+        (20.0, r"no two contacts are nearer than [\d.]+ m, and no two of its pads are ever farther apart than "),
+        (0.004, r"all contacts lie within 0\.004 m of each other, and no two of its pads ever come nearer than "),
+    ],
+)
+def test_an_object_out_of_the_hands_size_is_named_as_such(hand, diagonal, said):
+    """No sample, threshold or choice of fingers helps there: the line says to scale the object."""
+    from ogcp.planner.grasp.contact_set import sample_contacts
+    from ogcp.planner.objects import resolve_object
+
+    contacts = sample_contacts(resolve_object("box", diagonal)[0], 30, seed=0)
+    line = hand.why_none(3, contacts)
+    assert re.search(said, line) and line.endswith("for the hand; scale it (--diagonal)")
+    assert "more [reachability] samples" not in line
+    fitting = sample_contacts(resolve_object("box", 0.2)[0], 30, seed=0)
+    assert "more [reachability] samples" in hand.why_none(3, fitting) and hand.why_none(3) == hand.why_none(3, None)

@@ -27,7 +27,8 @@ def test_a_plan_with_a_hand_is_closed_by_that_hand_and_recorded(sdh_plan):
     hand = grasp.hand
     assert hand["name"] == "sdh" and hand["descriptor_sha256"] == sdh_plan["hand"]["descriptor_sha256"]
     assert len(hand["fit_residuals"]) == 3 and max(hand["fit_residuals"]) < 1e-3 and hand["fit"]["realised"]
-    assert set(hand["seconds"]) == {"fit", "close", "protocol"} and min(hand["seconds"].values()) > 0
+    assert set(hand["seconds"]) == {"fit", "close", "protocol", "ramps"} and min(hand["seconds"].values()) > 0
+    assert hand["seconds"]["ramps"] < hand["seconds"]["protocol"]  # the ramps are part of the protocol
     assert len(hand["joint_angles"]) == len(hand["settled_joint_angles"]) == 8
     assert isinstance(hand["extra_contacts"], list) and sorted(hand["finger_contacts"]) == sorted(grasp.grasp)
     assert grasp.valid and grasp.gates["tips_in_contact"] == 3 and all(grasp.gates["pads_on_contacts"])
