@@ -380,7 +380,7 @@ def sample_contacts(
     """
     import trimesh.sample
 
-    from ogcp.planner.grasp.reach import fill_reachable, reach_settings
+    from ogcp.planner.grasp.reach import fill_outer, fill_reachable, reach_settings
 
     _check_sampling(mesh, n, seed, mu, cone_edges, tip_radius, torsional_friction)
     n, seed = int(n), int(seed)
@@ -400,6 +400,8 @@ def sample_contacts(
         faces = np.concatenate([faces, extra_f])
     if reach is not None:
         points, faces = fill_reachable(mesh, points, faces, seed, *reach)
+    else:  # still only where a finger can touch: not on a shell inside another
+        points, faces = fill_outer(mesh, points, faces, seed)
     com, rho = mass_properties(mesh)
     record = dict(source or {})
     record.update({"sampling": EVEN_SAMPLING, "n": n, "seed": seed})

@@ -28,6 +28,7 @@ away does not flip it the way it flips a ray-parity or winding-number count.
 
 from __future__ import annotations
 
+import functools
 import itertools
 from dataclasses import dataclass
 
@@ -36,6 +37,7 @@ import trimesh
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 
+from ogcp.planner.grasp.shells import Shells
 from ogcp.planner.infra.errors import OgcpError
 
 #: Feature of a triangle that holds the nearest point: its interior, an edge or a corner.
@@ -199,6 +201,7 @@ class SurfaceIndex:
         if faces.ndim != 2 or len(faces) == 0:
             raise OgcpError("cannot measure distance to a mesh without faces")
         self.triangles = vertices[faces]
+        self._vertices, self._faces = vertices, faces
         normals = np.cross(self.triangles[:, 1] - self.triangles[:, 0], self.triangles[:, 2] - self.triangles[:, 0])
         lengths = np.linalg.norm(normals, axis=1)
         self.normals = normals / np.where(lengths > 0, lengths, 1.0)[:, None]
@@ -214,6 +217,11 @@ class SurfaceIndex:
         for level in np.unique(levels):
             members = np.flatnonzero(levels == level)
             self.groups.append((members, cKDTree(self.centroids[members]), float(self.radii[members].max())))
+
+    @functools.cached_property
+    def shells(self) -> Shells:
+        """The mesh's closed shells (a point near one may lie inside another: :meth:`Shells.enclosed`)."""
+        return Shells(self._vertices, self._faces)
 
     def _measure(
         self, query: NDArray[np.intp], faces: NDArray[np.intp], points: NDArray[np.float64]

@@ -4,12 +4,16 @@ A fingertip is a sphere of radius r. It touches the surface at a contact p with 
 normal n when its centre is at ``p - r n``, outside the object. In a concavity narrower
 than the tip (a slot, a groove, the crook of a handle) that sphere cuts the object, so the
 tip cannot make that contact: the simulation would start with the tip inside the object.
+Nor can it touch a surface inside the object: a mesh of several closed shells (a part
+modelled inside another, overlapping bodies, a cavity) has faces whose tip centre lies inside
+another shell (:mod:`ogcp.planner.grasp.shells`).
 :func:`reachable` finds such contacts; :func:`fill_reachable` replaces them in a sample.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 import trimesh
@@ -17,6 +21,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ogcp.planner.grasp.defaults import DEFAULT_TIP_RADIUS_RATIO
 from ogcp.planner.grasp.mesh_distance import SurfaceIndex
+from ogcp.planner.grasp.shells import Shells
 from ogcp.planner.infra.errors import OgcpError
 
 #: Default cut depth a reachable contact may have, as a fraction of the tip radius. It
@@ -30,6 +35,9 @@ REACH_TOLERANCE = 0.01
 #: draws ``max(2 * missing, 64) * 2**k`` points, so up to ~128x the shortfall are tried.
 FILL_BATCHES = 6
 _FIRST_FILL_STREAM = 2  # rng streams [seed, 0] and [seed, 1] belong to the plain sample
+#: How far off the surface a sample without a tip radius is asked whether it lies inside another
+#: shell, as a fraction of the object's diagonal.
+OUTER_STEP = 1e-6
 
 
 def default_tip_radius(mesh: trimesh.Trimesh, ratio: float = DEFAULT_TIP_RADIUS_RATIO) -> float:
@@ -133,11 +141,16 @@ def reachable(
     # the surface may be farther, and is measured without a bound.
     near = index.nearest(centres, max_distance=radius + tolerance)
     lost = np.flatnonzero(near.face < 0)
-    distance, outside = near.distance.copy(), near.outside.copy()
+    distance, outside, face = near.distance.copy(), near.outside.copy(), near.face.copy()
     if len(lost):
         far = index.nearest(centres[lost])
-        distance[lost], outside[lost] = far.distance, far.outside
-    return (distance >= radius - tolerance) & outside
+        distance[lost], outside[lost], face[lost] = far.distance, far.outside, far.face
+    clear = (distance >= radius - tolerance) & outside
+    # The nearest sheet's side is the whole answer for one closed shell; a centre inside another
+    # shell (a part modelled inside the object, an overlapping body, a cavity) is inside too.
+    if index.shells.count > 1 and clear.any():
+        clear[clear] = ~index.shells.enclosed(centres[clear], face[clear])
+    return clear
 
 
 def fill_reachable(
@@ -171,12 +184,65 @@ def fill_reachable(
             batches: the tip is too large for most of the surface.
     """
     radius, tolerance = check_tip_radius(tip_radius, tolerance)
-    n = len(points)
     index = SurfaceIndex(mesh)
     inward = -np.asarray(mesh.face_normals)
-    keep = reachable(index, points, inward[faces], radius, tolerance)
-    kept_points, kept_faces = [points[keep]], [faces[keep]]
-    have, tried = int(keep.sum()), n
+
+    def keep(points: NDArray[np.float64], faces: NDArray[np.int64]) -> NDArray[np.bool_]:
+        return reachable(index, points, inward[faces], radius, tolerance)
+
+    kept, have, tried = _refill(mesh, points, faces, seed, keep)
+    if have < len(points):
+        diagonal = float(np.linalg.norm(np.ptp(np.asarray(mesh.vertices), axis=0)))
+        raise OgcpError(
+            f"only {have} of {len(points)} contacts found where a fingertip of radius {radius:.3g} m "
+            f"({100 * radius / diagonal:.3g}% of the object's {diagonal:.3g} m diagonal) touches the surface "
+            f"without cutting it ({tried} samples tried); use a smaller --tip-radius"
+        )
+    return kept
+
+
+def fill_outer(
+    mesh: trimesh.Trimesh, points: NDArray[np.float64], faces: NDArray[np.int64], seed: int
+) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """Replace the samples on surfaces inside the object (on a shell inside another) by samples outside.
+
+    Contacts sampled without a tip radius need only lie on the outer surface; a mesh of one shell
+    returns its sample as it is. The refill is :func:`fill_reachable`'s, with the same seeds.
+
+    Raises:
+        OgcpError: When fewer than n outer samples turn up.
+    """
+    shells = Shells(mesh.vertices, mesh.faces)
+    if shells.count < 2:
+        return points, faces
+    normals = np.asarray(mesh.face_normals)
+    step = OUTER_STEP * float(np.linalg.norm(np.ptp(np.asarray(mesh.vertices), axis=0)))
+
+    def keep(points: NDArray[np.float64], faces: NDArray[np.int64]) -> NDArray[np.bool_]:
+        return ~shells.enclosed(points + step * normals[faces], faces)
+
+    kept, have, tried = _refill(mesh, points, faces, seed, keep)
+    if have < len(points):
+        raise OgcpError(
+            f"only {have} of {len(points)} contacts found on the object's outer surface ({tried} samples tried)"
+        )
+    return kept
+
+
+def _refill(
+    mesh: trimesh.Trimesh,
+    points: NDArray[np.float64],
+    faces: NDArray[np.int64],
+    seed: int,
+    keep: Callable[[NDArray[np.float64], NDArray[np.int64]], NDArray[np.bool_]],
+) -> tuple[tuple[NDArray[np.float64], NDArray[np.int64]], int, int]:
+    """The samples ``keep`` accepts, in order, then accepted area-weighted samples from the rng
+    streams ``[seed, 2]``, ``[seed, 3]``, ... until there are as many: ((points, faces), how many
+    were found, how many were tried)."""
+    n = len(points)
+    kept_mask = keep(points, faces)
+    kept_points, kept_faces = [points[kept_mask]], [faces[kept_mask]]
+    have, tried = int(kept_mask.sum()), n
     for batch in range(FILL_BATCHES):
         if have == n:
             break
@@ -185,15 +251,8 @@ def fill_reachable(
         extra_points, extra_faces = trimesh.sample.sample_surface(mesh, size, seed=rng)
         extra_faces = np.asarray(extra_faces)
         extra_points = np.asarray(extra_points)
-        good = np.flatnonzero(reachable(index, extra_points, inward[extra_faces], radius, tolerance))[: n - have]
+        good = np.flatnonzero(keep(extra_points, extra_faces))[: n - have]
         kept_points.append(extra_points[good])
         kept_faces.append(extra_faces[good])
         have, tried = have + len(good), tried + size
-    if have < n:
-        diagonal = float(np.linalg.norm(np.ptp(np.asarray(mesh.vertices), axis=0)))
-        raise OgcpError(
-            f"only {have} of {n} contacts found where a fingertip of radius {radius:.3g} m "
-            f"({100 * radius / diagonal:.3g}% of the object's {diagonal:.3g} m diagonal) touches the surface "
-            f"without cutting it ({tried} samples tried); use a smaller --tip-radius"
-        )
-    return np.vstack(kept_points), np.concatenate(kept_faces)
+    return (np.vstack(kept_points), np.concatenate(kept_faces)), have, tried

@@ -5,7 +5,9 @@ and the checks around the parse refuse what trimesh would silently drop or misre
 (a file cut short, counts that disagree, faces pointing at missing vertices, non-finite
 coordinates, flat or open surfaces). The only changes made to a mesh are re-orientations
 with a single right answer and the removal of faces that name a vertex twice (no area, no
-orientation), each announced by a :class:`MeshOrientationWarning`.
+orientation), each announced by a :class:`MeshOrientationWarning`. A file of several closed
+shells is one object touched only on its outer surface (:mod:`ogcp.planner.grasp.shells`), which a
+:class:`MeshShellsWarning` says.
 """
 
 from __future__ import annotations
@@ -16,11 +18,16 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
+from ogcp.planner.grasp.shells import Shells
 from ogcp.planner.infra.errors import OgcpError
 from ogcp.planner.objects.file_checks import check_mesh_file
 from ogcp.planner.objects.repair import MeshOrientationWarning, require_solid
 
 MESH_SUFFIXES = (".obj", ".stl", ".ply", ".off", ".glb", ".gltf")
+
+
+class MeshShellsWarning(UserWarning):
+    """A mesh file holds several closed shells: one object, touched only on its outer surface."""
 
 
 def load_mesh(path: str | Path, solid: bool = True) -> trimesh.Trimesh:
@@ -70,6 +77,14 @@ def load_mesh(path: str | Path, solid: bool = True) -> trimesh.Trimesh:
     steps = (*dropped, *steps)
     if steps:
         warnings.warn(f"{path}: {'; '.join(steps)}", MeshOrientationWarning, stacklevel=2)
+    shells = Shells(mesh.vertices, mesh.faces).count
+    if shells > 1:
+        warnings.warn(
+            f"{path}: the mesh is {shells} closed shells (bodies modelled inside or through one another, or apart): "
+            "no contact is sampled where one lies inside another, and they are grasped as one rigid body",
+            MeshShellsWarning,
+            stacklevel=2,
+        )
     return mesh
 
 

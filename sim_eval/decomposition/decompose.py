@@ -41,6 +41,7 @@ import trimesh
 from numpy.typing import NDArray
 from scipy.spatial import ConvexHull
 
+from ogcp.planner.grasp.shells import Shells
 from ogcp.planner.infra.cache import cache_dir, read_entry, write_entry
 from ogcp.planner.infra.errors import OgcpError
 from ogcp.sim_eval.decomposition.coacd_child import run_coacd_child
@@ -286,7 +287,13 @@ def decompose(
                 f"{name} is not a closed, consistently oriented mesh; CoACD needs one with preprocess "
                 "'off': use preprocess 'on' or 'auto' to remesh it"
             )
-        raw, seconds, log = _run_coacd(vertices, faces, settings, name, progress)
+        # Shell by shell (CoACD crashed on a part modelled inside another); enclosed shells add nothing
+        # a finger or the floor could touch.
+        raw: list[NDArray[np.float64]] = []
+        seconds, log = 0.0, ""
+        for shell_vertices, shell_faces in Shells(vertices, faces).outer():
+            shell_raw, shell_seconds, shell_log = _run_coacd(shell_vertices, shell_faces, settings, name, progress)
+            raw, seconds, log = [*raw, *shell_raw], seconds + shell_seconds, log + shell_log
         hulls = [hull_part(v) for v in raw]
     else:
         start = time.perf_counter()

@@ -370,3 +370,32 @@ def test_if_open_remeshes_only_meshes_that_are_not_closed(tmp_path: Path) -> Non
     assert max(float(np.abs(v).max()) for v, _ in closed.parts) <= 0.06 + 1e-9
     opened = decompose(_open_box(), DecompositionSettings(**TINY), cache=tmp_path, name="open box")
     assert opened.meta["preprocess_mode"] == "on" and opened.meta["remeshed"] is True
+
+
+def test_coacd_takes_a_mesh_of_several_shells_shell_by_shell_and_skips_the_enclosed_ones(tmp_path: Path) -> None:
+    """A part modelled inside the object once crashed CoACD (signal 11); an enclosed shell adds
+    nothing a finger touches, and overlapping shells each keep their parts."""
+    inner = trimesh.creation.box([0.03] * 3)
+    inner.apply_translation([0.005, 0.0, 0.0])
+    nested = trimesh.util.concatenate([trimesh.creation.box([0.05] * 3), inner])
+    ran: list[int] = []
+    real = dec._run_coacd
+
+    def counting(vertices, faces, *args, **kwargs):
+        ran.append(len(faces))
+        return real(vertices, faces, *args, **kwargs)
+
+    settings = DecompositionSettings(method="coacd", **TINY)
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(dec, "_run_coacd", counting)
+        parts = decompose(nested, settings, cache=tmp_path / "a").parts
+        assert ran == [12]  # the outer box only
+        ran.clear()
+        second = trimesh.creation.box([0.05] * 3)
+        second.apply_translation([0.03, 0.0, 0.0])
+        overlapping = trimesh.util.concatenate([trimesh.creation.box([0.05] * 3), second])
+        both = decompose(overlapping, settings, cache=tmp_path / "b").parts
+        assert ran == [12, 12]
+    corners = np.vstack([v for v, _ in parts])
+    assert np.allclose(corners.min(axis=0), -0.025, atol=2e-3) and np.allclose(corners.max(axis=0), 0.025, atol=2e-3)
+    assert np.vstack([v for v, _ in both])[:, 0].max() == pytest.approx(0.055, abs=2e-3)
