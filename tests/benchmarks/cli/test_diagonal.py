@@ -10,6 +10,7 @@ import pytest
 from ogcp.planner import builtin_mesh, resolve_object
 from ogcp.planner.grasp import ContactSet
 from ogcp.planner.infra.errors import OgcpError
+from ogcp.planner.objects.resolve import MeshScaleWarning
 from ogcp.planner.records.plan import contact_sampling
 from ogcp.sim_eval.inputs.plan_input import plan_input
 from tests.cli_run import run_cli
@@ -31,7 +32,8 @@ def box_mm(tmp_path):
 
 
 def test_a_mesh_file_keeps_its_size_unless_a_diagonal_is_given(box_mm):
-    native, source = resolve_object(str(box_mm))
+    with pytest.warns(MeshScaleWarning, match="in millimetres it would be 0.2 m"):  # read as given, and said
+        native, source = resolve_object(str(box_mm))
     assert np.linalg.norm(np.ptp(native.vertices, axis=0)) == pytest.approx(200.0)
     assert "diagonal" not in source  # records of meshes at their own size are unchanged
     scaled, source = resolve_object(str(box_mm), 0.2)
