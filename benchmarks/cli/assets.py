@@ -1,7 +1,8 @@
 """``ogcp assets``: list the objects and hands ogcp knows; fetch the paper's meshes and hand models into the cache.
 
 ``ogcp assets list [--cache DIR]`` and ``ogcp assets fetch NAME... | paper | all [--force] [--cache DIR]``;
-``all`` is every fetchable object and hand.
+``all`` is every fetchable object and hand. ``ogcp assets repair MESH --out FILE [--force]`` closes
+the holes of a user's mesh file (the repair fetched meshes get) into a new file.
 """
 
 from __future__ import annotations
@@ -48,6 +49,23 @@ def register(commands: Any) -> None:
     fetch.add_argument("--force", action="store_true", help="fetch again objects that are already cached")
     fetch.add_argument("--cache", type=Path, default=None, metavar="DIR", help=_CACHE_HELP)
     fetch.set_defaults(handler=run_fetch)
+    repair = actions.add_parser(
+        "repair", help="close the holes of a mesh file and fix its winding, into a new file every command reads"
+    )
+    repair.add_argument("mesh", type=Path, metavar="MESH", help="the mesh file (OBJ, STL, PLY, OFF, GLB, glTF)")
+    repair.add_argument(
+        "--out", type=Path, required=True, metavar="FILE", help="the repaired mesh (its suffix names the format)"
+    )
+    repair.add_argument("--force", action="store_true", help="replace FILE if it exists")
+    repair.set_defaults(handler=run_repair)
+
+
+def run_repair(args: argparse.Namespace) -> int:
+    """``ogcp assets repair``: the repaired mesh, checked as every command checks a mesh file, written whole."""
+    from ogcp.planner.objects.repair_file import repair_file
+
+    print(repair_file(args.mesh, args.out, force=args.force))
+    return 0
 
 
 def format_table(rows: list[ObjectStatus]) -> str:

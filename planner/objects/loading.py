@@ -73,7 +73,8 @@ def load_mesh(path: str | Path, solid: bool = True) -> trimesh.Trimesh:
     try:
         mesh, steps = require_solid(mesh)
     except OgcpError as exc:
-        raise OgcpError(f"{path}: {exc}") from None
+        hint = f"; `ogcp assets repair {path} --out FILE` closes its holes" if "mesh is open" in str(exc) else ""
+        raise OgcpError(f"{path}: {exc}{hint}") from None
     steps = (*dropped, *steps)
     if steps:
         warnings.warn(f"{path}: {'; '.join(steps)}", MeshOrientationWarning, stacklevel=2)
