@@ -44,17 +44,18 @@ from tqdm import tqdm
 
 from ogcp.planner.config.methods import DEFAULT_HAND_THRESHOLD
 from ogcp.planner.grasp.contact_set import ContactSet
-from ogcp.planner.hands.box_index import boxes_within, pair_bounds
+from ogcp.planner.hands.box_index import pair_bounds
 from ogcp.planner.hands.descriptor import HandDescriptor
+from ogcp.planner.hands.many_fingers import TRIPLE_SLACK, ManyFingers
 from ogcp.planner.hands.model_file import MODEL_FILE, read_model, save_model
 from ogcp.planner.hands.registry import resolve_hand
 from ogcp.planner.hands.sampled_model import (
     AUTO_RECALL,
     MAX_AUTO_SAMPLES,
-    SPAN_SCALE,
     FingerModel,
     SampledHand,
-    assignments,
+    assignment_codes,
+    boxes_admit,
     finger_model,
     grow_samples,
     pair_code,
@@ -72,6 +73,9 @@ MODEL_VERSION = 6  # 6: a coupled joint's driver sampled only where the coupled 
 MAX_FINGERS = 6
 #: Fingers whose configurations a growing model must recall, when none are named: a default grasp's.
 RECALLED_FINGERS = 3
+#: Most fingers one code covers: a grasp of more is judged by every three of its fingers
+#: (:mod:`~ogcp.planner.hands.many_fingers`).
+CODED_FINGERS = 3
 
 
 @dataclass(frozen=True)
@@ -89,17 +93,6 @@ class Reach:
     joint_angles: tuple[float, ...]
     fingers: tuple[int, ...]
     finger_names: tuple[str, ...] = ()
-
-
-def _assignment_codes(
-    grasp: Sequence[int], contacts: ContactSet, model: FingerModel
-) -> tuple[NDArray[np.int64], NDArray[np.float64], NDArray[np.float64]]:
-    """Every assignment of a grasp's contacts to the fingers, shape (m!, m), its scaled codes,
-    shape (m!, 4 C(m, 2)), and how far beyond the pairs' spans it puts the pads, shape (m!,)."""
-    orders = assignments(len(grasp))[0]
-    ordered = np.asarray(grasp, dtype=np.intp)[orders]
-    codes = pair_code(contacts.positions[ordered], contacts.normals[ordered])
-    return orders, codes / model.scale, model.beyond(codes)
 
 
 #: How many times the samples of the last model a search tries when it finds no grasp under a hand.
@@ -158,6 +151,7 @@ class HandReachability:
         self.sampled = self._load_or_sample()
         self.samples = len(self.sampled.angles)
         self._models: dict[tuple[int, ...], FingerModel] = {}
+        self._threes: dict[tuple[int, ...], ManyFingers] = {}
 
     # ----- the sampled model -------------------------------------------------------------------
 
@@ -214,7 +208,16 @@ class HandReachability:
         return self.descriptor.choose_fingers(m, self.fingers)
 
     def _model(self, m: int) -> FingerModel:
+        return self._model_of(self.chosen(m))
+
+    def _many(self, m: int) -> ManyFingers:
+        """The m > :data:`CODED_FINGERS` chosen fingers as the models of their threes."""
         chosen = self.chosen(m)
+        if chosen not in self._threes:
+            self._threes[chosen] = ManyFingers(chosen, self._model_of)
+        return self._threes[chosen]
+
+    def _model_of(self, chosen: tuple[int, ...]) -> FingerModel:
         if chosen not in self._models:
             model = finger_model(self.sampled, chosen)
             if model is None:
@@ -245,13 +248,18 @@ class HandReachability:
             positions: Target points, shape (B, m, 3) [m].
             normals: Inward normals at the targets (the pad normals needed), shape (B, m, 3).
         """
-        return residuals(self._model(positions.shape[1]), positions, normals)
+        m = positions.shape[1]
+        if m > CODED_FINGERS:
+            return self._many(m).residuals(positions, normals)
+        return residuals(self._model(m), positions, normals)
 
     def reach(self, grasp: Sequence[int], contacts: ContactSet) -> Reach:
         """Residual of a grasp over all finger assignments, with the nearest sample."""
         m = len(grasp)
+        if m > CODED_FINGERS:
+            return self._many_starts(grasp, contacts, 1)[0]
         model = self._model(m)
-        orders, codes, beyond = _assignment_codes(grasp, contacts, model)
+        orders, codes, beyond = assignment_codes(grasp, contacts, model)
         distance, nearest = model.tree.query(codes, k=1)
         distance = np.hypot(distance, beyond)
         best = int(np.argmin(distance))
@@ -269,8 +277,10 @@ class HandReachability:
         assignment's nearest sample (assignments by that distance), then every second nearest, etc.
         """
         m = len(grasp)
+        if m > CODED_FINGERS:
+            return self._many_starts(grasp, contacts, count)
         model = self._model(m)
-        orders, codes, beyond = _assignment_codes(grasp, contacts, model)
+        orders, codes, beyond = assignment_codes(grasp, contacts, model)
         k = min(count, len(model.rows))
         distance, nearest = model.tree.query(codes, k=k)
         distance, nearest = np.hypot(distance.reshape(len(orders), k), beyond[:, None]), nearest.reshape(len(orders), k)
@@ -285,6 +295,17 @@ class HandReachability:
             found.append(Reach(float(distance[a, j]), tuple(float(v) for v in angles), fingers, names))
         return found
 
+    def _many_starts(self, grasp: Sequence[int], contacts: ContactSet, count: int) -> list[Reach]:
+        """:meth:`starts` of a grasp of more than :data:`CODED_FINGERS` contacts: the assignments by
+        residual, and within one the nearest samples of its threes of fingers by theirs."""
+        members = np.asarray(grasp, dtype=np.intp)
+        ranked = self._many(len(grasp)).ranked_starts(contacts.positions[members], contacts.normals[members])
+        names = tuple(self.descriptor.finger_names[f] for f in self.chosen(len(grasp)))
+        return [
+            Reach(residual, tuple(float(v) for v in self.sampled.angles[row]), tuple(int(f) for f in order), names)
+            for residual, row, order in ranked[:count]
+        ]
+
     def accepts(self, grasp: Sequence[int], contacts: ContactSet) -> bool:
         """P(g): the residual is within the threshold.
 
@@ -293,6 +314,9 @@ class HandReachability:
         k-d tree is not needed, and took 0.6 ms of every grasp a search met.
         """
         members = np.asarray(grasp, dtype=np.int64)
+        if len(members) > CODED_FINGERS:
+            residual = self.residuals(contacts.positions[members][None], contacts.normals[members][None])[0]
+            return bool(residual <= self.threshold)
         return self._within(contacts, members, np.arange(len(members) + 1, dtype=np.int64))
 
     def accepts_many(self, grasps: NDArray[np.intp], contacts: ContactSet) -> NDArray[np.bool_]:
@@ -310,27 +334,14 @@ class HandReachability:
         """Whether some sample's code lies within the threshold of the box of codes that super-contacts
         ``members[offsets[x]:offsets[x + 1]]`` span, under some assignment to the fingers."""
         m = len(offsets) - 1
-        model = self._model(m)
         # bounds[x, y]: the interval of every code dimension of contact x (finger i) and y (finger j).
         bounds = pair_bounds(contacts.positions, contacts.normals, members, offsets)
-        orders, pairs = assignments(m)
-        boxes = model.boxes
-        radius2 = self.threshold * self.threshold
-        return bool(
-            boxes_within(
-                bounds,
-                orders,
-                pairs,
-                model.scale,
-                radius2,
-                model.spans,
-                SPAN_SCALE,
-                boxes.low,
-                boxes.high,
-                boxes.points,
-                boxes.starts,
+        if m > CODED_FINGERS:
+            widened = TRIPLE_SLACK * self.threshold
+            return self._many(m).admits(
+                lambda model, three: boxes_admit(model, bounds[np.ix_(three, three)], widened), m
             )
-        )
+        return boxes_admit(self._model(m), bounds, self.threshold)
 
     def near_miss(self, contacts: ContactSet, m: int, seed: int = 0) -> float:
         """The least residual of up to :data:`NEAR_MISS_GRASPS` of the contacts' m-grasps (all, when
@@ -372,11 +383,10 @@ class HandReachability:
         if mismatch is not None:  # no sample, threshold or choice of fingers changes that
             return f"the {self.name} hand's reach accepts none of these contacts' grasps: {mismatch}; scale it (--diagonal)"
         many = ""
-        if m is not None and m > RECALLED_FINGERS:
+        if m is not None and m > CODED_FINGERS:
             many = (
-                f"; with {m} fingers its codes have {4 * math.comb(m, 2)} dimensions, where a sample seldom comes "
-                f"within the threshold of a pose the hand takes (the Shadow hand's 10,000 recall none of its own "
-                f"4-finger poses): plan {RECALLED_FINGERS} of them (-m {RECALLED_FINGERS}, --hand-fingers)"
+                f"; with {m} fingers a grasp is accepted where every {CODED_FINGERS} of them accept their contacts "
+                f"within {TRIPLE_SLACK:g} thresholds, under one assignment"
             )
         return (
             f"the {self.name} hand's reachability model ({self.samples:,} sampled configurations{recall}) accepts "

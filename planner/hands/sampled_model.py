@@ -22,9 +22,10 @@ from numpy.typing import NDArray
 from tqdm import tqdm
 
 from ogcp.planner.config.methods import DEFAULT_HAND_THRESHOLD
-from ogcp.planner.hands.box_index import BoxIndex
+from ogcp.planner.hands.box_index import BoxIndex, boxes_within
 
 if TYPE_CHECKING:
+    from ogcp.planner.grasp.contact_set import ContactSet
     from ogcp.planner.hands.kinematics import HandKinematics
 
 #: Smallest spread a code dimension is normalised by, for distances [m] and for normal differences
@@ -261,4 +262,38 @@ def _joined(a: SampledHand, b: SampledHand) -> SampledHand:
         np.concatenate([a.points, b.points]),
         np.concatenate([a.normals, b.normals]),
         np.concatenate([a.collisions, b.collisions]),
+    )
+
+
+def assignment_codes(
+    grasp: Sequence[int], contacts: ContactSet, model: FingerModel
+) -> tuple[NDArray[np.int64], NDArray[np.float64], NDArray[np.float64]]:
+    """Every assignment of a grasp's contacts to the fingers, shape (m!, m), its scaled codes,
+    shape (m!, 4 C(m, 2)), and how far beyond the pairs' spans it puts the pads, shape (m!,)."""
+    orders = assignments(len(grasp))[0]
+    ordered = np.asarray(grasp, dtype=np.intp)[orders]
+    codes = pair_code(contacts.positions[ordered], contacts.normals[ordered])
+    return orders, codes / model.scale, model.beyond(codes)
+
+
+def boxes_admit(model: FingerModel, bounds: NDArray[np.float64], threshold: float) -> bool:
+    """Whether some sample of ``model`` lies within ``threshold`` of the box of codes that super-contacts
+    of those invariant ranges (``bounds``, shape (m, m, 2, 4), of :func:`pair_bounds`) span, under
+    some assignment to its fingers."""
+    orders, pairs = assignments(len(bounds))
+    boxes = model.boxes
+    return bool(
+        boxes_within(
+            np.ascontiguousarray(bounds),
+            orders,
+            pairs,
+            model.scale,
+            threshold * threshold,
+            model.spans,
+            SPAN_SCALE,
+            boxes.low,
+            boxes.high,
+            boxes.points,
+            boxes.starts,
+        )
     )

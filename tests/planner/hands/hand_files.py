@@ -438,3 +438,30 @@ ON_A_BASE = f"""<mujoco><compiler angle="radian" autolimits="true"/><worldbody><
 def write_side_by_side_gripper(folder: Path) -> Path:
     """The built-in gripper with its palm and jaws on the world side by side (:data:`SIDE_BY_SIDE`); the descriptor's path."""
     return write_gripper_variant(folder, lambda text: SIDE_BY_SIDE)
+
+
+def write_four_finger_hand(folder: Path) -> Path:
+    """Four fingers of two flexion hinges round a cylinder palm, two facing two; the descriptor's path."""
+    fingers = (
+        _spread_finger(1, "0.025 0.025 0.06", "0 0 0", False)
+        + _spread_finger(2, "0.025 -0.025 0.06", "0 0 0", False)
+        + _spread_finger(3, "-0.025 0.025 0.06", "0 0 3.14159", False)
+        + _spread_finger(4, "-0.025 -0.025 0.06", "0 0 3.14159", False)
+    )
+    (folder / "four.xml").write_text(
+        '<mujoco model="four"><compiler angle="radian" autolimits="true"/>'
+        '<default><joint damping="0.05" armature="0.001"/><geom density="1500"/></default>'
+        f'<worldbody><body name="palm"><geom type="cylinder" size="0.05 0.03" pos="0 0 0.03"/>{fingers}'
+        "</body></worldbody></mujoco>"
+    )
+    entries = "".join(
+        f'[[fingers]]\nname = "f{n}"\ntip_body = "f{n}_tip"\ntip_offset = [0.0, 0.0, 0.0]\n'
+        "pad_normal = [-1.0, 0.0, 0.0]\ntip_radius = 0.009\n"
+        for n in (1, 2, 3, 4)
+    )
+    path = folder / "four.toml"
+    path.write_text(
+        f'schema = "ogcp.hand/1"\nname = "four"\nmjcf = "four.xml"\npalm = "palm"\n{entries}'
+        "[actuation]\nkp = 5.0\nforce_range = 1.5\n"
+    )
+    return path

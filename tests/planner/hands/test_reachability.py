@@ -273,16 +273,6 @@ def test_hfts_takes_any_number_of_fingers_the_hand_has(object_contacts, tmp_path
         HFTS(runs=2, seed=0, hand=gripper).run(contacts, 3)
 
 
-def test_a_search_with_more_fingers_than_the_model_recalls_says_to_plan_three(hand):
-    assert "plan 3 of them (-m 3, --hand-fingers)" not in hand.why_none(3)
-    line = hand.why_none(4)
-    assert line.endswith(
-        "with 4 fingers its codes have 24 dimensions, where a sample seldom comes within the threshold "
-        "of a pose the hand takes (the Shadow hand's 10,000 recall none of its own 4-finger poses): "
-        "plan 3 of them (-m 3, --hand-fingers)"
-    )
-
-
 def test_cli_es_summary_counts_admissible_grasps(capsys, tmp_path, monkeypatch):
     monkeypatch.setenv("OGCP_CACHE", str(tmp_path))
     assert main(["plan", "donut", "-n", "16", "-m", "3", "--method", "es", "--hand", "sdh"]) == 0
