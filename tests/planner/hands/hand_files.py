@@ -395,21 +395,29 @@ def write_spread_hand(folder: Path) -> Path:
         + _spread_finger(2, "0.025 -0.025 0.06", "0 0 0", True)
         + _spread_finger(3, "-0.025 0 0.06", "0 0 3.14159", False)
     )
-    (folder / "spread.xml").write_text(
-        '<mujoco model="spread"><compiler angle="radian" autolimits="true"/>'
+    tie = '<equality><joint joint1="j21" joint2="j11" polycoef="0 1 0 0 0"/></equality>'
+    return _primitive_hand(folder, "spread", 0.045, fingers, (3, 1, 2), tie)
+
+
+def _primitive_hand(
+    folder: Path, name: str, palm: float, fingers: str, order: tuple[int, ...], extra: str = ""
+) -> Path:
+    """A cylinder palm of radius ``palm`` [m] holding ``fingers`` (:func:`_spread_finger`), no actuators;
+    the descriptor (fingers in ``order``, [actuation] servos) beside it; the descriptor's path."""
+    (folder / f"{name}.xml").write_text(
+        f'<mujoco model="{name}"><compiler angle="radian" autolimits="true"/>'
         '<default><joint damping="0.05" armature="0.001"/><geom density="1500"/></default>'
-        f'<worldbody><body name="palm"><geom type="cylinder" size="0.045 0.03" pos="0 0 0.03"/>{fingers}'
-        "</body></worldbody>"
-        '<equality><joint joint1="j21" joint2="j11" polycoef="0 1 0 0 0"/></equality></mujoco>'
+        f'<worldbody><body name="palm"><geom type="cylinder" size="{palm} 0.03" pos="0 0 0.03"/>{fingers}'
+        f"</body></worldbody>{extra}</mujoco>"
     )
     entries = "".join(
         f'[[fingers]]\nname = "f{n}"\ntip_body = "f{n}_tip"\ntip_offset = [0.0, 0.0, 0.0]\n'
         "pad_normal = [-1.0, 0.0, 0.0]\ntip_radius = 0.009\n"
-        for n in (3, 1, 2)
+        for n in order
     )
-    path = folder / "spread.toml"
+    path = folder / f"{name}.toml"
     path.write_text(
-        f'schema = "ogcp.hand/1"\nname = "spread"\nmjcf = "spread.xml"\npalm = "palm"\n{entries}'
+        f'schema = "ogcp.hand/1"\nname = "{name}"\nmjcf = "{name}.xml"\npalm = "palm"\n{entries}'
         "[actuation]\nkp = 5.0\nforce_range = 1.5\n"
     )
     return path
@@ -448,20 +456,4 @@ def write_four_finger_hand(folder: Path) -> Path:
         + _spread_finger(3, "-0.025 0.025 0.06", "0 0 3.14159", False)
         + _spread_finger(4, "-0.025 -0.025 0.06", "0 0 3.14159", False)
     )
-    (folder / "four.xml").write_text(
-        '<mujoco model="four"><compiler angle="radian" autolimits="true"/>'
-        '<default><joint damping="0.05" armature="0.001"/><geom density="1500"/></default>'
-        f'<worldbody><body name="palm"><geom type="cylinder" size="0.05 0.03" pos="0 0 0.03"/>{fingers}'
-        "</body></worldbody></mujoco>"
-    )
-    entries = "".join(
-        f'[[fingers]]\nname = "f{n}"\ntip_body = "f{n}_tip"\ntip_offset = [0.0, 0.0, 0.0]\n'
-        "pad_normal = [-1.0, 0.0, 0.0]\ntip_radius = 0.009\n"
-        for n in (1, 2, 3, 4)
-    )
-    path = folder / "four.toml"
-    path.write_text(
-        f'schema = "ogcp.hand/1"\nname = "four"\nmjcf = "four.xml"\npalm = "palm"\n{entries}'
-        "[actuation]\nkp = 5.0\nforce_range = 1.5\n"
-    )
-    return path
+    return _primitive_hand(folder, "four", 0.05, fingers, (1, 2, 3, 4))
