@@ -386,7 +386,8 @@ class HandReachability:
         if m is not None and m > CODED_FINGERS:
             many = (
                 f"; with {m} fingers a grasp is accepted where every {CODED_FINGERS} of them accept their contacts "
-                f"within {TRIPLE_SLACK:g} thresholds, under one assignment"
+                f"within {TRIPLE_SLACK:g} thresholds, under one assignment; or plan {CODED_FINGERS} of them "
+                f"(-m {CODED_FINGERS}, --hand-fingers)"
             )
         return (
             f"the {self.name} hand's reachability model ({self.samples:,} sampled configurations{recall}) accepts "
