@@ -215,8 +215,9 @@ def add_servos(
         added.append(name)
     if names:
         warnings.warn(
-            f"{where}: actuators {', '.join(names)} hold no pose (no stiffness on their length: motors or velocity "
-            f"servos); closing the hand needs one, so their joints get position servos of [actuation] kp "
+            f"{where}: actuators {', '.join(names)} hold no pose (no stiffness on their length that ogcp can read: "
+            f"motors, velocity servos, plugins such as mujoco.pid); closing the hand needs one, so their joints get "
+            f"position servos of [actuation] kp "
             f"{actuation.kp:g} within those actuators' force limits",
             HandActuatorWarning,
             stacklevel=4,
