@@ -84,7 +84,7 @@ class ManyFingers:
         for t, model in enumerate(self.models):
             d, rows = model.tree.query((codes / model.scale).reshape(-1, codes.shape[-1]), k=1)
             distance[:, t] = np.hypot(d.reshape(batch, -1), model.beyond(codes))
-            nearest[:, t] = model.rows[np.minimum(rows, len(model.rows) - 1)].reshape(batch, -1)
+            nearest[:, t] = model.rows[rows].reshape(batch, -1)  # unbounded query: every row found
         threes = np.arange(len(self.threes))[None, :]
         per_three = distance[:, threes, self.gather]  # (B, m!, T)
         return TripleTable(per_three.max(axis=2) / TRIPLE_SLACK, per_three, nearest[:, threes, self.gather])
